@@ -1,0 +1,52 @@
+// Spinning-LiDAR sensor models (DESIGN.md §2): beam geometry, firing timing and packet constants.
+//
+// Sensor frame: x forward, y left, z up. A beam with elevation w and rotation angle a (clockwise seen
+// from above, 0 at +x, the Velodyne azimuth convention) points along
+//   (cos w cos a, -cos w sin a, sin w).
+// Laser i's beam rotation angle is the encoder azimuth at its firing time plus azimuth_offset_deg[i].
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace rsu {
+
+struct SensorModel {
+  std::string name;                         // "vlp16", "vlp32c", "generic64", ...
+  std::vector<double> elevation_deg;        // per laser, channel (firing) order
+  std::vector<double> azimuth_offset_deg;   // per laser, added to the encoder azimuth
+  std::vector<double> firing_offset_us;     // per laser, from the start of its firing sequence
+  double sequence_period_us = 55.296;       // one firing sequence of every laser
+  int sequences_per_block = 1;              // data blocks per packet hold 32 channels: VLP-16 packs 2
+  double distance_unit_m = 0.002;           // packet distance quantum
+  double min_range_m = 0.5;
+  double max_range_m = 100.0;
+  std::uint8_t product_id = 0;              // packet byte 1205; 0 = no Velodyne packet format
+  double rpm = 600.0;
+
+  std::size_t laser_count() const { return elevation_deg.size(); }
+  bool has_packet_format() const { return product_id != 0; }
+  double rotation_hz() const { return rpm / 60.0; }
+  // Encoder rotation during one firing sequence, degrees (about 0.199 at 600 rpm).
+  double azimuth_step_deg() const { return 360.0 * rotation_hz() * sequence_period_us * 1e-6; }
+  // Firing sequences in one rotation (about 1808.4 at 600 rpm; not an integer).
+  double sequences_per_rotation() const { return 1e6 / (rotation_hz() * sequence_period_us); }
+  // Unit beam direction in the sensor frame for laser `laser` at beam rotation angle `azimuth_rad`.
+  Eigen::Vector3d beam_direction(std::size_t laser, double azimuth_rad) const;
+};
+
+SensorModel make_vlp16();
+SensorModel make_vlp32c();
+// A generic N-ring model for scaling tests: elevations evenly from -25 deg to +15 deg, every laser
+// fires within one 55.296 us sequence, no packet format.
+SensorModel make_generic(int rings);
+
+// "vlp16", "vlp32c", "generic64", "generic128" (any "genericN" with 2 <= N <= 256); nullopt otherwise.
+std::optional<SensorModel> sensor_model_by_name(std::string_view name);
+
+}  // namespace rsu
