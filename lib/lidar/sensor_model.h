@@ -17,16 +17,16 @@
 namespace rsu {
 
 struct SensorModel {
-  std::string name;                         // "vlp16", "vlp32c", "generic64", ...
-  std::vector<double> elevation_deg;        // per laser, channel (firing) order
-  std::vector<double> azimuth_offset_deg;   // per laser, added to the encoder azimuth
-  std::vector<double> firing_offset_us;     // per laser, from the start of its firing sequence
-  double sequence_period_us = 55.296;       // one firing sequence of every laser
-  int sequences_per_block = 1;              // data blocks per packet hold 32 channels: VLP-16 packs 2
-  double distance_unit_m = 0.002;           // packet distance quantum
+  std::string name;                        // "vlp16", "vlp32c", "generic64", ...
+  std::vector<double> elevation_deg;       // per laser, channel (firing) order
+  std::vector<double> azimuth_offset_deg;  // per laser, added to the encoder azimuth
+  std::vector<double> firing_offset_us;    // per laser, from the start of its firing sequence
+  double sequence_period_us = 55.296;      // one firing sequence of every laser
+  int sequences_per_block = 1;             // data blocks per packet hold 32 channels: VLP-16 packs 2
+  double distance_unit_m = 0.002;          // packet distance quantum
   double min_range_m = 0.5;
   double max_range_m = 100.0;
-  std::uint8_t product_id = 0;              // packet byte 1205; 0 = no Velodyne packet format
+  std::uint8_t product_id = 0;  // packet byte 1205; 0 = no Velodyne packet format
   double rpm = 600.0;
 
   std::size_t laser_count() const { return elevation_deg.size(); }
@@ -40,10 +40,15 @@ struct SensorModel {
   Eigen::Vector3d beam_direction(std::size_t laser, double azimuth_rad) const;
 };
 
+// Why `model` cannot be used (tables of unequal length, non-positive periods, a packet format whose
+// lasers x sequences_per_block is not 32, ...); empty when it is usable.
+std::string sensor_model_error(const SensorModel& model);
+
 SensorModel make_vlp16();
 SensorModel make_vlp32c();
 // A generic N-ring model for scaling tests: elevations evenly from -25 deg to +15 deg, every laser
-// fires within one 55.296 us sequence, no packet format.
+// fires within one 55.296 us sequence, no packet format. Throws std::invalid_argument unless
+// 2 <= rings <= 256.
 SensorModel make_generic(int rings);
 
 // "vlp16", "vlp32c", "generic64", "generic128" (any "genericN" with 2 <= N <= 256); nullopt otherwise.

@@ -1,0 +1,80 @@
+// Classic pcap files (the libpcap format, as `tcpdump -w` and VeloView write them) as pure byte
+// formatting and parsing: the daemon replays recorded Velodyne traffic and tests write captures,
+// with no file or socket here.
+//
+// Written: magic 0xa1b2c3d4 (microsecond timestamps) in little-endian order, version 2.4, snaplen
+// 65535, link type 1 (Ethernet), each datagram as Ethernet II + IPv4 (header checksum) + UDP
+// (checksum). Read: both byte orders, microsecond or nanosecond magic, link types 1 (Ethernet,
+// optionally 802.1Q tagged) and 113 (Linux cooked capture, `tcpdump -i any`).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "common/time.h"
+
+namespace rsu {
+
+struct UdpEndpoint {
+  std::uint32_t ip = 0;  // host order: 192.168.1.201 is 0xC0A801C9
+  std::uint16_t port = 0;
+};
+
+constexpr std::uint32_t ipv4_address(std::uint8_t a, std::uint8_t b, std::uint8_t c, std::uint8_t d) {
+  return (std::uint32_t{a} << 24) | (std::uint32_t{b} << 16) | (std::uint32_t{c} << 8) | std::uint32_t{d};
+}
+
+// The 24-byte file header.
+std::vector<std::uint8_t> pcap_global_header();
+
+// Appends one record holding a UDP datagram. The record time is `time_ns` floored to the microsecond.
+// Throws std::invalid_argument if time_ns is negative or past 2^32 s, or the payload exceeds the
+// IPv4 UDP maximum of 65507 bytes.
+void append_udp_record(std::vector<std::uint8_t>& out, TimeNs time_ns, UdpEndpoint src, UdpEndpoint dst,
+                       std::span<const std::uint8_t> payload);
+
+struct UdpDatagram {
+  TimeNs time_ns = 0;  // capture time
+  UdpEndpoint src;
+  UdpEndpoint dst;
+  std::vector<std::uint8_t> payload;
+};
+
+// Errors that stop parsing (the file is not a usable pcap from that point on).
+enum class PcapError {
+  none,
+  truncated_file_header,    // fewer than 24 bytes
+  bad_magic,                // not a pcap file
+  pcapng_not_supported,     // a pcapng file (convert with `editcap -F pcap`)
+  unsupported_link_type,    // not Ethernet or Linux cooked capture
+  truncated_record_header,  // bytes left over that do not make a 16-byte record header
+  truncated_record,         // a record's captured length runs past the end of the data
+  bad_record_length,        // captured length larger than any snapshot length (262144)
+};
+std::string_view to_string(PcapError error);
+
+// Records that are valid pcap but not an intact IPv4 UDP datagram; skipped and counted.
+struct PcapSkipped {
+  std::uint64_t not_ipv4 = 0;
+  std::uint64_t not_udp = 0;
+  std::uint64_t fragmented = 0;  // IPv4 fragments (Velodyne packets are never fragmented)
+  std::uint64_t malformed = 0;   // bad IPv4/UDP header or lengths, cut by the snapshot length, bad time
+};
+
+struct PcapParseResult {
+  PcapError error = PcapError::none;
+  // Every datagram before the error, if any: a capture cut off mid-record (a killed tcpdump) still
+  // yields its complete records, while error says that the file did not end cleanly.
+  std::vector<UdpDatagram> datagrams;
+  PcapSkipped skipped;
+
+  bool ok() const { return error == PcapError::none; }
+};
+
+// Checksums are not verified: captures of locally sent traffic carry unfilled checksums when the
+// NIC offloads them.
+PcapParseResult parse_pcap(std::span<const std::uint8_t> bytes);
+
+}  // namespace rsu

@@ -1,0 +1,51 @@
+// Euclidean clustering (PCL's EuclideanClusterExtraction, as Autoware's euclidean_cluster runs it):
+// points are connected when within `tolerance_m`, clusters are the connected components, and only
+// components with min_points <= size <= max_points are kept. As in PCL, a component larger than
+// max_points is dropped whole (not split), and counted.
+//
+// Distance: planar by default. Autoware's euclidean_cluster (parameter use_height: false, its default)
+// sets z = 0 before clustering; we follow it. For a roadside LiDAR it also joins a vehicle's roof and
+// body returns that a 3D tolerance would separate at long range, where rings are far apart vertically.
+//
+// Two implementations that give the same clusters:
+//  - cluster_reference: breadth-first growth with brute-force neighbour search, O(n^2), obviously right;
+//  - cluster_grid: hash grid with cell = tolerance, union-find over the neighbouring cells with exact
+//    distance checks, O(n) expected.
+// Both return clusters with ascending indices, ordered by their smallest index.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "lidar/point.h"
+
+namespace rsu::perception {
+
+enum class ClusterDistance { planar, spatial };
+
+struct ClusteringConfig {
+  double tolerance_m = 0.7;      // Autoware euclidean_cluster default
+  std::size_t min_points = 10;   // Autoware default
+  std::size_t max_points = 1000; // Autoware default
+  ClusterDistance distance = ClusterDistance::planar;
+};
+
+using Cluster = std::vector<std::uint32_t>;  // indices into the frame's points, ascending
+
+struct Clustering {
+  std::vector<Cluster> clusters;
+  std::size_t dropped_small = 0;   // components with fewer than min_points
+  std::size_t dropped_large = 0;   // components with more than max_points (dropped whole)
+  std::size_t invalid_points = 0;  // non-finite or out-of-range points, left out
+};
+
+// `subset`: the indices of the points to cluster (e.g. the foreground); cluster indices refer to
+// `points`. Indices outside `points` are counted as invalid.
+Clustering cluster_reference(std::span<const LidarPoint> points, std::span<const std::uint32_t> subset,
+                             const ClusteringConfig& config = {});
+Clustering cluster_grid(std::span<const LidarPoint> points, std::span<const std::uint32_t> subset,
+                        const ClusteringConfig& config = {});
+
+}  // namespace rsu::perception

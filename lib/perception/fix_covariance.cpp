@@ -1,0 +1,64 @@
+#include "perception/fix_covariance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace rsu::perception {
+namespace {
+
+double axis_variance(const AxisEvidence& axis, double noise_var, double spacing, double shape_var) {
+  switch (axis.anchor) {
+    case AxisAnchor::face:
+      return noise_var / static_cast<double>(std::max<std::size_t>(axis.face_points, 1)) + shape_var;
+    case AxisAnchor::midpoint:
+      return spacing * spacing / 24.0 + noise_var / 2.0 + shape_var;
+    case AxisAnchor::one_end:
+      return spacing * spacing / 3.0 + noise_var + shape_var;
+  }
+  return noise_var + shape_var;
+}
+
+}  // namespace
+
+Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig& config) {
+  const double range = std::max(0.0, std::isfinite(e.range_m) ? e.range_m : 0.0);
+  const double noise_var = config.range_sigma_m * config.range_sigma_m +
+                           (range * config.angle_sigma_rad) * (range * config.angle_sigma_rad);
+  const double shape_var = config.shape_sigma_m * config.shape_sigma_m;
+  const double spacing = range * config.azimuth_resolution_rad;
+
+  double yaw_information = 0.0;
+  for (const auto& face : e.seen_faces) {
+    if (face.points >= 2 && face.length_m > 0.0) {
+      yaw_information += static_cast<double>(face.points) * face.length_m * face.length_m / (12.0 * noise_var);
+    }
+  }
+  const double max_var = config.max_yaw_sigma_rad * config.max_yaw_sigma_rad;
+  double var_yaw = yaw_information > 0.0 ? 1.0 / yaw_information : max_var;
+  var_yaw += config.search_resolution_rad * config.search_resolution_rad / 12.0;
+  var_yaw = std::min(var_yaw, max_var);
+
+  const Eigen::Vector2d u(std::cos(e.yaw), std::sin(e.yaw));  // length axis
+  const Eigen::Vector2d v(-u.y(), u.x());                      // width axis
+  const double var_u = axis_variance(e.length_axis, noise_var, spacing, shape_var);
+  const double var_v = axis_variance(e.width_axis, noise_var, spacing, shape_var);
+  Eigen::Matrix2d pos = var_u * u * u.transpose() + var_v * v * v.transpose();
+
+  const Eigen::Vector2d j(-e.lever.y(), e.lever.x());
+  pos += var_yaw * j * j.transpose();
+  const Eigen::Vector2d pos_yaw = var_yaw * j;  // a yaw error moves the centre along j
+
+  const double wrong = std::clamp(1.0 - e.assignment_confidence, 0.0, 1.0);
+  pos += wrong * e.alternative_offset * e.alternative_offset.transpose();
+  var_yaw += wrong * (std::numbers::pi / 2.0) * (std::numbers::pi / 2.0);
+
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  cov.topLeftCorner<2, 2>() = pos;
+  cov.block<2, 1>(0, 2) = pos_yaw;
+  cov.block<1, 2>(2, 0) = pos_yaw.transpose();
+  cov(2, 2) = var_yaw;
+  return cov;
+}
+
+}  // namespace rsu::perception

@@ -1,0 +1,68 @@
+// The covariance of a size-corrected fix (x, y, yaw), from what the LiDAR saw (DESIGN.md §3: every
+// estimate carries its uncertainty).
+//
+// Model. Per-point noise across a face: sigma_n^2 = sigma_range^2 + (R sigma_angle)^2 at range R; the
+// vehicle's departure from a box (bumpers, mirrors, rounded corners) adds sigma_shape, which does not
+// average out over points. Point spacing along a face is s = R * azimuth resolution.
+//  - Yaw: each seen face with n points over length l constrains the direction like a line fit,
+//    information n l^2 / (12 sigma_n^2) (slope variance of least squares with evenly spread points);
+//    faces add information. Plus the search's quantisation (step^2 / 12). No face seen: max_yaw_sigma.
+//  - Position along each box axis, by how the centre coordinate on that axis was found:
+//      face      (a seen face perpendicular to the axis + half the known size): sigma_n^2 / n + shape^2;
+//      midpoint  (both ends of a face seen whole, no perpendicular face): each end lies inside the true
+//                end by U(0, s), so the midpoint errs by their half difference: s^2 / 24 + sigma_n^2 / 2
+//                + shape^2;
+//      one end   (only one, resolution-limited end): E[U(0,s)^2] = s^2 / 3, + sigma_n^2 + shape^2.
+//    So one seen face gives the larger variance along that face (the unseen direction's position comes
+//    from face ends), fewer points and longer range give larger variances.
+//  - The centre is anchor + R(yaw) * offset, so a yaw error moves it by yaw_error x lever; this adds
+//    var_yaw * J J^T with J = d(centre)/d(yaw) = (-lever_y, lever_x), and the x-yaw covariance.
+//  - A length/width assignment that is right only with probability c: the fix is the chosen hypothesis,
+//    the other is (1 - c) likely, so (1 - c) d d^T is added (d = other centre - chosen centre) and
+//    (1 - c) (pi/2)^2 to the yaw variance (the mean square error about the reported fix).
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+#include <Eigen/Core>
+
+#include "common/angles.h"
+
+namespace rsu::perception {
+
+struct CovarianceModelConfig {
+  double range_sigma_m = 0.02;                       // DESIGN.md §2 (simulator default)
+  double angle_sigma_rad = 0.001;                    // DESIGN.md §2
+  double shape_sigma_m = 0.03;                       // vehicle vs box
+  double azimuth_resolution_rad = deg_to_rad(0.2);   // VLP at 600 rpm (DESIGN.md §2)
+  double search_resolution_rad = deg_to_rad(0.02);   // the orientation search's final step
+  double max_yaw_sigma_rad = 0.5;
+};
+
+enum class AxisAnchor { face, midpoint, one_end };
+
+struct AxisEvidence {
+  AxisAnchor anchor = AxisAnchor::one_end;
+  std::size_t face_points = 0;  // points of the anchoring face (anchor == face)
+};
+
+struct FaceEvidence {
+  std::size_t points = 0;
+  double length_m = 0.0;
+};
+
+struct FixEvidence {
+  double range_m = 0.0;                              // LiDAR to the fix
+  double yaw = 0.0;                                  // direction of the length axis
+  Eigen::Vector2d lever = Eigen::Vector2d::Zero();   // centre - anchor point, map frame
+  AxisEvidence length_axis;                          // centre coordinate along the length axis
+  AxisEvidence width_axis;                           // and along the width axis
+  std::array<FaceEvidence, 2> seen_faces{};          // unused entries have points = 0
+  double assignment_confidence = 1.0;
+  Eigen::Vector2d alternative_offset = Eigen::Vector2d::Zero();  // other assignment's centre - centre
+};
+
+Eigen::Matrix3d fix_covariance(const FixEvidence& evidence, const CovarianceModelConfig& config = {});
+
+}  // namespace rsu::perception

@@ -1,0 +1,299 @@
+// The improved size correction (see size_correction.h): prior-decided or geometry-decided length/width
+// assignment, known-size box hypotheses, and per-axis anchoring on seen faces.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "perception/size_correction.h"
+
+namespace rsu::perception {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+double fold_half_turn(double a) {
+  a = std::remainder(a, kPi);
+  return a <= -kPi / 2.0 ? a + kPi : a;
+}
+
+double logistic(double x) { return 1.0 / (1.0 + std::exp(-std::clamp(x, -50.0, 50.0))); }
+
+// The fitted rectangle's own frame: origin at its centre, axes e1 (axis 0) and e2 (axis 1). Its edges
+// perpendicular to axis a are, on the low side, edge kLowEdge[a], on the high side kHighEdge[a].
+constexpr std::array<std::size_t, 2> kLowEdge = {3, 0};
+constexpr std::array<std::size_t, 2> kHighEdge = {1, 2};
+
+struct Frame {
+  Eigen::Vector2d origin;
+  Eigen::Vector2d e1;
+  Eigen::Vector2d e2;
+  Eigen::Vector2d local(const Eigen::Vector2d& p) const { return {(p - origin).dot(e1), (p - origin).dot(e2)}; }
+  Eigen::Vector2d map(const Eigen::Vector2d& c) const { return origin + c.x() * e1 + c.y() * e2; }
+};
+
+struct AxisOption {
+  double centre = 0.0;  // centre coordinate on this axis
+  double anchor = 0.0;  // the coordinate the centre was derived from
+  AxisEvidence evidence;
+};
+
+struct Hypothesis {
+  int length_axis = 0;  // 0: the vehicle's length lies along e1; 1: along e2
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // local
+  Eigen::Vector2d half = Eigen::Vector2d::Zero();    // half sizes along e1, e2
+  Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // local
+  std::array<AxisEvidence, 2> evidence{};            // along e1, e2
+  double score = 0.0;                                // lower is better
+};
+
+double median(std::vector<double>& v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+class Corrector {
+ public:
+  Corrector(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy, const Eigen::Vector2d& lidar_xy,
+            const CorrectionConfig& config)
+      : fit_(fit), config_(config), frame_{fit.center, fit.axis0(), fit.axis1()} {
+    for (const auto& p : cluster_xy) {
+      if (p.allFinite()) {
+        pts_.push_back(frame_.local(p));
+      }
+    }
+    lidar_ = frame_.local(lidar_xy);
+    half_extent_ = {fit.length0 / 2.0, fit.length1 / 2.0};
+    const double range = (lidar_xy - fit.center).norm();
+    cover_radius_ = std::max(config.cover_radius_m, range * config.covariance.azimuth_resolution_rad);
+  }
+
+  // Of every known-size box worth considering, the most consistent one per assignment.
+  std::array<Hypothesis, 2> best_hypotheses(const VehicleSize& size) const {
+    std::array<Hypothesis, 2> best;
+    for (int length_axis = 0; length_axis < 2; ++length_axis) {
+      bool first = true;
+      const std::array<double, 2> dims = length_axis == 0 ? std::array<double, 2>{size.length, size.width}
+                                                          : std::array<double, 2>{size.width, size.length};
+      const auto along0 = axis_options(0, dims[0]);
+      const auto along1 = axis_options(1, dims[1]);
+      for (const auto& o0 : along0) {
+        for (const auto& o1 : along1) {
+          Hypothesis h;
+          h.length_axis = length_axis;
+          h.centre = {o0.centre, o1.centre};
+          h.half = {dims[0] / 2.0, dims[1] / 2.0};
+          h.anchor = {o0.anchor, o1.anchor};
+          h.evidence = {o0.evidence, o1.evidence};
+          h.score = score(h);
+          if (first || h.score < best[static_cast<std::size_t>(length_axis)].score) {
+            best[static_cast<std::size_t>(length_axis)] = h;
+            first = false;
+          }
+        }
+      }
+    }
+    return best;
+  }
+
+  const Frame& frame() const { return frame_; }
+
+ private:
+  // Where the known-size box can sit along axis a (dimension `dim` on that axis).
+  std::vector<AxisOption> axis_options(int a, double dim) const {
+    const auto ua = static_cast<std::size_t>(a);
+    const RectangleEdge& low = fit_.edges[kLowEdge[ua]];
+    const RectangleEdge& high = fit_.edges[kHighEdge[ua]];
+    const double lo = -half_extent_[a];
+    const double hi = half_extent_[a];
+    if (low.seen || high.seen) {
+      // A box seen from outside shows at most one of two opposite faces; prefer the better supported.
+      const bool use_low = low.seen && (!high.seen || low.support_points >= high.support_points);
+      const double face = face_position(a, use_low ? lo : hi);
+      const std::size_t n = use_low ? low.support_points : high.support_points;
+      const double centre = use_low ? face + dim / 2.0 : face - dim / 2.0;
+      return {{centre, face, {AxisAnchor::face, n}}};
+    }
+    if (std::abs((hi - lo) - dim) <= config_.full_face_tolerance_m) {
+      return {{0.5 * (lo + hi), 0.5 * (lo + hi), {AxisAnchor::midpoint, 0}}};
+    }
+    // Only face ends fix this axis and the points do not span the known size: either end may be the
+    // real one. The end nearer the LiDAR goes first (ties keep it), after Algorithm 1's reasoning.
+    AxisOption from_low{lo + dim / 2.0, lo, {AxisAnchor::one_end, 0}};
+    AxisOption from_high{hi - dim / 2.0, hi, {AxisAnchor::one_end, 0}};
+    if (std::abs(lidar_[a] - hi) < std::abs(lidar_[a] - lo)) {
+      std::swap(from_low, from_high);
+    }
+    return {from_low, from_high};
+  }
+
+  // Median coordinate on axis a of the points supporting the face at coordinate `bound`: robust to the
+  // outward bias of the extreme point that bounds the fitted rectangle.
+  double face_position(int a, double bound) const {
+    const int b = 1 - a;
+    const double d = config_.edge_support_m;
+    std::vector<double> v;
+    for (const auto& p : pts_) {
+      if (std::abs(p[a] - bound) <= d && std::abs(p[b]) <= half_extent_[b] + d) {
+        v.push_back(p[a]);
+      }
+    }
+    return v.empty() ? bound : median(v);
+  }
+
+  // Inconsistency of a hypothesis box with the points, in [0, 2]: the fraction of points outside it
+  // plus the fraction (weighted by the cosine of incidence) of its LiDAR-facing outline without points.
+  double score(const Hypothesis& h) const {
+    std::size_t outside = 0;
+    for (const auto& p : pts_) {
+      const Eigen::Vector2d q = (p - h.centre).cwiseAbs() - h.half;
+      if (q.maxCoeff() > config_.outside_tolerance_m) {
+        ++outside;
+      }
+    }
+    const double outside_fraction = pts_.empty() ? 0.0 : static_cast<double>(outside) / static_cast<double>(pts_.size());
+
+    double expected = 0.0;
+    double missing = 0.0;
+    for (int a = 0; a < 2; ++a) {
+      for (const double side : {-1.0, 1.0}) {
+        const double face = h.centre[a] + side * h.half[a];
+        const double towards = side * (lidar_[a] - face);
+        if (towards <= 0.0) {
+          continue;  // faces away from the LiDAR
+        }
+        face_coverage(h, a, face, towards, expected, missing);
+      }
+    }
+    const double uncovered_fraction = expected > 0.0 ? missing / expected : 1.0;
+    return outside_fraction + uncovered_fraction;
+  }
+
+  void face_coverage(const Hypothesis& h, int a, double face, double towards, double& expected,
+                     double& missing) const {
+    const int b = 1 - a;
+    const double from = h.centre[b] - h.half[b];
+    const double length = 2.0 * h.half[b];
+    const auto bins = static_cast<std::size_t>(std::max(1.0, std::ceil(length / config_.face_bin_m)));
+    const double bin = length / static_cast<double>(bins);
+    std::vector<bool> covered(bins, false);
+    for (const auto& p : pts_) {
+      if (std::abs(p[a] - face) > cover_radius_) {
+        continue;
+      }
+      const double t0 = (p[b] - cover_radius_ - from) / bin;
+      const double t1 = (p[b] + cover_radius_ - from) / bin;
+      if (t1 < 0.0 || t0 >= static_cast<double>(bins)) {
+        continue;
+      }
+      const auto j0 = static_cast<std::size_t>(std::max(0.0, std::floor(t0)));
+      const auto j1 = std::min(bins - 1, static_cast<std::size_t>(std::floor(t1)));
+      for (std::size_t j = j0; j <= j1; ++j) {
+        covered[j] = true;
+      }
+    }
+    for (std::size_t j = 0; j < bins; ++j) {
+      const double t = from + (static_cast<double>(j) + 0.5) * bin;
+      const double along = lidar_[b] - t;
+      const double cos_incidence = towards / std::sqrt(towards * towards + along * along);
+      if (cos_incidence < config_.min_incidence_cos) {
+        continue;
+      }
+      expected += cos_incidence;
+      if (!covered[j]) {
+        missing += cos_incidence;
+      }
+    }
+  }
+
+  const RectangleFit& fit_;
+  const CorrectionConfig& config_;
+  Frame frame_;
+  std::vector<Eigen::Vector2d> pts_;  // local
+  Eigen::Vector2d lidar_;             // local
+  Eigen::Vector2d half_extent_;       // of the fitted rectangle
+  double cover_radius_;
+};
+
+}  // namespace
+
+CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy,
+                               const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
+                               const std::optional<YawPrior>& prior, const CorrectionConfig& config) {
+  CorrectedPose out;
+  if (!fit.ok()) {
+    out.status = CorrectionStatus::no_fit;
+    return out;
+  }
+  if (!(std::isfinite(size.length) && std::isfinite(size.width) && size.length > 0.0 && size.width > 0.0)) {
+    out.status = CorrectionStatus::invalid_size;
+    return out;
+  }
+  if (!lidar_xy.allFinite() ||
+      (prior && !(std::isfinite(prior->yaw) && std::isfinite(prior->sigma) && prior->sigma > 0.0))) {
+    out.status = CorrectionStatus::invalid_input;
+    return out;
+  }
+
+  const Corrector corrector(fit, cluster_xy, lidar_xy, config);
+  const std::array<Hypothesis, 2> best = corrector.best_hypotheses(size);
+
+  // Log-odds that the length lies along e1 rather than e2.
+  const double geometry_log_odds = (best[1].score - best[0].score) / config.geometry_scale;
+  double prior_log_odds = 0.0;
+  if (prior) {
+    // Angular distance (mod pi) of the prior from e1; e2 is pi/2 minus it.
+    const double d0 = std::abs(fold_half_turn(prior->yaw - fit.yaw));
+    const double d1 = kPi / 2.0 - d0;
+    prior_log_odds = (d1 * d1 - d0 * d0) / (2.0 * prior->sigma * prior->sigma);
+  }
+  const bool prior_decisive = prior && logistic(std::abs(prior_log_odds)) >= config.min_confidence;
+  const double log_odds = prior_decisive ? prior_log_odds : geometry_log_odds + prior_log_odds;
+  int chosen = log_odds > 0.0 ? 0 : 1;
+  if (log_odds == 0.0) {  // a perfect tie: fall back on Algorithm 1's rule (the longer edge is the length)
+    chosen = fit.length0 >= fit.length1 ? 0 : 1;
+  }
+  const Hypothesis& h = best[static_cast<std::size_t>(chosen)];
+  const Hypothesis& other = best[static_cast<std::size_t>(1 - chosen)];
+  out.confidence = logistic(std::abs(log_odds));
+  if (prior_decisive) {
+    out.resolution = AmbiguityResolution::prior;
+  } else {
+    out.resolution = out.confidence >= config.min_confidence ? AmbiguityResolution::geometry
+                                                             : AmbiguityResolution::unresolved;
+  }
+
+  const Frame& frame = corrector.frame();
+  const Eigen::Vector2d centre = frame.map(h.centre);
+  double yaw = fit.yaw + (chosen == 0 ? 0.0 : kPi / 2.0);
+  if (prior) {
+    yaw = angle_distance(yaw, prior->yaw) <= kPi / 2.0 ? wrap_angle(yaw) : wrap_angle(yaw + kPi);
+    out.heading_from_prior = true;
+  } else {
+    yaw = fold_half_turn(yaw);
+  }
+  out.status = CorrectionStatus::ok;
+  out.pose = {centre.x(), centre.y(), yaw};
+  out.alignment_point = frame.map(h.anchor);
+
+  FixEvidence evidence;
+  evidence.range_m = (out.alignment_point - lidar_xy).norm();
+  evidence.yaw = yaw;
+  evidence.lever = centre - out.alignment_point;
+  evidence.length_axis = h.evidence[static_cast<std::size_t>(chosen)];
+  evidence.width_axis = h.evidence[static_cast<std::size_t>(1 - chosen)];
+  std::size_t f = 0;
+  for (std::size_t i = 0; i < 4 && f < 2; ++i) {
+    if (fit.edges[i].seen) {
+      evidence.seen_faces[f++] = {fit.edges[i].support_points, i % 2 == 0 ? fit.length0 : fit.length1};
+    }
+  }
+  evidence.assignment_confidence = out.confidence;
+  evidence.alternative_offset = frame.map(other.centre) - centre;
+  out.covariance = fix_covariance(evidence, config.covariance);
+  return out;
+}
+
+}  // namespace rsu::perception

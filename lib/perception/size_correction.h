@@ -1,0 +1,93 @@
+// Size correction (paper Sec. 3.2): the connected vehicle announces its footprint size; the RSU aligns
+// a box of that size with the fitted rectangle and reports the box's centre and yaw.
+//
+//  - correct_algorithm1: Algorithm 1 exactly as the paper writes it. P = the fitted corner nearest the
+//    LiDAR (the "alignment point"), Pl, Pr its neighbours, L, R the unit vectors to them; the shorter
+//    fitted edge takes the vehicle's width and the longer its length (the paper's <width, height> is the
+//    footprint's width and length). Off by 90 deg when the LiDAR saw only the front or back (then the
+//    fitted box's longer edge is the vehicle's width).
+//  - correct_improved: decides which fitted edge is the length (a) by the vehicle's own yaw prior, when
+//    it is decisive, else (b) by building the known-size box for both assignments (and, where the
+//    position along an axis is not fixed by a seen face, anchored at either end) and keeping the box
+//    most consistent with the points: no points outside it, and its faces that face the LiDAR covered by
+//    points (a face the LiDAR should have seen but did not speaks against the box). Along each axis the
+//    centre comes from the seen face perpendicular to it (its median position, + half the known size),
+//    or, when the points span the whole known size without such a face, from the middle of their extent.
+//
+// Yaw is the direction of the length axis. A box has no front: without a prior, yaw is reported mod pi in
+// (-pi/2, pi/2]; with a prior, the one of yaw and yaw + pi nearer the prior (heading_from_prior = true).
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string_view>
+
+#include <Eigen/Core>
+
+#include "common/pose.h"
+#include "perception/fix_covariance.h"
+#include "perception/rectangle_fit.h"
+
+namespace rsu::perception {
+
+struct VehicleSize {
+  double length = 4.89;  // DESIGN.md §2: Lexus RX450h
+  double width = 1.92;
+};
+
+// The vehicle's own yaw estimate (map frame, counter-clockwise from +x) and its standard deviation.
+struct YawPrior {
+  double yaw = 0.0;
+  double sigma = deg_to_rad(10.0);
+};
+
+enum class CorrectionStatus {
+  ok,
+  no_fit,              // the rectangle fit failed (see its status)
+  invalid_size,        // size not finite and positive
+  invalid_input,       // LiDAR position or prior not finite
+};
+
+enum class AmbiguityResolution {
+  edge_lengths,  // Algorithm 1: the longer fitted edge is the length
+  prior,         // the vehicle's yaw prior was decisive
+  geometry,      // the point-consistency test was decisive
+  unresolved,    // neither was; the more consistent assignment is reported with its low confidence
+};
+
+std::string_view to_string(CorrectionStatus status);
+std::string_view to_string(AmbiguityResolution resolution);
+
+struct CorrectedPose {
+  CorrectionStatus status = CorrectionStatus::no_fit;
+  Pose2 pose;                                          // footprint centre; yaw of the length axis
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // (x, y, yaw), see fix_covariance.h
+  AmbiguityResolution resolution = AmbiguityResolution::unresolved;
+  double confidence = 0.0;  // probability the length/width assignment is right; 1 for Algorithm 1
+  bool heading_from_prior = false;
+  Eigen::Vector2d alignment_point = Eigen::Vector2d::Zero();  // the point the box was anchored at
+
+  bool ok() const { return status == CorrectionStatus::ok; }
+};
+
+struct CorrectionConfig {
+  double outside_tolerance_m = 0.15;   // a point farther outside a hypothesis box than this counts against it
+  double cover_radius_m = 0.15;        // a point covers a face within this (at least the point spacing)
+  double face_bin_m = 0.1;             // faces are checked for coverage in bins of this length
+  double min_incidence_cos = 0.1;      // faces seen more obliquely than ~84 deg are not expected to show
+  double full_face_tolerance_m = 0.3;  // points spanning the known size within this: both ends seen
+  double edge_support_m = 0.15;        // points this close to a face locate it (as LShapeFitConfig)
+  double geometry_scale = 0.05;        // score difference per unit of log-odds between the assignments
+  double min_confidence = 0.9;         // resolved only above this; a prior this decisive is trusted
+  CovarianceModelConfig covariance;
+};
+
+CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
+                                 const CovarianceModelConfig& covariance = {});
+
+// cluster_xy: the cluster's footprint points (the ones the fit was made from); non-finite ones ignored.
+CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy,
+                               const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
+                               const std::optional<YawPrior>& prior, const CorrectionConfig& config = {});
+
+}  // namespace rsu::perception

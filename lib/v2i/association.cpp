@@ -1,0 +1,152 @@
+#include "v2i/association.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "v2i/assignment.h"
+
+namespace rsu::v2i {
+namespace {
+
+bool is_finite(const FittedCluster& c) {
+  return c.centre.allFinite() && std::isfinite(c.yaw) && std::isfinite(c.edge_along_m) &&
+         std::isfinite(c.edge_across_m) && c.edge_along_m >= 0.0 && c.edge_across_m >= 0.0;
+}
+
+bool is_finite(const VehicleHypothesis& v) {
+  return v.centre.allFinite() && std::isfinite(v.yaw) && v.covariance.allFinite() &&
+         std::isfinite(v.size.length_m) && std::isfinite(v.size.width_m);
+}
+
+// How far the fitted centre may sit from the true one along each box axis because of unseen extent:
+// half the announced dimension missing from the fitted edge. Which announced dimension lies along which
+// fitted edge is unknown (the off-by-90 deg problem), so every pairing the edge lengths allow is taken
+// and the larger spread kept per axis.
+Eigen::Vector2d unseen_half_extent(const FittedCluster& c, const BoxSize& size, const AssociationConfig& cfg) {
+  const double slack_long = size.length_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
+  const double slack_wide = size.width_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
+  Eigen::Vector2d spread = Eigen::Vector2d::Zero();
+  bool any = false;
+  // Pairing 1: along <-> length, across <-> width. Pairing 2: along <-> width, across <-> length.
+  if (c.edge_along_m <= size.length_m + slack_long && c.edge_across_m <= size.width_m + slack_wide) {
+    spread = spread.cwiseMax(Eigen::Vector2d(std::max(0.0, size.length_m - c.edge_along_m),
+                                             std::max(0.0, size.width_m - c.edge_across_m)));
+    any = true;
+  }
+  if (c.edge_along_m <= size.width_m + slack_wide && c.edge_across_m <= size.length_m + slack_long) {
+    spread = spread.cwiseMax(Eigen::Vector2d(std::max(0.0, size.width_m - c.edge_along_m),
+                                             std::max(0.0, size.length_m - c.edge_across_m)));
+    any = true;
+  }
+  return any ? Eigen::Vector2d(0.5 * spread) : Eigen::Vector2d::Zero();
+}
+
+bool size_consistent(const FittedCluster& c, const BoxSize& size, const AssociationConfig& cfg) {
+  const double longer = std::max(c.edge_along_m, c.edge_across_m);
+  const double shorter = std::min(c.edge_along_m, c.edge_across_m);
+  return longer <= size.length_m * (1.0 + cfg.size_relative_tolerance) + cfg.size_absolute_tolerance_m &&
+         shorter <= size.width_m * (1.0 + cfg.size_relative_tolerance) + cfg.size_absolute_tolerance_m;
+}
+
+}  // namespace
+
+PairCheck check_pair(const FittedCluster& cluster, const VehicleHypothesis& vehicle,
+                     const AssociationConfig& config) {
+  PairCheck out;
+  if (!is_finite(cluster) || !is_finite(vehicle)) {
+    return out;  // kInvalid
+  }
+  if (!size_consistent(cluster, vehicle.size, config)) {
+    out.verdict = PairGate::kSizeMismatch;
+    return out;
+  }
+  Eigen::Matrix2d s = vehicle.covariance.topLeftCorner<2, 2>();
+  s += config.fit_sigma_floor_m * config.fit_sigma_floor_m * Eigen::Matrix2d::Identity();
+  if (config.inflate_for_unseen_extent) {
+    const Eigen::Vector2d half = unseen_half_extent(cluster, vehicle.size, config);
+    const double c = std::cos(cluster.yaw);
+    const double sn = std::sin(cluster.yaw);
+    Eigen::Matrix2d axes;
+    axes << c, -sn, sn, c;
+    s += axes * half.cwiseProduct(half).asDiagonal() * axes.transpose();
+  }
+  const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
+  if (!(det > 0.0) || !(s(0, 0) > 0.0)) {
+    return out;  // kInvalid: the vehicle's covariance is not positive semi-definite
+  }
+  const Eigen::Vector2d d = cluster.centre - vehicle.centre;
+  // d^T S^-1 d with the closed-form 2x2 inverse.
+  out.distance_sq = (s(1, 1) * d.x() * d.x() - (s(0, 1) + s(1, 0)) * d.x() * d.y() + s(0, 0) * d.y() * d.y()) / det;
+  out.verdict = out.distance_sq <= config.gate_chi2 ? PairGate::kPass : PairGate::kTooFar;
+  return out;
+}
+
+AssociationResult associate(std::span<const FittedCluster> clusters, std::span<const VehicleHypothesis> vehicles,
+                            const AssociationConfig& config) {
+  AssociationResult result;
+  const auto n_clusters = static_cast<Eigen::Index>(clusters.size());
+  const auto n_vehicles = static_cast<Eigen::Index>(vehicles.size());
+
+  // Rows: vehicles. Columns: clusters, then one private "no cluster" column per vehicle costing the
+  // gate value. A forbidden pairing costs more than leaving every vehicle unmatched, so the optimum
+  // never uses one while staying finite (the solver's potentials stay well conditioned).
+  const double unmatched_cost = config.gate_chi2;
+  const double forbidden = unmatched_cost * static_cast<double>(n_vehicles + 1) + 1.0;
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(n_vehicles, n_clusters + n_vehicles, forbidden);
+  Eigen::MatrixXd distance = Eigen::MatrixXd::Zero(n_vehicles, n_clusters);
+  bool any_pass = false;
+  for (Eigen::Index v = 0; v < n_vehicles; ++v) {
+    cost(v, n_clusters + v) = unmatched_cost;
+    for (Eigen::Index c = 0; c < n_clusters; ++c) {
+      const PairCheck check = check_pair(clusters[static_cast<std::size_t>(c)],
+                                         vehicles[static_cast<std::size_t>(v)], config);
+      switch (check.verdict) {
+        case PairGate::kPass:
+          cost(v, c) = check.distance_sq;
+          distance(v, c) = check.distance_sq;
+          any_pass = true;
+          break;
+        case PairGate::kTooFar:
+          ++result.pairs_too_far;
+          break;
+        case PairGate::kSizeMismatch:
+          ++result.pairs_size_mismatch;
+          break;
+        case PairGate::kInvalid:
+          ++result.pairs_invalid;
+          break;
+      }
+    }
+  }
+
+  std::vector<char> cluster_used(clusters.size(), 0);
+  std::vector<char> vehicle_used(vehicles.size(), 0);
+  if (any_pass) {
+    const std::optional<Assignment> assignment = solve_assignment(cost);
+    if (assignment) {
+      for (Eigen::Index v = 0; v < n_vehicles; ++v) {
+        const int c = assignment->row_to_col[static_cast<std::size_t>(v)];
+        if (c >= 0 && c < n_clusters && cost(v, c) < forbidden) {
+          result.pairs.push_back({static_cast<std::size_t>(c), static_cast<std::size_t>(v), distance(v, c)});
+          cluster_used[static_cast<std::size_t>(c)] = 1;
+          vehicle_used[static_cast<std::size_t>(v)] = 1;
+        }
+      }
+    }
+  }
+  std::sort(result.pairs.begin(), result.pairs.end(),
+            [](const AssociatedPair& a, const AssociatedPair& b) { return a.cluster < b.cluster; });
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (!cluster_used[c]) {
+      result.unmatched_clusters.push_back(c);
+    }
+  }
+  for (std::size_t v = 0; v < vehicles.size(); ++v) {
+    if (!vehicle_used[v]) {
+      result.unmatched_vehicles.push_back(v);
+    }
+  }
+  return result;
+}
+
+}  // namespace rsu::v2i

@@ -1,0 +1,80 @@
+// V2I messages as plain C++ data (decoded from / encoded to proto/v2i.proto by wire_codec.h).
+// Map frame ENU, metres, radians CCW from east; vehicle frame x forward, y left; time in ns of the
+// common clock (DESIGN.md §3).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "common/pose.h"
+#include "common/time.h"
+
+namespace rsu::v2i {
+
+// The wire format version this code speaks (V2iMessage.protocol_version).
+inline constexpr std::uint32_t kProtocolVersion = 1;
+
+struct BoxSize {
+  double length_m = 0.0;  // along vehicle x
+  double width_m = 0.0;   // along vehicle y
+  double height_m = 0.0;
+};
+
+struct UdpEndpoint {
+  std::string address;     // numeric IPv4 or IPv6 literal
+  std::uint32_t port = 0;  // as on the wire; validation checks 1..65535
+};
+
+struct VehicleAnnouncement {
+  std::uint32_t protocol_version = kProtocolVersion;
+  std::uint64_t vehicle_id = 0;
+  std::uint32_t sequence = 0;
+  TimeNs generation_time = 0;
+  BoxSize size;
+  // Reference point minus footprint box centre, vehicle frame (zero: the pose is the box centre).
+  Eigen::Vector2d reference_offset = Eigen::Vector2d::Zero();
+  Pose2 pose;  // of the reference point
+  Eigen::Matrix3d pose_covariance = Eigen::Matrix3d::Identity();  // (x, y, yaw)
+  std::optional<double> speed_mps;
+  std::optional<double> yaw_rate_rps;
+  UdpEndpoint reply_to;
+};
+
+enum class YawResolution : std::uint8_t {
+  kUnresolved = 0,  // yaw only meaningful modulo pi
+  kPrior = 1,       // branch nearest the vehicle's announced yaw
+  kGeometry = 2,    // branch fixed by what the RSU saw
+};
+
+struct CorrectionQuality {
+  std::uint32_t points_used = 0;
+  std::uint32_t faces_seen = 0;
+  double range_m = 0.0;
+  YawResolution yaw_resolution = YawResolution::kUnresolved;
+  double confidence = 0.0;  // 0..1
+};
+
+struct Correction {
+  std::uint32_t protocol_version = kProtocolVersion;
+  std::uint64_t rsu_id = 0;
+  std::uint64_t vehicle_id = 0;
+  std::uint32_t sequence = 0;
+  TimeNs sweep_time = 0;  // when the LiDAR swept the vehicle
+  Pose2 pose;             // footprint box centre
+  Eigen::Matrix3d pose_covariance = Eigen::Matrix3d::Identity();
+  CorrectionQuality quality;
+  std::uint32_t announcement_sequence = 0;
+};
+
+struct RsuAdvertisement {
+  std::uint32_t protocol_version = kProtocolVersion;
+  std::uint64_t rsu_id = 0;
+  Pose3 lidar_pose;
+  double coverage_radius_m = 0.0;
+  std::uint32_t correction_port = 0;
+  std::uint32_t announcement_port = 0;
+};
+
+}  // namespace rsu::v2i

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Configure and build one build tree. Usage: scripts/build.sh [release|asan] (default release).
+# release -> build/      (Release, warnings are errors, benchmarks included)
+# asan    -> build-asan/ (RelWithDebInfo with AddressSanitizer + UndefinedBehaviorSanitizer, no benchmarks)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+kind=${1:-release}
+jobs=${RSU_JOBS:-$(nproc)}
+case "$kind" in
+  release)
+    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DRSU_WERROR=ON >/dev/null
+    cmake --build build -j "$jobs"
+    ;;
+  asan)
+    cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE=ON \
+      -DRSU_BUILD_BENCHMARKS=OFF -DRSU_WERROR=ON >/dev/null
+    cmake --build build-asan -j "$jobs"
+    ;;
+  *) echo "usage: $0 [release|asan]" >&2; exit 2 ;;
+esac

@@ -1,0 +1,43 @@
+// Scenario files (YAML): the LiDAR, its mount, the scene and the vehicles (scenarios/*.yaml).
+// Every error names the file, the line and the field, e.g.
+//   scenarios/pilot.yaml:12: lidar.mount.z: expected a number, got "two"
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "common/pose.h"
+#include "common/time.h"
+#include "lidar/sensor_model.h"
+#include "sim/scene.h"
+
+namespace rsu::sim {
+
+struct LidarConfig {
+  std::string model_name = "vlp16";
+  SensorModel model;           // resolved from model_name (and rpm)
+  Pose3 mount;                 // sensor pose in the map frame
+  NoiseModel noise;
+  double start_azimuth_deg = 0.0;
+};
+
+struct Scenario {
+  std::string name;
+  std::string source;          // file the scenario was read from
+  LidarConfig lidar;
+  Scene scene;
+  TimeNs start_ns = 0;         // time of the first simulated frame
+  int frames = 10;             // how many frames the main command simulates
+};
+
+class ScenarioError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Throws ScenarioError with "<source>:<line>: <field path>: <what is wrong>".
+Scenario parse_scenario(std::string_view yaml_text, const std::string& source_name);
+Scenario load_scenario_file(const std::string& path);
+
+}  // namespace rsu::sim

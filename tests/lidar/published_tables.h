@@ -1,0 +1,23 @@
+// The tests' own copy of the published sensor tables (DESIGN.md §2), independent of the library's.
+#pragma once
+
+#include <array>
+
+namespace rsu::test {
+
+constexpr std::array<double, 16> kVlp16ElevationDeg = {-15, 1, -13, 3,  -11, 5,  -9, 7,
+                                                       -7,  9, -5,  11, -3,  13, -1, 15};
+
+constexpr std::array<double, 32> kVlp32cElevationDeg = {
+    -25,    -1,     -1.667, -15.639, -11.31, 0,      -0.667, -8.843, -7.254, 0.333,  -0.333,
+    -6.148, -5.333, 1.333,  0.667,   -4,     -4.667, 1.667,  1,      -3.667, -3.333, 3.333,
+    2.333,  -2.667, -3,     7,       4.667,  -2.333, -2,     15,     10.333, -1.333};
+
+constexpr std::array<double, 32> kVlp32cAzimuthOffsetDeg = {
+    -1.4, 4.2, -1.4, 1.4, -1.4, 1.4, -4.2, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 1.4,
+    -1.4, 4.2, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4, -1.4, 1.4, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4};
+
+constexpr double kSequenceUs = 55.296;
+constexpr double kFiringIntervalUs = 2.304;
+
+}  // namespace rsu::test

@@ -1,0 +1,293 @@
+#include "sim/raycaster.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "geometry_checks.h"
+#include "sim/trajectory.h"
+
+namespace rsu::sim {
+namespace {
+
+constexpr double kMm = 1e-3;
+
+Eigen::Vector3d random_unit(std::mt19937& rng) {
+  std::normal_distribution<double> n;
+  Eigen::Vector3d d(n(rng), n(rng), n(rng));
+  return d.normalized();
+}
+
+Scene ground_only() {
+  Scene s;
+  s.ground.half_extent_m = 200.0;
+  return s;
+}
+
+TEST(Raycaster, HitsTheGroundPlaneExactly) {
+  const Raycaster rc(ground_only());
+  std::mt19937 rng(1);
+  const Eigen::Vector3d origin(1.0, 2.0, 3.0);
+  int tested = 0;
+  for (int i = 0; i < 500; ++i) {
+    Eigen::Vector3d d = random_unit(rng);
+    if (d.z() > -0.05) {
+      continue;  // the plane must be hit within its 200 m extent
+    }
+    ++tested;
+    const double expected = origin.z() / -d.z();  // origin.z + s d.z = 0
+    const RayHit h = rc.cast(origin, d, 0);
+    ASSERT_TRUE(h.hit());
+    EXPECT_NEAR(h.range, expected, kMm);
+    EXPECT_EQ(h.surface, SurfaceClass::kGround);
+    EXPECT_DOUBLE_EQ(h.reflectivity, Reflectivity{}.ground);
+    EXPECT_NEAR(h.normal.z(), 1.0, 1e-6);
+  }
+  EXPECT_GT(tested, 200);
+  // Upward rays and rays beyond max_range miss.
+  EXPECT_FALSE(rc.cast(origin, {0.3, 0.1, 1.0}, 0).hit());
+  EXPECT_FALSE(rc.cast(origin, {0.0, 0.0, -1.0}, 0, 2.9).hit());
+  EXPECT_TRUE(rc.cast(origin, {0.0, 0.0, -1.0}, 0, 3.1).hit());
+}
+
+TEST(Raycaster, HitsARotatedBuildingWhereTheSlabTestSays) {
+  Scene scene = ground_only();
+  Building b;
+  b.x = 20.0;
+  b.y = 5.0;
+  b.yaw = 0.3;
+  b.length = 10.0;
+  b.width = 6.0;
+  b.height = 8.0;
+  scene.buildings.push_back(b);
+  const Raycaster rc(scene);
+  // The test's own model: the box [-l/2, l/2] x [-w/2, w/2] x [0, h] in the building frame.
+  const Eigen::Affine3d to_map =
+      Eigen::Translation3d(b.x, b.y, 0.0) * Eigen::AngleAxisd(b.yaw, Eigen::Vector3d::UnitZ());
+  const Eigen::Affine3d to_box = to_map.inverse();
+  const Eigen::Vector3d lo(-5.0, -3.0, 0.0), hi(5.0, 3.0, 8.0);
+  const Eigen::Vector3d origin(0.0, 0.0, 2.0);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int hits = 0;
+  for (int i = 0; i < 300; ++i) {
+    // Aim at random points of the box volume (and a bit around it).
+    const Eigen::Vector3d target = to_map * Eigen::Vector3d(6.0 * u(rng), 3.6 * u(rng), 4.0 + 5.0 * u(rng));
+    const Eigen::Vector3d d = (target - origin).normalized();
+    const auto expected = testing::ray_box(to_box * origin, to_box.linear() * d, lo, hi);
+    const RayHit h = rc.cast(origin, d, 0);
+    if (!expected) {
+      EXPECT_NE(h.surface, SurfaceClass::kBuilding);
+      continue;
+    }
+    ++hits;
+    ASSERT_EQ(h.surface, SurfaceClass::kBuilding);
+    EXPECT_NEAR(h.range, expected->s, kMm);
+    EXPECT_NEAR((h.normal - to_map.linear() * expected->normal).norm(), 0.0, 1e-5);
+    EXPECT_DOUBLE_EQ(h.reflectivity, Reflectivity{}.building);
+  }
+  EXPECT_GT(hits, 100);
+}
+
+// A fine icosphere is an inscribed polyhedron: every hit lies between the circumscribed sphere (its
+// vertices' radius r) and the inscribed sphere (the smallest distance from the centre to a face
+// plane, computed here from the mesh's faces), and the test requires the latter to be within 0.5 %.
+TEST(Raycaster, HitsASphereBetweenItsInscribedAndCircumscribedSpheres) {
+  Scene scene = ground_only();
+  Shrub ball;  // equal extents: a sphere of radius 1 centred 1 m above the ground
+  ball.x = 8.0;
+  ball.y = -3.0;
+  ball.length = ball.width = ball.height = 2.0;
+  scene.shrubs.push_back(ball);
+  RaycasterConfig config;
+  config.sphere_subdivisions = 4;
+  const Raycaster rc(scene, config);
+  const Eigen::Vector3d centre(8.0, -3.0, 1.0);
+  const double r = 1.0;
+  const TriangleMesh& mesh = rc.static_mesh(SurfaceClass::kVegetation);
+  double r_in = std::numeric_limits<double>::infinity();
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = testing::vertex(mesh, t[0]);
+    const Eigen::Vector3d n = (testing::vertex(mesh, t[1]) - a).cross(testing::vertex(mesh, t[2]) - a).normalized();
+    r_in = std::min(r_in, std::abs(n.dot(a - centre)));
+  }
+  ASSERT_GT(r_in, 0.995 * r);
+  const Eigen::Vector3d origin(0.0, 0.0, 1.5);
+  std::mt19937 rng(3);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d target = centre + 0.9 * r_in * random_unit(rng);
+    const Eigen::Vector3d d = (target - origin).normalized();
+    const auto outer = testing::ray_sphere(origin, d, centre, r);
+    const auto inner = testing::ray_sphere(origin, d, centre, r_in);
+    ASSERT_TRUE(outer && inner);
+    const RayHit h = rc.cast(origin, d, 0);
+    ASSERT_EQ(h.surface, SurfaceClass::kVegetation);
+    EXPECT_GE(h.range, *outer - kMm);
+    EXPECT_LE(h.range, *inner + kMm);
+    // The facet normal is within a facet's angular size of the radial direction.
+    const Eigen::Vector3d radial = (origin + h.range * d - centre).normalized();
+    EXPECT_GT(h.normal.dot(radial), 0.99);
+  }
+}
+
+TEST(Raycaster, BadRaysMissWithoutCrashing) {
+  const Raycaster rc(ground_only());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(rc.cast({nan, 0, 1}, {0, 0, -1}, 0).hit());
+  EXPECT_FALSE(rc.cast({0, 0, 1}, {0, 0, 0}, 0).hit());
+  EXPECT_FALSE(rc.cast({0, 0, 1}, {0, nan, -1}, 0).hit());
+  EXPECT_FALSE(rc.cast({0, 0, 1}, {0, 0, -1}, 0, -5.0).hit());
+  std::vector<Ray> rays(3);
+  rays[0].origin = {0, 0, 1};
+  rays[0].direction = {0, 0, -1};
+  rays[1].origin = {nan, 0, 1};
+  rays[2].direction = {0, 0, 0};
+  std::vector<RayHit> hits(3);
+  rc.cast_batch(rays, hits);
+  EXPECT_TRUE(hits[0].hit());
+  EXPECT_FALSE(hits[1].hit());
+  EXPECT_FALSE(hits[2].hit());
+  std::vector<RayHit> too_few(2);
+  EXPECT_THROW(rc.cast_batch(rays, too_few), std::invalid_argument);
+}
+
+TEST(Raycaster, InvalidScenesThrowNamingTheObject) {
+  Scene scene = ground_only();
+  scene.buildings.push_back(Building{});
+  scene.buildings.push_back(Building{});
+  scene.buildings[1].height = std::numeric_limits<double>::quiet_NaN();
+  try {
+    const Raycaster rc(scene);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("building 1"), std::string::npos) << e.what();
+  }
+  Scene twins = ground_only();
+  twins.vehicles.resize(2);
+  twins.vehicles[0].id = twins.vehicles[1].id = 4;
+  EXPECT_THROW(const Raycaster rc(twins), std::invalid_argument);
+  Scene bad_shape = ground_only();
+  bad_shape.vehicles.resize(1);
+  bad_shape.vehicles[0].shape.width = -1.0;
+  EXPECT_THROW(const Raycaster rc(bad_shape), std::invalid_argument);
+}
+
+// Side view of a parked car: a low horizontal ray over the wheel centre hits the tyre (slightly
+// inboard of the body side, through the arch); the same ray between the axles hits the body side.
+TEST(Raycaster, LowRaysHitTyresThroughTheArchesAndTheBodyBetweenThem) {
+  Scene scene = ground_only();
+  Vehicle v;
+  v.id = 42;
+  v.trajectory = StaticPose{{5.0, 10.0, 0.4}};
+  scene.vehicles.push_back(v);
+  const Raycaster rc(scene);
+  const VehicleShape& s = v.shape;
+  const Eigen::Matrix3d rot = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d pos(5.0, 10.0, 0.0);
+  const Eigen::Vector3d inward = rot * Eigen::Vector3d(0, -1, 0);  // from the car's left side
+  for (const double x_v : {0.5 * s.wheelbase, -0.5 * s.wheelbase, 0.0}) {
+    const Eigen::Vector3d origin = pos + rot * Eigen::Vector3d(x_v, 5.0, s.wheel_radius);
+    const RayHit h = rc.cast(origin, inward, 0);
+    ASSERT_EQ(h.surface, SurfaceClass::kVehicle);
+    EXPECT_EQ(h.vehicle_id, 42U);
+    EXPECT_DOUBLE_EQ(h.reflectivity, Reflectivity{}.vehicle);
+    const double y_hit = 5.0 - h.range;  // vehicle-frame y of the hit
+    if (x_v == 0.0) {
+      EXPECT_NEAR(y_hit, 0.5 * s.width, kMm);  // body side
+    } else {
+      EXPECT_LT(y_hit, 0.5 * s.width - 0.01);  // tyre, inboard
+      EXPECT_GT(y_hit, 0.5 * s.width - 0.05);
+    }
+    EXPECT_NEAR((h.normal - rot * Eigen::Vector3d(0, 1, 0)).norm(), 0.0, 1e-3);
+  }
+}
+
+// A vehicle driving along +x at 30 m/s: each ray sees it where it is at that ray's own time.
+TEST(Raycaster, EachRaySeesTheVehicleAtItsOwnTime) {
+  Scene scene = ground_only();
+  Vehicle v;
+  v.id = 7;
+  const double speed = 30.0;
+  Waypoints w;
+  w.points = {{0, {0.0, 0.0, 0.0}}, {2'000'000'000, {speed * 2.0, 0.0, 0.0}}};
+  v.trajectory = w;
+  scene.vehicles.push_back(v);
+  const Raycaster rc(scene);
+  const double half_l = 0.5 * v.shape.length;
+  // From behind along +x, at a height between the arch tops and the belt line: the flat rear face.
+  const Eigen::Vector3d origin(-20.0, 0.0, 0.9);
+  for (const TimeNs t : {TimeNs{0}, TimeNs{1'000'000}, TimeNs{50'000'000}, TimeNs{777'777'777}}) {
+    const double x_rear = speed * to_seconds(t) - half_l;  // the test's own kinematics
+    const RayHit h = rc.cast(origin, Eigen::Vector3d::UnitX(), t);
+    ASSERT_EQ(h.surface, SurfaceClass::kVehicle);
+    EXPECT_NEAR(h.range, x_rear - origin.x(), kMm) << "t = " << t;
+  }
+}
+
+TEST(Raycaster, BatchedCastingMatchesSingleRays) {
+  Scene scene = ground_only();
+  for (int i = 0; i < 6; ++i) {
+    Building b;
+    b.x = -30.0 + 12.0 * i;
+    b.y = 15.0;
+    scene.buildings.push_back(b);
+    Pole p;
+    p.x = -30.0 + 12.0 * i;
+    p.y = 6.0;
+    p.arm_length = 2.0;
+    p.arm_yaw = -1.57;
+    scene.poles.push_back(p);
+    Tree t;
+    t.x = -25.0 + 12.0 * i;
+    t.y = -8.0;
+    scene.trees.push_back(t);
+  }
+  Vehicle moving;
+  moving.id = 1;
+  Waypoints w;
+  w.points = {{0, {-10.0, 3.0, 0.0}}, {1'000'000'000, {10.0, 3.0, 0.2}}};
+  moving.trajectory = w;
+  scene.vehicles.push_back(moving);
+  Vehicle spinning;
+  spinning.id = 2;
+  Spin s;
+  s.x = 4.0;
+  s.y = -4.0;
+  s.rate_rad_s = 3.0;
+  spinning.trajectory = s;
+  scene.vehicles.push_back(spinning);
+
+  std::mt19937 rng(5);
+  std::vector<Ray> rays(2000);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    rays[i].origin = {0.0, 0.0, 2.0};
+    rays[i].direction = random_unit(rng);
+    rays[i].time_ns = static_cast<TimeNs>(i) * 200'000;  // 0.4 s of sweep
+    rays[i].max_range = 80.0;
+  }
+  for (const BatchMode mode : {BatchMode::kSingle, BatchMode::kPacket16, BatchMode::kStream}) {
+    RaycasterConfig config;
+    config.batch_mode = mode;
+    const Raycaster rc(scene, config);
+    std::vector<RayHit> batch(rays.size());
+    rc.cast_batch(rays, batch);
+    int vehicle_hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const RayHit single = rc.cast(rays[i].origin, rays[i].direction, rays[i].time_ns, rays[i].max_range);
+      ASSERT_EQ(batch[i].surface, single.surface) << "ray " << i;
+      ASSERT_EQ(batch[i].vehicle_id, single.vehicle_id);
+      if (single.hit()) {
+        EXPECT_NEAR(batch[i].range, single.range, 1e-4);
+      }
+      vehicle_hits += single.surface == SurfaceClass::kVehicle ? 1 : 0;
+    }
+    EXPECT_GT(vehicle_hits, 5);
+  }
+}
+
+}  // namespace
+}  // namespace rsu::sim

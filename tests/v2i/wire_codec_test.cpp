@@ -1,0 +1,196 @@
+#include "v2i/wire_codec.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/random.h"
+#include "proto/v2i.pb.h"
+#include "test_announcement.h"
+#include "v2i/announcement_validation.h"
+
+namespace rsu::v2i {
+namespace {
+
+constexpr TimeNs kNow = 1'700'000'000 * kNsPerSecond;
+
+std::vector<std::uint8_t> serialise(const v1::V2iMessage& m) {
+  std::string s;
+  EXPECT_TRUE(m.SerializeToString(&s));
+  return {s.begin(), s.end()};
+}
+
+TEST(WireCodec, AnnouncementRoundTripKeepsEveryField) {
+  const VehicleAnnouncement in = testing::make_announcement(0x1234567890ULL, 4'000'000'000U, kNow - 123);
+  const std::vector<std::uint8_t> bytes = encode_v2i_message(in);
+  ASSERT_FALSE(bytes.empty());
+  EXPECT_LE(bytes.size(), kMaxDatagramBytes);
+  const DecodedMessage out = decode_v2i_message(bytes);
+  ASSERT_EQ(out.status, DecodeStatus::kOk);
+  const auto* a = std::get_if<VehicleAnnouncement>(&out.body);
+  ASSERT_NE(a, nullptr);
+  EXPECT_EQ(a->protocol_version, kProtocolVersion);
+  EXPECT_EQ(a->vehicle_id, in.vehicle_id);
+  EXPECT_EQ(a->sequence, in.sequence);
+  EXPECT_EQ(a->generation_time, in.generation_time);
+  EXPECT_EQ(a->size.length_m, in.size.length_m);
+  EXPECT_EQ(a->size.width_m, in.size.width_m);
+  EXPECT_EQ(a->size.height_m, in.size.height_m);
+  EXPECT_EQ(a->reference_offset, in.reference_offset);
+  EXPECT_EQ(a->pose.x, in.pose.x);
+  EXPECT_EQ(a->pose.y, in.pose.y);
+  EXPECT_EQ(a->pose.yaw, in.pose.yaw);
+  EXPECT_EQ(a->pose_covariance, in.pose_covariance);
+  ASSERT_TRUE(a->speed_mps.has_value());
+  EXPECT_EQ(*a->speed_mps, *in.speed_mps);
+  ASSERT_TRUE(a->yaw_rate_rps.has_value());
+  EXPECT_EQ(*a->yaw_rate_rps, *in.yaw_rate_rps);
+  EXPECT_EQ(a->reply_to.address, in.reply_to.address);
+  EXPECT_EQ(a->reply_to.port, in.reply_to.port);
+}
+
+TEST(WireCodec, AbsentMotionStaysAbsentAndZeroStaysPresent) {
+  VehicleAnnouncement in = testing::make_announcement(3, 1, kNow);
+  in.speed_mps.reset();
+  in.yaw_rate_rps = 0.0;  // known to be zero: must not turn into "unknown"
+  const DecodedMessage out = decode_v2i_message(encode_v2i_message(in));
+  ASSERT_EQ(out.status, DecodeStatus::kOk);
+  const auto& a = std::get<VehicleAnnouncement>(out.body);
+  EXPECT_FALSE(a.speed_mps.has_value());
+  ASSERT_TRUE(a.yaw_rate_rps.has_value());
+  EXPECT_EQ(*a.yaw_rate_rps, 0.0);
+}
+
+TEST(WireCodec, CorrectionRoundTrip) {
+  Correction in;
+  in.rsu_id = 42;
+  in.vehicle_id = 7;
+  in.sequence = 99;
+  in.sweep_time = kNow + 5'000'123;
+  in.pose = {10.25, -4.5, -2.9};
+  in.pose_covariance << 0.0025, 0.0001, 0.0, 0.0001, 0.003, 0.0, 0.0, 0.0, 0.0004;
+  in.quality = {312, 2, 17.5, YawResolution::kPrior, 0.87};
+  in.announcement_sequence = 1234;
+  const DecodedMessage out = decode_v2i_message(encode_v2i_message(in));
+  ASSERT_EQ(out.status, DecodeStatus::kOk);
+  const auto& c = std::get<Correction>(out.body);
+  EXPECT_EQ(c.rsu_id, 42U);
+  EXPECT_EQ(c.vehicle_id, 7U);
+  EXPECT_EQ(c.sequence, 99U);
+  EXPECT_EQ(c.sweep_time, in.sweep_time);
+  EXPECT_EQ(c.pose.x, 10.25);
+  EXPECT_EQ(c.pose.y, -4.5);
+  EXPECT_EQ(c.pose.yaw, -2.9);
+  EXPECT_EQ(c.pose_covariance, in.pose_covariance);
+  EXPECT_EQ(c.quality.points_used, 312U);
+  EXPECT_EQ(c.quality.faces_seen, 2U);
+  EXPECT_EQ(c.quality.range_m, 17.5);
+  EXPECT_EQ(c.quality.yaw_resolution, YawResolution::kPrior);
+  EXPECT_EQ(c.quality.confidence, 0.87);
+  EXPECT_EQ(c.announcement_sequence, 1234U);
+}
+
+TEST(WireCodec, AdvertisementRoundTrip) {
+  RsuAdvertisement in;
+  in.rsu_id = 5;
+  in.lidar_pose = {1.5, 2.5, 2.0, 0.01, -0.02, 1.2};
+  in.coverage_radius_m = 40.0;
+  in.correction_port = 47100;
+  in.announcement_port = 47000;
+  const DecodedMessage out = decode_v2i_message(encode_v2i_message(in));
+  ASSERT_EQ(out.status, DecodeStatus::kOk);
+  const auto& r = std::get<RsuAdvertisement>(out.body);
+  EXPECT_EQ(r.rsu_id, 5U);
+  EXPECT_EQ(r.lidar_pose.x, 1.5);
+  EXPECT_EQ(r.lidar_pose.y, 2.5);
+  EXPECT_EQ(r.lidar_pose.z, 2.0);
+  EXPECT_EQ(r.lidar_pose.roll, 0.01);
+  EXPECT_EQ(r.lidar_pose.pitch, -0.02);
+  EXPECT_EQ(r.lidar_pose.yaw, 1.2);
+  EXPECT_EQ(r.coverage_radius_m, 40.0);
+  EXPECT_EQ(r.correction_port, 47100U);
+  EXPECT_EQ(r.announcement_port, 47000U);
+}
+
+TEST(WireCodec, EmptyAndOversizedInputsAreRefused) {
+  EXPECT_EQ(decode_v2i_message({}).status, DecodeStatus::kEmpty);
+  const std::vector<std::uint8_t> big(kMaxDatagramBytes + 1, 0x08);
+  EXPECT_EQ(decode_v2i_message(big).status, DecodeStatus::kTooLarge);
+  VehicleAnnouncement huge = testing::make_announcement(3, 1, kNow);
+  huge.reply_to.address.assign(2000, '1');
+  EXPECT_TRUE(encode_v2i_message(huge).empty());
+}
+
+TEST(WireCodec, GarbageBytesAreAParseError) {
+  // Field number 0 is invalid in the protobuf wire format; 0xFF... is an unterminated varint tag.
+  EXPECT_EQ(decode_v2i_message(std::vector<std::uint8_t>(16, 0x00)).status, DecodeStatus::kParseError);
+  EXPECT_EQ(decode_v2i_message(std::vector<std::uint8_t>(16, 0xFF)).status, DecodeStatus::kParseError);
+  // Field 2 (announcement) claiming 100 bytes of a 3-byte buffer.
+  EXPECT_EQ(decode_v2i_message(std::vector<std::uint8_t>{0x12, 100, 0x08}).status, DecodeStatus::kParseError);
+}
+
+TEST(WireCodec, TruncatedMessagesNeverDecodeAsOk) {
+  const std::vector<std::uint8_t> bytes = encode_v2i_message(testing::make_announcement(3, 1, kNow));
+  ASSERT_GT(bytes.size(), 20U);
+  // The announcement is one length-delimited field: cutting into it must fail the parse.
+  for (std::size_t n = 1; n < bytes.size(); ++n) {
+    const std::vector<std::uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
+    const DecodeStatus s = decode_v2i_message(cut).status;
+    EXPECT_TRUE(s == DecodeStatus::kParseError || s == DecodeStatus::kNoBody) << "length " << n << ": " << to_string(s);
+  }
+}
+
+TEST(WireCodec, RandomBytesNeverCrash) {
+  int parse_errors = 0;
+  for (std::uint64_t trial = 0; trial < 3000; ++trial) {
+    const std::size_t size = 1 + trial % 200;
+    std::vector<std::uint8_t> bytes(size);
+    for (std::size_t i = 0; i < size; ++i) {
+      bytes[i] = static_cast<std::uint8_t>(mix64(trial * 1000 + i) & 0xFF);
+    }
+    const DecodedMessage out = decode_v2i_message(bytes);
+    ASSERT_LT(static_cast<int>(out.status), static_cast<int>(DecodeStatus::kCount));
+    if (out.status != DecodeStatus::kOk) {
+      EXPECT_TRUE(std::holds_alternative<std::monostate>(out.body));
+    }
+    parse_errors += out.status == DecodeStatus::kParseError ? 1 : 0;
+  }
+  EXPECT_GT(parse_errors, 2000);
+}
+
+TEST(WireCodec, StructuralDefectsHaveTheirStatus) {
+  v1::V2iMessage no_body;
+  no_body.set_protocol_version(1);
+  EXPECT_EQ(decode_v2i_message(serialise(no_body)).status, DecodeStatus::kNoBody);
+
+  v1::V2iMessage short_covariance;
+  short_covariance.set_protocol_version(1);
+  auto* a = short_covariance.mutable_announcement();
+  a->set_vehicle_id(3);
+  for (int i = 0; i < 8; ++i) {
+    a->mutable_pose_covariance()->add_row_major(1.0);
+  }
+  EXPECT_EQ(decode_v2i_message(serialise(short_covariance)).status, DecodeStatus::kMalformedCovariance);
+}
+
+TEST(WireCodec, FieldDefectsPassDecodingAndAreCaughtByValidation) {
+  VehicleAnnouncement future_version = testing::make_announcement(3, 1, kNow);
+  future_version.protocol_version = 7;
+  const DecodedMessage v = decode_v2i_message(encode_v2i_message(future_version));
+  ASSERT_EQ(v.status, DecodeStatus::kOk);
+  EXPECT_EQ(validate_announcement(std::get<VehicleAnnouncement>(v.body), kNow),
+            AnnouncementReason::kUnsupportedVersion);
+
+  // Invalid UTF-8 in the address parses (the field is bytes) and is refused by validation.
+  VehicleAnnouncement bad_address = testing::make_announcement(3, 1, kNow);
+  bad_address.reply_to.address = "\xC3\x28\xFF";
+  const DecodedMessage b = decode_v2i_message(encode_v2i_message(bad_address));
+  ASSERT_EQ(b.status, DecodeStatus::kOk);
+  EXPECT_EQ(validate_announcement(std::get<VehicleAnnouncement>(b.body), kNow),
+            AnnouncementReason::kReplyAddressInvalid);
+}
+
+}  // namespace
+}  // namespace rsu::v2i

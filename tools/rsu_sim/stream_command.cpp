@@ -1,0 +1,105 @@
+// rsu-sim stream: the scenario's Velodyne data packets over UDP, paced at real time (as a sensor
+// sends them) or as fast as possible. Packet times are the simulation clock; with --clock wall the
+// simulation clock is shifted so that the first packet is "now" on the host clock (the common clock
+// of tests on one machine).
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
+
+#include <boost/asio.hpp>
+#include <boost/program_options.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <thread>
+
+#include "lidar/velodyne_packet.h"
+#include "sim/lidar_simulator.h"
+#include "sim/scenario.h"
+#include "tools/rsu_sim/commands.h"
+
+namespace rsu::tools {
+namespace po = boost::program_options;
+namespace asio = boost::asio;
+
+namespace {
+
+asio::ip::udp::endpoint parse_endpoint(const std::string& text) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos) throw std::runtime_error("--to must be HOST:PORT, got \"" + text + "\"");
+  boost::system::error_code ec;
+  const auto address = asio::ip::make_address(text.substr(0, colon), ec);
+  if (ec) throw std::runtime_error("--to: \"" + text.substr(0, colon) + "\" is not an IP address");
+  const int port = std::stoi(text.substr(colon + 1));
+  if (port < 1 || port > 65535) throw std::runtime_error("--to: port out of range");
+  return {address, static_cast<unsigned short>(port)};
+}
+
+TimeNs wall_now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
+
+int run_stream(const std::vector<std::string>& args) {
+  po::options_description options("rsu-sim stream SCENARIO --to HOST:PORT [options]");
+  options.add_options()("help,h", "show this help")("to", po::value<std::string>(),
+                                                     "destination, e.g. 127.0.0.1:2368")(
+      "seconds", po::value<double>()->default_value(10.0), "simulated seconds to send")(
+      "start", po::value<double>(), "simulation start time, s (default: the scenario's simulation.start_s)")(
+      "fast", "send as fast as possible instead of at real time")(
+      "clock", po::value<std::string>()->default_value("sim"),
+      "packet time base: sim (scenario time) or wall (shifted to the host clock at start)")(
+      "scenario", po::value<std::string>(), "scenario YAML file");
+  po::positional_options_description positional;
+  positional.add("scenario", 1);
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(options).positional(positional).run(), vm);
+  po::notify(vm);
+  if (vm.count("help")) {
+    std::cout << options;
+    return 0;
+  }
+  if (!vm.count("scenario")) throw std::runtime_error("stream: a scenario file is required (see --help)");
+  if (!vm.count("to")) throw std::runtime_error("stream: --to HOST:PORT is required");
+  const std::string clock = vm["clock"].as<std::string>();
+  if (clock != "sim" && clock != "wall") throw std::runtime_error("stream: --clock must be sim or wall");
+  const double seconds = vm["seconds"].as<double>();
+  if (!(seconds > 0 && seconds <= 86400)) throw std::runtime_error("stream: --seconds must be within (0, 86400]");
+
+  const sim::Scenario scenario = sim::load_scenario_file(vm["scenario"].as<std::string>());
+  if (!scenario.lidar.model.has_packet_format())
+    throw std::runtime_error("stream: LiDAR model " + scenario.lidar.model_name + " has no Velodyne packet format");
+  const TimeNs sim_start = vm.count("start") ? from_seconds(vm["start"].as<double>()) : scenario.start_ns;
+  const sim::LidarSimulator simulator(scenario.lidar.model, scenario.lidar.mount, scenario.lidar.noise,
+                                      scenario.scene, 0, scenario.lidar.start_azimuth_deg);
+
+  asio::io_context io;
+  asio::ip::udp::socket socket(io);
+  const auto destination = parse_endpoint(vm["to"].as<std::string>());
+  socket.open(destination.protocol());
+
+  const std::int64_t first = simulator.packet_index_at(sim_start);
+  const std::int64_t last = simulator.packet_index_at(sim_start + from_seconds(seconds));
+  const auto wall_start = std::chrono::steady_clock::now();
+  // Shifts only the packets' timestamps: the scene keeps moving on the scenario's clock.
+  const TimeNs clock_offset = clock == "wall" ? wall_now_ns() - sim_start : 0;
+  std::array<std::uint8_t, kPacketBytes> payload{};
+  std::uint64_t sent = 0, failed = 0;
+  for (std::int64_t k = first; k < last; ++k) {
+    PacketReturns returns = simulator.simulate_packet(k);
+    const TimeNs since_start = returns.blocks.first_firing_ns - sim_start;
+    if (!vm.count("fast")) std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(since_start));
+    returns.blocks.first_firing_ns += clock_offset;
+    encode_packet(scenario.lidar.model, returns, payload);
+    boost::system::error_code ec;
+    socket.send_to(asio::buffer(payload), destination, 0, ec);
+    ec ? ++failed : ++sent;
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  std::printf("sent %llu packets (%llu failed) to %s in %.2f s\n", static_cast<unsigned long long>(sent),
+              static_cast<unsigned long long>(failed), vm["to"].as<std::string>().c_str(), wall);
+  return failed == 0 ? 0 : 1;
+}
+
+}  // namespace rsu::tools
