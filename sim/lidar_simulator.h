@@ -52,6 +52,13 @@ struct SimulationCounts {
   std::uint64_t returns = 0;         // points produced
 };
 
+// The standard normal variates of one firing's noise (scaled by NoiseModel's sigmas).
+struct FiringNoise {
+  double elevation = 0.0;
+  double azimuth = 0.0;
+  double range = 0.0;
+};
+
 struct SimulatedFrame {
   LidarFrame frame;               // points in the SENSOR frame, in firing order
   std::vector<PointTruth> truth;  // parallel to frame.points
@@ -63,20 +70,22 @@ class LidarSimulator {
   // `raycaster` must outlive the simulator. The schedule's packet 0 starts at `schedule_t0` with the
   // encoder at `start_azimuth_deg`. Throws std::invalid_argument for an unusable sensor model, a
   // non-finite mount or negative / non-finite noise sigmas.
-  LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise, const Raycaster& raycaster,
-                 TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0);
+  LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
+                 const Raycaster& raycaster, TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0);
   // Builds (and owns) the ray caster for `scene`.
   LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise, const Scene& scene,
                  TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0);
 
   // Packet k of the schedule, as the Velodyne encoder packs it (strongest return). Firings outside
   // `sector` report no return. Throws std::invalid_argument if the model has no packet format.
-  PacketReturns simulate_packet(std::int64_t k, const std::optional<AzimuthSector>& sector = std::nullopt) const;
+  PacketReturns simulate_packet(std::int64_t k,
+                                const std::optional<AzimuthSector>& sector = std::nullopt) const;
 
   // One rotation: every firing with time in [start, start + 1 / rotation rate) (0.1 s at 10 Hz),
   // from all packets that overlap that window. Points are those a decoder would rebuild from the
   // packets, bit for bit.
-  SimulatedFrame simulate_frame(TimeNs start, const std::optional<AzimuthSector>& sector = std::nullopt) const;
+  SimulatedFrame simulate_frame(TimeNs start,
+                                const std::optional<AzimuthSector>& sector = std::nullopt) const;
 
   // Index of the packet whose first firing is the last one at or before t.
   std::int64_t packet_index_at(TimeNs t) const;
@@ -93,19 +102,31 @@ class LidarSimulator {
                  std::shared_ptr<const Raycaster> owned, const Raycaster* borrowed, TimeNs schedule_t0,
                  double start_azimuth_deg);
 
-  // One firing's outcome; raw == 0 means no return.
+  // One firing's outcome (parallel to the packet's firings); raw == 0 means no return.
   struct Outcome {
-    Firing firing;
     std::uint16_t raw = 0;
     std::uint8_t intensity = 0;
     PointTruth truth;
+    FiringNoise noise;         // standard normal variates (zero without noise)
+    double cos_azimuth = 1.0;  // of the nominal beam rotation angle
+    double sin_azimuth = 0.0;
     bool cast = false;  // inside the sector and the time window
   };
 
-  // Firings of packet k with time in [t_begin, t_end) are simulated; the others only listed.
-  std::vector<Outcome> run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end,
-                                  const std::optional<AzimuthSector>& sector) const;
-  LidarPoint to_point(const Outcome& o) const;
+  // Buffers reused from packet to packet (no allocation per packet once warm).
+  struct PacketScratch {
+    std::vector<Firing> firings;
+    std::vector<Outcome> outcomes;
+    std::vector<Ray> rays;
+    std::vector<RayHit> hits;
+    std::vector<std::size_t> ray_outcome;
+  };
+
+  // Fills scratch.firings with packet k's firings and scratch.outcomes with their outcomes: firings
+  // with time in [t_begin, t_end) and inside `sector` are cast, the others only listed.
+  void run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end, const std::optional<AzimuthSector>& sector,
+                  PacketScratch& scratch) const;
+  LidarPoint to_point(const Firing& f, const Outcome& o) const;
 
   std::shared_ptr<const Raycaster> owned_raycaster_;
   const Raycaster* raycaster_;
@@ -117,6 +138,7 @@ class LidarSimulator {
   std::vector<double> elevation_rad_;  // per laser
   std::vector<double> cos_elevation_;  // per laser, nominal (the decoder's values)
   std::vector<double> sin_elevation_;
+  std::vector<std::size_t> cast_order_;  // a packet's firing slots sorted by beam elevation
 };
 
 }  // namespace rsu::sim

@@ -100,7 +100,8 @@ TriangleMesh make_box(const Eigen::Vector3d& min_corner, const Eigen::Vector3d& 
 }
 
 TriangleMesh make_cylinder(double radius, double z0, double z1, int segments) {
-  require(std::isfinite(radius) && radius > 0.0 && segments >= 3, "cylinder needs radius > 0 and >= 3 segments");
+  require(std::isfinite(radius) && radius > 0.0 && segments >= 3,
+          "cylinder needs radius > 0 and >= 3 segments");
   std::vector<Eigen::Vector2d> ring;
   ring.reserve(static_cast<std::size_t>(segments));
   for (int i = 0; i < segments; ++i) {
@@ -162,7 +163,8 @@ TriangleMesh make_ellipsoid(const Eigen::Vector3d& radii, int subdivisions) {
 }
 
 TriangleMesh make_ground_square(double half_extent, double z) {
-  require(std::isfinite(half_extent) && half_extent > 0.0 && std::isfinite(z), "ground needs half_extent > 0");
+  require(std::isfinite(half_extent) && half_extent > 0.0 && std::isfinite(z),
+          "ground needs half_extent > 0");
   TriangleMesh mesh;
   add_vertex(mesh, -half_extent, -half_extent, z);
   add_vertex(mesh, half_extent, -half_extent, z);
@@ -174,8 +176,9 @@ TriangleMesh make_ground_square(double half_extent, double z) {
 
 std::vector<Eigen::Vector2d> rounded_rectangle(double cx, double cy, double hx, double hy, double r,
                                                int arc_segments) {
-  require(std::isfinite(cx) && std::isfinite(cy) && std::isfinite(hx) && std::isfinite(hy) && std::isfinite(r),
-          "rounded rectangle needs finite parameters");
+  require(
+      std::isfinite(cx) && std::isfinite(cy) && std::isfinite(hx) && std::isfinite(hy) && std::isfinite(r),
+      "rounded rectangle needs finite parameters");
   require(hx > 0.0 && hy > 0.0 && r >= 0.0 && r <= std::min(hx, hy) && arc_segments >= 1,
           "rounded rectangle needs 0 <= r <= min(hx, hy) and >= 1 arc segment");
   // Corner centres counter-clockwise from (+x, +y); each arc spans the quarter turn that starts at

@@ -23,7 +23,9 @@ namespace {
 constexpr std::size_t kClassCount = 6;
 constexpr unsigned kPacketWidth = 16;
 
-std::size_t class_index(SurfaceClass c) { return static_cast<std::size_t>(c); }
+std::size_t class_index(SurfaceClass c) {
+  return static_cast<std::size_t>(c);
+}
 
 struct DeviceRelease {
   void operator()(RTCDevice device) const { rtcReleaseDevice(device); }
@@ -54,8 +56,12 @@ const char* error_name(RTCError code) {
   return "unknown Embree error";
 }
 
-bool positive(double v) { return std::isfinite(v) && v > 0.0; }
-bool finite(double v) { return std::isfinite(v); }
+bool positive(double v) {
+  return std::isfinite(v) && v > 0.0;
+}
+bool finite(double v) {
+  return std::isfinite(v);
+}
 
 void require(bool ok, const std::string& what) {
   if (!ok) {
@@ -70,8 +76,8 @@ Eigen::Affine3d planar_pose(double x, double y, double yaw, double z = 0.0) {
 // A pole with an optional lamp: a horizontal arm at the top along arm_yaw and a lamp head under its
 // end (the head is what a LiDAR mostly sees of a street lamp above the road).
 TriangleMesh make_pole_mesh(const Pole& pole, int segments) {
-  TriangleMesh mesh = transformed(make_cylinder(pole.radius, 0.0, pole.height, segments),
-                                  planar_pose(pole.x, pole.y, 0.0));
+  TriangleMesh mesh =
+      transformed(make_cylinder(pole.radius, 0.0, pole.height, segments), planar_pose(pole.x, pole.y, 0.0));
   if (pole.arm_length > 0.0) {
     const double arm_radius = std::max(0.5 * pole.radius, 0.03);
     // Cylinder along z from 0 to arm_length, laid along +x by +90 deg about y, then turned to arm_yaw.
@@ -80,8 +86,8 @@ TriangleMesh make_pole_mesh(const Pole& pole, int segments) {
     mesh.append(transformed(make_cylinder(arm_radius, 0.0, pole.arm_length, segments), arm_pose));
     const double head_length = std::min(0.5, pole.arm_length);
     const double head_top = pole.height - 1.5 * arm_radius;
-    const TriangleMesh head = make_box({pole.arm_length - head_length, -0.15, head_top - 0.15},
-                                       {pole.arm_length, 0.15, head_top});
+    const TriangleMesh head =
+        make_box({pole.arm_length - head_length, -0.15, head_top - 0.15}, {pole.arm_length, 0.15, head_top});
     mesh.append(transformed(head, planar_pose(pole.x, pole.y, pole.arm_yaw)));
   }
   return mesh;
@@ -161,7 +167,8 @@ struct CheckedRay {
 CheckedRay check_ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double max_range) {
   CheckedRay r;
   const double n = direction.norm();
-  if (!origin.allFinite() || !direction.allFinite() || !(n > 0.0) || std::isnan(max_range) || !(max_range > 0.0)) {
+  if (!origin.allFinite() || !direction.allFinite() || !(n > 0.0) || std::isnan(max_range) ||
+      !(max_range > 0.0)) {
     return r;
   }
   r.valid = true;
@@ -248,7 +255,8 @@ struct Raycaster::Impl {
   void attach(RTCScene scene, const TriangleMesh& mesh, unsigned geometry_id) {
     const auto vertex_count = static_cast<int>(mesh.vertices.size());
     for (const auto& t : mesh.triangles) {
-      require((t.array() >= 0).all() && (t.array() < vertex_count).all(), "mesh: triangle index out of range");
+      require((t.array() >= 0).all() && (t.array() < vertex_count).all(),
+              "mesh: triangle index out of range");
     }
     for (const auto& v : mesh.vertices) {
       require(v.allFinite(), "mesh: non-finite vertex");
@@ -288,16 +296,17 @@ struct Raycaster::Impl {
     auto& vegetation = static_meshes[class_index(SurfaceClass::kVegetation)];
     ground = make_ground_square(scene.ground.half_extent_m);
     for (const Building& b : scene.buildings) {
-      buildings.append(transformed(make_box({-0.5 * b.length, -0.5 * b.width, 0.0},
-                                            {0.5 * b.length, 0.5 * b.width, b.height}),
-                                   planar_pose(b.x, b.y, b.yaw)));
+      buildings.append(transformed(
+          make_box({-0.5 * b.length, -0.5 * b.width, 0.0}, {0.5 * b.length, 0.5 * b.width, b.height}),
+          planar_pose(b.x, b.y, b.yaw)));
     }
     for (const Pole& p : scene.poles) {
       poles.append(make_pole_mesh(p, config.cylinder_segments));
     }
     for (const Tree& t : scene.trees) {
-      vegetation.append(transformed(make_cylinder(t.trunk_radius, 0.0, t.trunk_height, config.cylinder_segments),
-                                    planar_pose(t.x, t.y, 0.0)));
+      vegetation.append(
+          transformed(make_cylinder(t.trunk_radius, 0.0, t.trunk_height, config.cylinder_segments),
+                      planar_pose(t.x, t.y, 0.0)));
       vegetation.append(transformed(make_sphere(t.crown_radius, config.sphere_subdivisions),
                                     planar_pose(t.x, t.y, 0.0, t.trunk_height + 0.7 * t.crown_radius)));
     }
@@ -375,11 +384,14 @@ struct Raycaster::Impl {
   // Intersects one vehicle at its pose; replaces `out` if the vehicle is nearer.
   void intersect_vehicle(const VehicleEntry& v, const Pose2& pose, const CheckedRay& ray, RayHit& out) const {
     const double limit = std::min(out.range, ray.max_range);
-    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const Eigen::Vector3d position(pose.x, pose.y, 0.0);
-    if (!ray_meets_sphere(ray, position + rotation * v.bound_centre, v.bound_radius, limit)) {
+    // Bounding-sphere reject before any trigonometry: centred over the reference point, grown by the
+    // bound centre's plan offset so that it holds for every yaw.
+    const Eigen::Vector3d any_yaw_centre(pose.x, pose.y, v.bound_centre.z());
+    if (!ray_meets_sphere(ray, any_yaw_centre, v.bound_radius + v.bound_centre.head<2>().norm(), limit)) {
       return;
     }
+    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const Eigen::Vector3d origin = rotation.transpose() * (ray.origin - position);
     const Eigen::Vector3d direction = rotation.transpose() * ray.direction;
     RTCIntersectContext context;
@@ -389,7 +401,8 @@ struct Raycaster::Impl {
     rtcIntersect1(v.bvh.get(), &context, &rh);
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && static_cast<double>(rh.ray.tfar) < limit) {
       out.range = rh.ray.tfar;
-      out.normal = facing_normal(rotation * Eigen::Vector3d(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z), ray.direction);
+      out.normal =
+          facing_normal(rotation * Eigen::Vector3d(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z), ray.direction);
       out.surface = SurfaceClass::kVehicle;
       out.reflectivity = reflectivity[class_index(SurfaceClass::kVehicle)];
       out.vehicle_id = v.id;
@@ -448,8 +461,9 @@ struct Raycaster::Impl {
     }
   }
 
+  // At most 64 rays (cast_batch's chunk).
   void static_batch_stream(std::span<const CheckedRay> rays, std::span<RayHit> hits) const {
-    std::vector<RTCRayHit> stream(rays.size());
+    std::array<RTCRayHit, 64> stream;
     for (std::size_t i = 0; i < rays.size(); ++i) {
       // An invalid ray gets an empty interval (tfar < tnear), which Embree skips.
       set_ray(stream[i], rays[i].valid ? rays[i].origin : Eigen::Vector3d::Zero(),
@@ -459,7 +473,7 @@ struct Raycaster::Impl {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    rtcIntersect1M(static_scene.get(), &context, stream.data(), static_cast<unsigned>(stream.size()),
+    rtcIntersect1M(static_scene.get(), &context, stream.data(), static_cast<unsigned>(rays.size()),
                    sizeof(RTCRayHit));
     for (std::size_t i = 0; i < rays.size(); ++i) {
       if (rays[i].valid && stream[i].hit.geomID != RTC_INVALID_GEOMETRY_ID) {
@@ -480,7 +494,8 @@ Raycaster::Raycaster(const Scene& scene, const RaycasterConfig& config) : impl_(
                              "\"): " + error_name(rtcGetDeviceError(nullptr)));
   }
   rtcSetDeviceErrorFunction(impl_->device.get(), &Impl::on_error, impl_.get());
-  impl_->packet16_native = rtcGetDeviceProperty(impl_->device.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+  impl_->packet16_native =
+      rtcGetDeviceProperty(impl_->device.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
   const Reflectivity& r = scene.reflectivity;
   impl_->reflectivity[class_index(SurfaceClass::kGround)] = r.ground;
   impl_->reflectivity[class_index(SurfaceClass::kBuilding)] = r.building;
@@ -495,9 +510,13 @@ Raycaster::~Raycaster() = default;
 Raycaster::Raycaster(Raycaster&&) noexcept = default;
 Raycaster& Raycaster::operator=(Raycaster&&) noexcept = default;
 
-std::size_t Raycaster::vehicle_count() const { return impl_->vehicles.size(); }
+std::size_t Raycaster::vehicle_count() const {
+  return impl_->vehicles.size();
+}
 
-const TriangleMesh& Raycaster::vehicle_mesh(std::size_t index) const { return impl_->vehicles.at(index).mesh; }
+const TriangleMesh& Raycaster::vehicle_mesh(std::size_t index) const {
+  return impl_->vehicles.at(index).mesh;
+}
 
 const TriangleMesh& Raycaster::static_mesh(SurfaceClass surface) const {
   return impl_->static_meshes.at(class_index(surface));
@@ -521,38 +540,24 @@ void Raycaster::cast_batch(std::span<const Ray> rays, std::span<RayHit> hits) co
   if (rays.size() != hits.size()) {
     throw std::invalid_argument("Raycaster::cast_batch: rays and hits differ in size");
   }
-  std::vector<CheckedRay> checked(rays.size());
-  TimeNs t_min = std::numeric_limits<TimeNs>::max();
-  TimeNs t_max = std::numeric_limits<TimeNs>::min();
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    checked[i] = check_ray(rays[i].origin, rays[i].direction, rays[i].max_range);
-    hits[i] = RayHit{};
-    if (checked[i].valid) {
-      t_min = std::min(t_min, rays[i].time_ns);
-      t_max = std::max(t_max, rays[i].time_ns);
-    }
+  if (rays.empty()) {
+    return;
   }
-  if (t_min > t_max) {
-    return;  // no valid ray
+  TimeNs t_min = rays.front().time_ns;
+  TimeNs t_max = t_min;
+  for (const Ray& r : rays) {
+    t_min = std::min(t_min, r.time_ns);
+    t_max = std::max(t_max, r.time_ns);
   }
-  switch (impl_->config.batch_mode) {
-    case BatchMode::kPacket16:
-      if (impl_->packet16_native) {
-        impl_->static_batch_packet16(checked, hits);
-        break;
-      }
-      impl_->static_batch_single(checked, hits);  // no native 16-wide packets on this CPU build
-      break;
-    case BatchMode::kStream:
-      impl_->static_batch_stream(checked, hits);
-      break;
-    case BatchMode::kSingle:
-      impl_->static_batch_single(checked, hits);
-      break;
-  }
+  // One sphere per vehicle bounding it wherever it is during the batch; only rays that meet it pay
+  // for the exact pose at their own time.
+  struct SweptSphere {
+    Eigen::Vector3d centre;
+    double radius;
+  };
+  std::vector<SweptSphere> swept;
+  swept.reserve(impl_->vehicles.size());
   for (const auto& v : impl_->vehicles) {
-    // One sphere bounding the vehicle wherever it is during the batch; only rays that meet it pay for
-    // the exact pose at their own time.
     const auto path = path_vertices(v.trajectory, t_min, t_max);
     Eigen::Vector2d mid = Eigen::Vector2d::Zero();
     for (const auto& p : path) {
@@ -563,13 +568,44 @@ void Raycaster::cast_batch(std::span<const Ray> rays, std::span<RayHit> hits) co
     for (const auto& p : path) {
       spread = std::max(spread, (p - mid).norm());
     }
-    const Eigen::Vector3d swept_centre(mid.x(), mid.y(), v.bound_centre.z());
-    const double swept_radius = v.bound_radius + v.bound_centre.head<2>().norm() + spread;
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      const CheckedRay& ray = checked[i];
-      if (ray.valid &&
-          ray_meets_sphere(ray, swept_centre, swept_radius, std::min(hits[i].range, ray.max_range))) {
-        impl_->intersect_vehicle(v, pose_at(v.trajectory, rays[i].time_ns), ray, hits[i]);
+    swept.push_back({Eigen::Vector3d(mid.x(), mid.y(), v.bound_centre.z()),
+                     v.bound_radius + v.bound_centre.head<2>().norm() + spread});
+  }
+  // Chunks small enough for the stack: no allocation per ray or per chunk.
+  constexpr std::size_t kChunk = 64;
+  std::array<CheckedRay, kChunk> checked;
+  for (std::size_t base = 0; base < rays.size(); base += kChunk) {
+    const std::size_t n = std::min(kChunk, rays.size() - base);
+    const std::span<const CheckedRay> chunk(checked.data(), n);
+    const std::span<RayHit> chunk_hits = hits.subspan(base, n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Ray& r = rays[base + i];
+      checked[i] = check_ray(r.origin, r.direction, r.max_range);
+      chunk_hits[i] = RayHit{};
+    }
+    switch (impl_->config.batch_mode) {
+      case BatchMode::kPacket16:
+        if (impl_->packet16_native) {
+          impl_->static_batch_packet16(chunk, chunk_hits);
+        } else {
+          impl_->static_batch_single(chunk, chunk_hits);  // no native 16-wide packets in this build
+        }
+        break;
+      case BatchMode::kStream:
+        impl_->static_batch_stream(chunk, chunk_hits);
+        break;
+      case BatchMode::kSingle:
+        impl_->static_batch_single(chunk, chunk_hits);
+        break;
+    }
+    for (std::size_t j = 0; j < impl_->vehicles.size(); ++j) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const CheckedRay& ray = checked[i];
+        if (ray.valid && ray_meets_sphere(ray, swept[j].centre, swept[j].radius,
+                                          std::min(chunk_hits[i].range, ray.max_range))) {
+          const auto& v = impl_->vehicles[j];
+          impl_->intersect_vehicle(v, pose_at(v.trajectory, rays[base + i].time_ns), ray, chunk_hits[i]);
+        }
       }
     }
   }

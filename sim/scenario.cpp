@@ -1,111 +1,17 @@
-// Scenario YAML -> sim::Scenario. Each value is read through a YamlField that knows its path
-// ("lidar.mount.z") and line, so that every error points at the offending line and field. Unknown keys
-// are errors too: a misspelt key silently falling back to a default is the worst kind of bug in an
-// experiment description.
+// Scenario YAML -> sim::Scenario, read through io::YamlField so that every error names the file, the
+// line and the field.
 #include "sim/scenario.h"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
-#include <fstream>
 #include <set>
-#include <sstream>
 
 #include "common/angles.h"
+#include "io/yaml_field.h"
 
 namespace rsu::sim {
 namespace {
 
-class YamlField {
- public:
-  YamlField(YAML::Node node, std::string path, const std::string& source, int line)
-      : node_(std::move(node)), path_(std::move(path)), source_(source), line_(line) {}
-
-  [[noreturn]] void fail(const std::string& what) const {
-    std::ostringstream out;
-    out << source_ << ':' << line_ << ": " << (path_.empty() ? "<document>" : path_) << ": " << what;
-    throw ScenarioError(out.str());
-  }
-
-  bool is_map() const { return node_.IsMap(); }
-  bool is_sequence() const { return node_.IsSequence(); }
-
-  YamlField child(const std::string& key) const {
-    const YAML::Node c = node_[key];
-    const int line = c ? c.Mark().line + 1 : line_;
-    return YamlField(c, path_.empty() ? key : path_ + "." + key, source_, line);
-  }
-  bool has(const std::string& key) const { return node_.IsMap() && node_[key]; }
-
-  // Rejects keys outside `allowed` (typos would otherwise silently fall back to defaults).
-  void expect_map(std::initializer_list<const char*> allowed) const {
-    if (!node_.IsMap()) fail("expected a mapping");
-    const std::set<std::string> keys(allowed.begin(), allowed.end());
-    for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
-      if (!keys.contains(key)) {
-        std::string list;
-        for (const auto& k : keys) list += (list.empty() ? "" : ", ") + k;
-        YamlField(kv.first, path_.empty() ? key : path_ + "." + key, source_, kv.first.Mark().line + 1)
-            .fail("unknown field (expected one of: " + list + ")");
-      }
-    }
-  }
-
-  std::vector<YamlField> items() const {
-    if (!node_.IsSequence()) fail("expected a list");
-    std::vector<YamlField> out;
-    for (std::size_t i = 0; i < node_.size(); ++i) {
-      const YAML::Node c = node_[i];
-      out.emplace_back(c, path_ + "[" + std::to_string(i) + "]", source_, c.Mark().line + 1);
-    }
-    return out;
-  }
-
-  double number() const {
-    if (!node_.IsScalar()) fail("expected a number");
-    double v = 0;
-    try {
-      v = node_.as<double>();
-    } catch (const YAML::Exception&) {
-      fail("expected a number, got \"" + node_.Scalar() + "\"");
-    }
-    if (!std::isfinite(v)) fail("expected a finite number, got \"" + node_.Scalar() + "\"");
-    return v;
-  }
-  std::string text() const {
-    if (!node_.IsScalar()) fail("expected a string");
-    return node_.Scalar();
-  }
-
-  double number_or(const std::string& key, double fallback) const {
-    return has(key) ? child(key).number() : fallback;
-  }
-  double positive_or(const std::string& key, double fallback) const {
-    const double v = number_or(key, fallback);
-    if (!(v > 0)) child(key).fail("must be > 0, got " + std::to_string(v));
-    return v;
-  }
-  double non_negative_or(const std::string& key, double fallback) const {
-    const double v = number_or(key, fallback);
-    if (v < 0) child(key).fail("must be >= 0, got " + std::to_string(v));
-    return v;
-  }
-  double angle_deg_or(const std::string& key, double fallback_rad) const {
-    return has(key) ? deg_to_rad(child(key).number()) : fallback_rad;
-  }
-  YamlField required(const std::string& key) const {
-    if (!has(key)) fail("missing required field \"" + key + "\"");
-    return child(key);
-  }
-  int line() const { return line_; }
-
- private:
-  YAML::Node node_;
-  std::string path_;
-  const std::string& source_;
-  int line_;
-};
+using io::YamlField;
 
 Pose3 read_mount(const YamlField& f) {
   f.expect_map({"x", "y", "z", "roll_deg", "pitch_deg", "yaw_deg"});
@@ -311,13 +217,9 @@ Scene read_scene(const YamlField& f) {
 
 }  // namespace
 
-Scenario parse_scenario(std::string_view yaml_text, const std::string& source_name) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(std::string(yaml_text));
-  } catch (const YAML::ParserException& e) {
-    throw ScenarioError(source_name + ":" + std::to_string(e.mark.line + 1) + ": <syntax>: " + e.msg);
-  }
+namespace {
+
+Scenario read_scenario(const YAML::Node& root, const std::string& source_name) {
   const YamlField doc(root, "", source_name, 1);
   doc.expect_map({"name", "lidar", "scene", "vehicles", "simulation"});
 
@@ -352,12 +254,22 @@ Scenario parse_scenario(std::string_view yaml_text, const std::string& source_na
   return s;
 }
 
+}  // namespace
+
+Scenario parse_scenario(std::string_view yaml_text, const std::string& source_name) {
+  try {
+    return read_scenario(io::parse_yaml(std::string(yaml_text), source_name), source_name);
+  } catch (const io::YamlError& e) {
+    throw ScenarioError(e.what());
+  }
+}
+
 Scenario load_scenario_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ScenarioError(path + ":0: <file>: cannot open");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_scenario(text.str(), path);
+  try {
+    return parse_scenario(io::read_text_file(path), path);
+  } catch (const io::YamlError& e) {
+    throw ScenarioError(e.what());
+  }
 }
 
 }  // namespace rsu::sim

@@ -11,7 +11,9 @@
 namespace rsu::sim {
 namespace {
 
-bool finite(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.yaw); }
+bool finite(const Pose2& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.yaw);
+}
 
 // Index of the first waypoint strictly after t (points are sorted by time).
 std::size_t first_after(const Waypoints& w, TimeNs t) {
@@ -118,7 +120,8 @@ void validate_trajectory(const Trajectory& trajectory) {
           }
           for (std::size_t i = 0; i < tr.points.size(); ++i) {
             if (!finite(tr.points[i].pose)) {
-              throw std::invalid_argument("trajectory: waypoint " + std::to_string(i) + " has a non-finite pose");
+              throw std::invalid_argument("trajectory: waypoint " + std::to_string(i) +
+                                          " has a non-finite pose");
             }
             if (i > 0 && tr.points[i].t < tr.points[i - 1].t) {
               throw std::invalid_argument("trajectory: waypoint " + std::to_string(i) +

@@ -17,10 +17,10 @@ constexpr double kWellClearance = 0.02;  // wheel-well inner wall inboard of the
 constexpr double kTumblehome = 0.05;     // roof narrower than the glasshouse base, each side, m
 constexpr double kMirrorLength = 0.20;   // along x
 constexpr double kMirrorHeight = 0.15;
-constexpr double kMirrorLift = 0.05;      // above the belt line
-constexpr double kMirrorSetback = 0.25;   // behind the windscreen base
-constexpr double kMirrorEmbed = 0.12;     // how far the mirror reaches into the glasshouse
-constexpr double kMirrorSideGap = 0.01;   // inboard of the body side, so the footprint stays exact
+constexpr double kMirrorLift = 0.05;     // above the belt line
+constexpr double kMirrorSetback = 0.25;  // behind the windscreen base
+constexpr double kMirrorEmbed = 0.12;    // how far the mirror reaches into the glasshouse
+constexpr double kMirrorSideGap = 0.01;  // inboard of the body side, so the footprint stays exact
 constexpr int kBodyArcSegments = 8;
 constexpr int kWheelSegments = 24;
 
@@ -30,8 +30,12 @@ void require(bool ok, const std::string& what) {
   }
 }
 
-double arch_top(const VehicleShape& s) { return 2.0 * s.wheel_radius + kArchGap; }
-double windscreen_base_x(const VehicleShape& s) { return 0.5 * s.length - s.hood_length; }
+double arch_top(const VehicleShape& s) {
+  return 2.0 * s.wheel_radius + kArchGap;
+}
+double windscreen_base_x(const VehicleShape& s) {
+  return 0.5 * s.length - s.hood_length;
+}
 double well_half_width(const VehicleShape& s) {
   return 0.5 * s.width - kWheelInset - s.wheel_width - kWellClearance;
 }
@@ -57,8 +61,8 @@ TriangleMesh make_lower_body(const VehicleShape& s) {
   body.append(make_prism(outline, top_of_arch, s.belt_height));
   // Below the arch tops: full width ahead of, between and behind the arches ...
   body.append(make_prism(clip_polygon_x(outline, front_arch_max, half_l), s.ground_clearance, top_of_arch));
-  body.append(make_prism(clip_polygon_x(outline, -front_arch_min, front_arch_min), s.ground_clearance,
-                         top_of_arch));
+  body.append(
+      make_prism(clip_polygon_x(outline, -front_arch_min, front_arch_min), s.ground_clearance, top_of_arch));
   body.append(make_prism(clip_polygon_x(outline, -half_l, -front_arch_max), s.ground_clearance, top_of_arch));
   // ... and only the narrow wheel-well core inside the arches, so the tyres are exposed to low rays.
   const double core = well_half_width(s);
@@ -141,10 +145,12 @@ void validate_vehicle_shape(const VehicleShape& s) {
   require(std::isfinite(s.hood_length) && s.hood_length >= 0.0 && std::isfinite(s.windscreen_run) &&
               s.windscreen_run >= 0.0 && std::isfinite(s.rear_slope_run) && s.rear_slope_run >= 0.0,
           "hood_length, windscreen_run and rear_slope_run must be finite and >= 0");
-  const double roof_length = windscreen_base_x(s) - s.windscreen_run - (-0.5 * s.length + s.cabin_inset) -
-                             s.rear_slope_run;
-  require(roof_length >= 0.3, "hood_length + windscreen_run + rear_slope_run leave a roof shorter than 30 cm");
-  require(windscreen_base_x(s) - kMirrorSetback - kMirrorLength > -0.5 * s.length + s.cabin_inset + s.rear_slope_run,
+  const double roof_length =
+      windscreen_base_x(s) - s.windscreen_run - (-0.5 * s.length + s.cabin_inset) - s.rear_slope_run;
+  require(roof_length >= 0.3,
+          "hood_length + windscreen_run + rear_slope_run leave a roof shorter than 30 cm");
+  require(windscreen_base_x(s) - kMirrorSetback - kMirrorLength >
+              -0.5 * s.length + s.cabin_inset + s.rear_slope_run,
           "hood_length leaves no room for the mirrors beside the glasshouse");
 }
 

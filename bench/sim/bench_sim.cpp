@@ -6,8 +6,8 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <span>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -89,13 +89,13 @@ void BM_CastBatch(benchmark::State& state) {
   }
   state.counters["rays/s"] =
       benchmark::Counter(static_cast<double>(rays.size()), benchmark::Counter::kIsIterationInvariantRate);
-  state.SetLabel(state.range(0) == 0 ? "rtcIntersect1" : state.range(0) == 1 ? "rtcIntersect16" : "rtcIntersect1M");
+  state.SetLabel(state.range(0) == 0   ? "rtcIntersect1"
+                 : state.range(0) == 1 ? "rtcIntersect16"
+                                       : "rtcIntersect1M");
 }
 // Args: batch mode (0 single, 1 packet16, 2 stream), rays by elevation (1) or channel order (0),
 // robust traversal (1) or not (0).
-BENCHMARK(BM_CastBatch)
-    ->ArgsProduct({{0, 1, 2}, {0, 1}, {0, 1}})
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CastBatch)->ArgsProduct({{0, 1, 2}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 // A whole simulated frame: firing schedule, noise, casting, quantisation, points and labels.
 void simulate_frames(benchmark::State& state, const SensorModel& model, bool noise_on) {
@@ -121,13 +121,19 @@ void simulate_frames(benchmark::State& state, const SensorModel& model, bool noi
   state.counters["rays/s"] = benchmark::Counter(static_cast<double>(firings), benchmark::Counter::kIsRate);
 }
 
-void BM_SimulateFrameVlp32c(benchmark::State& state) { simulate_frames(state, make_vlp32c(), true); }
+void BM_SimulateFrameVlp32c(benchmark::State& state) {
+  simulate_frames(state, make_vlp32c(), true);
+}
 BENCHMARK(BM_SimulateFrameVlp32c)->Unit(benchmark::kMillisecond);
 
-void BM_SimulateFrameVlp32cNoNoise(benchmark::State& state) { simulate_frames(state, make_vlp32c(), false); }
+void BM_SimulateFrameVlp32cNoNoise(benchmark::State& state) {
+  simulate_frames(state, make_vlp32c(), false);
+}
 BENCHMARK(BM_SimulateFrameVlp32cNoNoise)->Unit(benchmark::kMillisecond);
 
-void BM_SimulateFrameVlp16(benchmark::State& state) { simulate_frames(state, make_vlp16(), true); }
+void BM_SimulateFrameVlp16(benchmark::State& state) {
+  simulate_frames(state, make_vlp16(), true);
+}
 BENCHMARK(BM_SimulateFrameVlp16)->Unit(benchmark::kMillisecond);
 
 // Experiments that only need the sector around the vehicle (here 60 deg of the 360).

@@ -21,8 +21,8 @@ inline constexpr int kYawRate = 4;
 
 // White-noise accelerations that drive the model (the usual CTRV noise inputs).
 struct CtrvNoise {
-  double accel_sigma_mps2 = 1.5;       // longitudinal acceleration: town driving, gentle braking
-  double yaw_accel_sigma_rps2 = 0.6;   // change of yaw rate entering/leaving a bend
+  double accel_sigma_mps2 = 1.5;      // longitudinal acceleration: town driving, gentle braking
+  double yaw_accel_sigma_rps2 = 0.6;  // change of yaw rate entering/leaving a bend
 };
 
 struct CtrvStep {

@@ -10,7 +10,7 @@
 namespace rsu::fusion {
 
 struct PoseInnovation {
-  Eigen::Vector3d residual;                   // measured minus predicted (x, y, yaw), yaw on its branch
+  Eigen::Vector3d residual;                       // measured minus predicted (x, y, yaw), yaw on its branch
   Eigen::Matrix<double, 3, kStateSize> jacobian;  // d(predicted measurement) / d(state)
 };
 

@@ -95,8 +95,7 @@ MeasurementOutcome VehicleEkf::fuse(StateEstimate& estimate, const PoseMeasureme
     return MeasurementOutcome::kRejectedGate;
   }
   // K = P H^T S^-1, via the symmetric solve S K^T = H P.
-  const Eigen::Matrix<double, kStateSize, 3> gain =
-      s_ldlt.solve(h * predicted.covariance).transpose();
+  const Eigen::Matrix<double, kStateSize, 3> gain = s_ldlt.solve(h * predicted.covariance).transpose();
   predicted.state += gain * innovation.residual;
   predicted.state(kYaw) = wrap_angle(predicted.state(kYaw));
   // Joseph form: stays symmetric positive semi-definite under rounding.
@@ -155,9 +154,9 @@ MeasurementOutcome VehicleEkf::add(const PoseMeasurement& m) {
   }
   // Late: insert after every kept measurement of the same or an earlier time, then redo the rest.
   ++stats_.late;
-  const auto position = std::upper_bound(
-      history_.begin(), history_.end(), m.time,
-      [](TimeNs t, const HistoryEntry& e) { return t < e.measurement.time; });
+  const auto position =
+      std::upper_bound(history_.begin(), history_.end(), m.time,
+                       [](TimeNs t, const HistoryEntry& e) { return t < e.measurement.time; });
   const auto index = static_cast<std::size_t>(position - history_.begin());
   history_.insert(position, HistoryEntry{m, MeasurementOutcome::kCount, StateEstimate{}});
   replay_from(index);
@@ -208,10 +207,9 @@ std::optional<StateEstimate> VehicleEkf::estimate_at(TimeNs t) const {
   if (!initialized_) {
     return std::nullopt;
   }
-  const auto after = std::upper_bound(history_.begin(), history_.end(), t,
-                                      [](TimeNs time, const HistoryEntry& e) {
-                                        return time < e.measurement.time;
-                                      });
+  const auto after =
+      std::upper_bound(history_.begin(), history_.end(), t,
+                       [](TimeNs time, const HistoryEntry& e) { return time < e.measurement.time; });
   const StateEstimate& base = after == history_.begin() ? anchor_ : std::prev(after)->posterior;
   return predict(base, t, config_);
 }

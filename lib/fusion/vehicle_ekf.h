@@ -17,13 +17,13 @@
 namespace rsu::fusion {
 
 enum class MeasurementOutcome : std::uint8_t {
-  kInitialized,         // the first full-heading pose started the filter
-  kAccepted,            // fused
-  kRejectedGate,        // innovation outside the chi-square gate
-  kRejectedYawBranch,   // RSU box yaw about 90 deg off the estimate
-  kRejectedTooOld,      // older than the kept history
+  kInitialized,             // the first full-heading pose started the filter
+  kAccepted,                // fused
+  kRejectedGate,            // innovation outside the chi-square gate
+  kRejectedYawBranch,       // RSU box yaw about 90 deg off the estimate
+  kRejectedTooOld,          // older than the kept history
   kRejectedNotInitialized,  // an RSU fix before any full-heading pose: its yaw cannot start the filter
-  kRejectedInvalid,     // NaN/inf, or a covariance that is not symmetric positive definite
+  kRejectedInvalid,         // NaN/inf, or a covariance that is not symmetric positive definite
   kCount,
 };
 
@@ -33,8 +33,8 @@ struct EkfStats {
   // Per outcome; counts reflect the current decision for measurements still in history (a measurement
   // re-gated after a late insertion moves between counts).
   std::array<std::uint64_t, static_cast<std::size_t>(MeasurementOutcome::kCount)> by_outcome{};
-  std::uint64_t late = 0;        // arrived older than the newest measurement already processed
-  std::uint64_t reapplied = 0;   // measurement updates redone because a late one was inserted before them
+  std::uint64_t late = 0;       // arrived older than the newest measurement already processed
+  std::uint64_t reapplied = 0;  // measurement updates redone because a late one was inserted before them
 
   std::uint64_t count(MeasurementOutcome o) const { return by_outcome[static_cast<std::size_t>(o)]; }
   std::uint64_t accepted() const {

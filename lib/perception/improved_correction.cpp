@@ -6,6 +6,7 @@
 #include <numbers>
 #include <vector>
 
+#include "perception/face_refinement.h"
 #include "perception/size_correction.h"
 
 namespace rsu::perception {
@@ -66,6 +67,7 @@ class Corrector {
     }
     lidar_ = frame_.local(lidar_xy);
     half_extent_ = {fit.length0 / 2.0, fit.length1 / 2.0};
+    assign_points_to_seen_faces();
     const double range = (lidar_xy - fit.center).norm();
     cover_radius_ = std::max(config.cover_radius_m, range * config.covariance.azimuth_resolution_rad);
   }
@@ -111,7 +113,7 @@ class Corrector {
     if (low.seen || high.seen) {
       // A box seen from outside shows at most one of two opposite faces; prefer the better supported.
       const bool use_low = low.seen && (!high.seen || low.support_points >= high.support_points);
-      const double face = face_position(a, use_low ? lo : hi);
+      const double face = face_position(a, use_low);
       const std::size_t n = use_low ? low.support_points : high.support_points;
       const double centre = use_low ? face + dim / 2.0 : face - dim / 2.0;
       return {{centre, face, {AxisAnchor::face, n}}};
@@ -129,18 +131,41 @@ class Corrector {
     return {from_low, from_high};
   }
 
-  // Median coordinate on axis a of the points supporting the face at coordinate `bound`: robust to the
-  // outward bias of the extreme point that bounds the fitted rectangle.
-  double face_position(int a, double bound) const {
-    const int b = 1 - a;
-    const double d = config_.edge_support_m;
-    std::vector<double> v;
-    for (const auto& p : pts_) {
-      if (std::abs(p[a] - bound) <= d && std::abs(p[b]) <= half_extent_[b] + d) {
-        v.push_back(p[a]);
+  // Each point belongs to the nearest seen face within the support distance, if any (-1 otherwise), so
+  // that an L's corner points locate the face they lie on and not the perpendicular one as well.
+  void assign_points_to_seen_faces() {
+    const double d = config_.fit.edge_support_m;
+    face_of_point_.assign(pts_.size(), -1);
+    for (std::size_t i = 0; i < pts_.size(); ++i) {
+      double nearest = d;
+      for (int a = 0; a < 2; ++a) {
+        const int b = 1 - a;
+        if (std::abs(pts_[i][b]) > half_extent_[b] + d) {
+          continue;  // beyond the ends of both faces perpendicular to axis a
+        }
+        for (const std::size_t edge : {kLowEdge[static_cast<std::size_t>(a)], kHighEdge[static_cast<std::size_t>(a)]}) {
+          const double bound = edge == kLowEdge[static_cast<std::size_t>(a)] ? -half_extent_[a] : half_extent_[a];
+          const double dist = std::abs(pts_[i][a] - bound);
+          if (fit_.edges[edge].seen && dist <= nearest) {
+            nearest = dist;
+            face_of_point_[i] = static_cast<int>(edge);
+          }
+        }
       }
     }
-    return v.empty() ? bound : median(v);
+  }
+
+  // Median coordinate on axis a of the points on the face at the low or high bound: robust to the
+  // outward bias of the extreme point that bounds the fitted rectangle.
+  double face_position(int a, bool low) const {
+    const std::size_t edge = low ? kLowEdge[static_cast<std::size_t>(a)] : kHighEdge[static_cast<std::size_t>(a)];
+    std::vector<double> v;
+    for (std::size_t i = 0; i < pts_.size(); ++i) {
+      if (face_of_point_[i] == static_cast<int>(edge)) {
+        v.push_back(pts_[i][a]);
+      }
+    }
+    return v.empty() ? (low ? -half_extent_[a] : half_extent_[a]) : median(v);
   }
 
   // Inconsistency of a hypothesis box with the points, in [0, 2]: the fraction of points outside it
@@ -212,6 +237,7 @@ class Corrector {
   const CorrectionConfig& config_;
   Frame frame_;
   std::vector<Eigen::Vector2d> pts_;  // local
+  std::vector<int> face_of_point_;    // seen edge each point lies on, -1 for none
   Eigen::Vector2d lidar_;             // local
   Eigen::Vector2d half_extent_;       // of the fitted rectangle
   double cover_radius_;
@@ -237,7 +263,9 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
     return out;
   }
 
-  const Corrector corrector(fit, cluster_xy, lidar_xy, config);
+  const RectangleFit refined =
+      config.refine_on_faces ? refine_on_faces(fit, cluster_xy, lidar_xy, config.fit, config.refinement) : fit;
+  const Corrector corrector(refined, cluster_xy, lidar_xy, config);
   const std::array<Hypothesis, 2> best = corrector.best_hypotheses(size);
 
   // Log-odds that the length lies along e1 rather than e2.
@@ -245,7 +273,7 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   double prior_log_odds = 0.0;
   if (prior) {
     // Angular distance (mod pi) of the prior from e1; e2 is pi/2 minus it.
-    const double d0 = std::abs(fold_half_turn(prior->yaw - fit.yaw));
+    const double d0 = std::abs(fold_half_turn(prior->yaw - refined.yaw));
     const double d1 = kPi / 2.0 - d0;
     prior_log_odds = (d1 * d1 - d0 * d0) / (2.0 * prior->sigma * prior->sigma);
   }
@@ -253,7 +281,7 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   const double log_odds = prior_decisive ? prior_log_odds : geometry_log_odds + prior_log_odds;
   int chosen = log_odds > 0.0 ? 0 : 1;
   if (log_odds == 0.0) {  // a perfect tie: fall back on Algorithm 1's rule (the longer edge is the length)
-    chosen = fit.length0 >= fit.length1 ? 0 : 1;
+    chosen = refined.length0 >= refined.length1 ? 0 : 1;
   }
   const Hypothesis& h = best[static_cast<std::size_t>(chosen)];
   const Hypothesis& other = best[static_cast<std::size_t>(1 - chosen)];
@@ -267,7 +295,7 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
 
   const Frame& frame = corrector.frame();
   const Eigen::Vector2d centre = frame.map(h.centre);
-  double yaw = fit.yaw + (chosen == 0 ? 0.0 : kPi / 2.0);
+  double yaw = refined.yaw + (chosen == 0 ? 0.0 : kPi / 2.0);
   if (prior) {
     yaw = angle_distance(yaw, prior->yaw) <= kPi / 2.0 ? wrap_angle(yaw) : wrap_angle(yaw + kPi);
     out.heading_from_prior = true;
@@ -286,8 +314,8 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   evidence.width_axis = h.evidence[static_cast<std::size_t>(1 - chosen)];
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
-    if (fit.edges[i].seen) {
-      evidence.seen_faces[f++] = {fit.edges[i].support_points, i % 2 == 0 ? fit.length0 : fit.length1};
+    if (refined.edges[i].seen) {
+      evidence.seen_faces[f++] = {refined.edges[i].support_points, i % 2 == 0 ? refined.length0 : refined.length1};
     }
   }
   evidence.assignment_confidence = out.confidence;

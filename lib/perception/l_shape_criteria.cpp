@@ -7,16 +7,11 @@
 namespace rsu::perception {
 namespace {
 
-// Zhang's D for one direction: true when the points as a whole lie nearer the c_min edge, i.e.
-// ||C - c_min|| <= ||c_max - C||.
-bool nearer_min_edge(const std::vector<double>& c, double c_min, double c_max) {
-  double to_min = 0.0;
-  double to_max = 0.0;
-  for (const double v : c) {
-    to_min += (v - c_min) * (v - c_min);
-    to_max += (c_max - v) * (c_max - v);
-  }
-  return to_min <= to_max;
+// Zhang's D for one direction picks the edge whose distance vector has the smaller 2-norm:
+// ||C - c_min||^2 <= ||c_max - C||^2. Expanding both sums of squares, this is mean(C) <= (c_min + c_max) / 2:
+// the edge on the side of the points' mean, one comparison instead of a pass over the points.
+bool nearer_min_edge(double sum, std::size_t n, double c_min, double c_max) {
+  return 2.0 * sum <= static_cast<double>(n) * (c_min + c_max);
 }
 
 double population_variance(double sum, double sum_sq, std::size_t n) {
@@ -44,11 +39,14 @@ double CriterionEvaluator::operator()(double theta) {
   const double s = std::sin(theta);
   c1_min_ = c2_min_ = std::numeric_limits<double>::infinity();
   c1_max_ = c2_max_ = -std::numeric_limits<double>::infinity();
+  c1_sum_ = c2_sum_ = 0.0;
   for (std::size_t i = 0; i < x_.size(); ++i) {
     const double a = x_[i] * c + y_[i] * s;
     const double b = -x_[i] * s + y_[i] * c;
     c1_[i] = a;
     c2_[i] = b;
+    c1_sum_ += a;
+    c2_sum_ += b;
     c1_min_ = std::min(c1_min_, a);
     c1_max_ = std::max(c1_max_, a);
     c2_min_ = std::min(c2_min_, b);
@@ -70,8 +68,8 @@ double CriterionEvaluator::operator()(double theta) {
 double CriterionEvaluator::area() const { return -(c1_max_ - c1_min_) * (c2_max_ - c2_min_); }
 
 double CriterionEvaluator::closeness_zhang() const {
-  const bool min1 = nearer_min_edge(c1_, c1_min_, c1_max_);
-  const bool min2 = nearer_min_edge(c2_, c2_min_, c2_max_);
+  const bool min1 = nearer_min_edge(c1_sum_, c1_.size(), c1_min_, c1_max_);
+  const bool min2 = nearer_min_edge(c2_sum_, c2_.size(), c2_min_, c2_max_);
   const double d0 = config_.closeness_d0_m;
   double beta = 0.0;
   for (std::size_t i = 0; i < c1_.size(); ++i) {
@@ -83,8 +81,8 @@ double CriterionEvaluator::closeness_zhang() const {
 }
 
 double CriterionEvaluator::variance() const {
-  const bool min1 = nearer_min_edge(c1_, c1_min_, c1_max_);
-  const bool min2 = nearer_min_edge(c2_, c2_min_, c2_max_);
+  const bool min1 = nearer_min_edge(c1_sum_, c1_.size(), c1_min_, c1_max_);
+  const bool min2 = nearer_min_edge(c2_sum_, c2_.size(), c2_min_, c2_max_);
   double s1 = 0.0, q1 = 0.0, s2 = 0.0, q2 = 0.0;
   std::size_t n1 = 0, n2 = 0;
   for (std::size_t i = 0; i < c1_.size(); ++i) {

@@ -53,6 +53,7 @@ class CriterionEvaluator {
   std::vector<double> c1_;
   std::vector<double> c2_;
   double c1_min_ = 0, c1_max_ = 0, c2_min_ = 0, c2_max_ = 0;
+  double c1_sum_ = 0, c2_sum_ = 0;
   std::size_t evaluations_ = 0;
 };
 

@@ -22,25 +22,49 @@ double wrap_quarter(double theta) {
   return t >= kQuarterTurn ? 0.0 : t;
 }
 
+// A criterion can be flat at its maximum (Autoware's closeness floors distances at 0.1 m, so every angle
+// that keeps all points within 0.1 m of an edge scores the same: a plateau about +-0.1 m / face length
+// wide). Picking the plateau's first angle biases the yaw by half its width; its middle is unbiased.
+// Returns the middle (in sample units, possibly x.5, possibly outside [0, n) when circular) of the run
+// of samples equal to values[at].
+double middle_of_tied_run(const std::vector<double>& values, std::size_t at, bool circular) {
+  const auto n = static_cast<long>(values.size());
+  const double top = values[at];
+  auto value = [&](long i) { return values[static_cast<std::size_t>(circular ? ((i % n) + n) % n : i)]; };
+  long lo = static_cast<long>(at);
+  long hi = lo;
+  while (hi - lo + 1 < n && (circular || lo > 0) && value(lo - 1) == top) {
+    --lo;
+  }
+  while (hi - lo + 1 < n && (circular || hi < n - 1) && value(hi + 1) == top) {
+    ++hi;
+  }
+  return 0.5 * static_cast<double>(lo + hi);
+}
+
 }  // namespace
 
 OrientationResult search_exhaustive(CriterionEvaluator& criterion, double step_rad) {
   OrientationResult best;
-  if (!(step_rad > 0.0)) {
+  if (!(step_rad > 0.0) || !std::isfinite(step_rad)) {
     return best;
   }
+  step_rad = std::min(std::max(step_rad, 1e-5), kQuarterTurn);
   const auto steps = static_cast<int>(std::ceil(kQuarterTurn / step_rad - 1e-9));
-  bool first = true;
+  std::vector<double> values(static_cast<std::size_t>(steps));
+  std::size_t at = 0;
   for (int k = 0; k < steps; ++k) {
-    const double theta = k * step_rad;
-    const double q = criterion(theta);
-    ++best.evaluations;
-    if (first || q > best.value) {
-      best.theta = theta;
-      best.value = q;
-      first = false;
+    const auto uk = static_cast<std::size_t>(k);
+    values[uk] = criterion(k * step_rad);
+    if (values[uk] > values[at]) {
+      at = uk;
     }
   }
+  best.evaluations = values.size();
+  best.value = values[at];
+  // The grid is circular only when the step divides the quarter turn.
+  const bool circular = std::abs(steps * step_rad - kQuarterTurn) < 1e-9;
+  best.theta = wrap_quarter(middle_of_tied_run(values, at, circular) * step_rad);
   return best;
 }
 
@@ -75,34 +99,43 @@ OrientationResult search_coarse_to_fine(CriterionEvaluator& criterion, const Ori
 
   OrientationResult best;
   best.value = -std::numeric_limits<double>::infinity();
-  for (const int k : peaks) {
-    double centre = k * step;
-    double centre_q = q[static_cast<std::size_t>(k)];
-    double half = step;         // search [centre - half, centre + half]
-    double sub = step / 4.0;    // at this spacing
-    while (true) {
-      const auto m = static_cast<int>(std::round(half / sub));
-      const double from = centre;
-      for (int j = -m; j <= m; ++j) {
-        if (j == 0) {
-          continue;
-        }
-        const double theta = from + j * sub;
-        const double v = criterion(wrap_quarter(theta));
-        if (v > centre_q) {
-          centre_q = v;
-          centre = theta;
-        }
-      }
-      if (sub <= fine * 1.0001) {
-        break;
-      }
-      half = sub;
-      sub = std::max(sub / 5.0, fine);
+  auto consider = [&](double theta) {
+    const double t = wrap_quarter(theta);
+    const double v = criterion(t);
+    if (v > best.value) {
+      best.value = v;
+      best.theta = t;
     }
-    if (centre_q > best.value) {
-      best.value = centre_q;
-      best.theta = wrap_quarter(centre);
+  };
+  // Dense scan of +-window around each coarse peak, on the global grid of `dense` steps; the best
+  // sample, moved to the middle of its plateau if it has one.
+  const double dense = deg_to_rad(std::clamp(config.dense_step_deg, 1e-3, config.coarse_step_deg));
+  const double window = deg_to_rad(std::max(0.0, config.dense_window_deg));
+  for (const int k : peaks) {
+    const double centre = k * step;
+    const auto first = static_cast<long>(std::ceil((centre - window) / dense - 1e-9));
+    const auto last = static_cast<long>(std::floor((centre + window) / dense + 1e-9));
+    std::vector<double> values;
+    std::size_t at = 0;
+    for (long j = first; j <= last; ++j) {
+      values.push_back(criterion(wrap_quarter(static_cast<double>(j) * dense)));
+      if (values.back() > values[at]) {
+        at = values.size() - 1;
+      }
+    }
+    if (!values.empty() && values[at] > best.value) {
+      best.value = values[at];
+      best.theta = wrap_quarter((static_cast<double>(first) + middle_of_tied_run(values, at, false)) * dense);
+    }
+  }
+  // Then successively finer grids around the best, each spanning +-1 step of the previous.
+  for (double sub = dense / 5.0, half = dense; half > fine * 1.0001; half = sub, sub = std::max(sub / 5.0, fine)) {
+    const double centre = best.theta;
+    const auto m = static_cast<int>(std::round(half / sub));
+    for (int j = -m; j <= m; ++j) {
+      if (j != 0) {
+        consider(centre + j * sub);
+      }
     }
   }
   best.evaluations = criterion.evaluations() - evaluations_before;

@@ -101,6 +101,7 @@ CorrectedPose correct(const RectangleFit& fit, std::span<const Eigen::Vector2d> 
                       const PerceptionConfig& config) {
   // The fix's yaw is quantised by the orientation search that produced the fit.
   CorrectionConfig correction = config.correction;
+  correction.fit = config.fit;
   correction.covariance.search_resolution_rad =
       deg_to_rad(config.fit.search.method == OrientationSearchMethod::exhaustive
                      ? config.fit.search.exhaustive_step_deg

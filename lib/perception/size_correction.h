@@ -13,6 +13,7 @@
 //    points (a face the LiDAR should have seen but did not speaks against the box). Along each axis the
 //    centre comes from the seen face perpendicular to it (its median position, + half the known size),
 //    or, when the points span the whole known size without such a face, from the middle of their extent.
+//    Before that, the fit's orientation is refined by least squares on the seen faces (face_refinement.h).
 //
 // Yaw is the direction of the length axis. A box has no front: without a prior, yaw is reported mod pi in
 // (-pi/2, pi/2]; with a prior, the one of yaw and yaw + pi nearer the prior (heading_from_prior = true).
@@ -25,7 +26,9 @@
 #include <Eigen/Core>
 
 #include "common/pose.h"
+#include "perception/face_refinement.h"
 #include "perception/fix_covariance.h"
+#include "perception/l_shape_fitting.h"
 #include "perception/rectangle_fit.h"
 
 namespace rsu::perception {
@@ -76,9 +79,11 @@ struct CorrectionConfig {
   double face_bin_m = 0.1;             // faces are checked for coverage in bins of this length
   double min_incidence_cos = 0.1;      // faces seen more obliquely than ~84 deg are not expected to show
   double full_face_tolerance_m = 0.3;  // points spanning the known size within this: both ends seen
-  double edge_support_m = 0.15;        // points this close to a face locate it (as LShapeFitConfig)
   double geometry_scale = 0.05;        // score difference per unit of log-odds between the assignments
   double min_confidence = 0.9;         // resolved only above this; a prior this decisive is trusted
+  bool refine_on_faces = true;         // re-fit the orientation to the seen faces first (face_refinement.h)
+  LShapeFitConfig fit;                 // face support and 'seen' rules (the pipeline passes its own)
+  FaceRefinementConfig refinement;
   CovarianceModelConfig covariance;
 };
 

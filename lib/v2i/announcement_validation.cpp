@@ -11,9 +11,9 @@ namespace rsu::v2i {
 namespace {
 
 bool all_finite(const VehicleAnnouncement& a) {
-  const std::array<double, 8> values = {a.size.length_m,        a.size.width_m,         a.size.height_m,
-                                        a.reference_offset.x(), a.reference_offset.y(), a.pose.x,
-                                        a.pose.y,               a.pose.yaw};
+  const std::array<double, 8> values = {
+      a.size.length_m,        a.size.width_m, a.size.height_m, a.reference_offset.x(),
+      a.reference_offset.y(), a.pose.x,       a.pose.y,        a.pose.yaw};
   for (const double v : values) {
     if (!std::isfinite(v)) {
       return false;
@@ -23,7 +23,9 @@ bool all_finite(const VehicleAnnouncement& a) {
          (!a.yaw_rate_rps || std::isfinite(*a.yaw_rate_rps));
 }
 
-bool in_range(double v, double lo, double hi) { return v >= lo && v <= hi; }
+bool in_range(double v, double lo, double hi) {
+  return v >= lo && v <= hi;
+}
 
 // now - t, saturated instead of overflowing for garbage times.
 TimeNs saturating_age(TimeNs t, TimeNs now) {
@@ -159,7 +161,8 @@ AnnouncementReason validate_announcement(const VehicleAnnouncement& a, TimeNs no
   if (std::abs(a.pose.yaw) > limits.max_abs_yaw_rad) {
     return AnnouncementReason::kYawOutOfRange;
   }
-  if (const AnnouncementReason r = check_covariance(a.pose_covariance, limits); r != AnnouncementReason::kValid) {
+  if (const AnnouncementReason r = check_covariance(a.pose_covariance, limits);
+      r != AnnouncementReason::kValid) {
     return r;
   }
   if (a.speed_mps && !in_range(*a.speed_mps, -limits.max_reverse_speed_mps, limits.max_speed_mps)) {

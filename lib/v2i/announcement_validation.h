@@ -49,8 +49,8 @@ struct AnnouncementLimits {
 enum class AnnouncementReason : std::uint8_t {
   kValid,
   kUnsupportedVersion,
-  kMissingVehicleId,          // vehicle_id 0 (proto3 default: the field was absent)
-  kNonFinite,                 // NaN or inf in any number
+  kMissingVehicleId,  // vehicle_id 0 (proto3 default: the field was absent)
+  kNonFinite,         // NaN or inf in any number
   kLengthOutOfRange,
   kWidthOutOfRange,
   kHeightOutOfRange,
@@ -58,13 +58,13 @@ enum class AnnouncementReason : std::uint8_t {
   kReferenceOffsetOutsideBox,
   kPositionOutOfRange,
   kYawOutOfRange,
-  kCovarianceInvalid,         // not symmetric, not positive definite, or a variance <= 0
+  kCovarianceInvalid,  // not symmetric, not positive definite, or a variance <= 0
   kCovarianceTooLarge,
   kSpeedOutOfRange,
   kYawRateOutOfRange,
   kTooOld,
   kFromFuture,
-  kReplyAddressInvalid,       // not a numeric unicast IPv4/IPv6 address
+  kReplyAddressInvalid,  // not a numeric unicast IPv4/IPv6 address
   kReplyPortInvalid,
   kCount,
 };

@@ -23,7 +23,9 @@ std::vector<int> assign_rows_to_columns(const Eigen::MatrixXd& cost) {
   std::vector<int> came_from(static_cast<std::size_t>(cols));
   std::vector<char> done(static_cast<std::size_t>(cols) + 1);
 
-  const auto at = [](auto& v, int i) -> auto& { return v[static_cast<std::size_t>(i)]; };
+  const auto at = [](auto& v, int i) -> auto& {
+    return v[static_cast<std::size_t>(i)];
+  };
 
   for (int r = 0; r < rows; ++r) {
     at(row_of_col, start) = r;

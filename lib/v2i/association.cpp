@@ -22,7 +22,8 @@ bool is_finite(const VehicleHypothesis& v) {
 // half the announced dimension missing from the fitted edge. Which announced dimension lies along which
 // fitted edge is unknown (the off-by-90 deg problem), so every pairing the edge lengths allow is taken
 // and the larger spread kept per axis.
-Eigen::Vector2d unseen_half_extent(const FittedCluster& c, const BoxSize& size, const AssociationConfig& cfg) {
+Eigen::Vector2d unseen_half_extent(const FittedCluster& c, const BoxSize& size,
+                                   const AssociationConfig& cfg) {
   const double slack_long = size.length_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
   const double slack_wide = size.width_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
   Eigen::Vector2d spread = Eigen::Vector2d::Zero();
@@ -76,13 +77,14 @@ PairCheck check_pair(const FittedCluster& cluster, const VehicleHypothesis& vehi
   }
   const Eigen::Vector2d d = cluster.centre - vehicle.centre;
   // d^T S^-1 d with the closed-form 2x2 inverse.
-  out.distance_sq = (s(1, 1) * d.x() * d.x() - (s(0, 1) + s(1, 0)) * d.x() * d.y() + s(0, 0) * d.y() * d.y()) / det;
+  out.distance_sq =
+      (s(1, 1) * d.x() * d.x() - (s(0, 1) + s(1, 0)) * d.x() * d.y() + s(0, 0) * d.y() * d.y()) / det;
   out.verdict = out.distance_sq <= config.gate_chi2 ? PairGate::kPass : PairGate::kTooFar;
   return out;
 }
 
-AssociationResult associate(std::span<const FittedCluster> clusters, std::span<const VehicleHypothesis> vehicles,
-                            const AssociationConfig& config) {
+AssociationResult associate(std::span<const FittedCluster> clusters,
+                            std::span<const VehicleHypothesis> vehicles, const AssociationConfig& config) {
   AssociationResult result;
   const auto n_clusters = static_cast<Eigen::Index>(clusters.size());
   const auto n_vehicles = static_cast<Eigen::Index>(vehicles.size());
@@ -98,8 +100,8 @@ AssociationResult associate(std::span<const FittedCluster> clusters, std::span<c
   for (Eigen::Index v = 0; v < n_vehicles; ++v) {
     cost(v, n_clusters + v) = unmatched_cost;
     for (Eigen::Index c = 0; c < n_clusters; ++c) {
-      const PairCheck check = check_pair(clusters[static_cast<std::size_t>(c)],
-                                         vehicles[static_cast<std::size_t>(v)], config);
+      const PairCheck check =
+          check_pair(clusters[static_cast<std::size_t>(c)], vehicles[static_cast<std::size_t>(v)], config);
       switch (check.verdict) {
         case PairGate::kPass:
           cost(v, c) = check.distance_sq;

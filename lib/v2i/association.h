@@ -19,9 +19,9 @@ namespace rsu::v2i {
 // size correction. Its yaw may be off by 90 or 180 degrees; its edges shrink where faces are unseen.
 struct FittedCluster {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // map frame, m
-  double yaw = 0.0;            // direction of edge_along, rad
-  double edge_along_m = 0.0;   // edge length along yaw
-  double edge_across_m = 0.0;  // edge length across yaw
+  double yaw = 0.0;                                  // direction of edge_along, rad
+  double edge_along_m = 0.0;                         // edge length along yaw
+  double edge_across_m = 0.0;                        // edge length across yaw
   std::size_t point_count = 0;
 };
 
@@ -70,6 +70,7 @@ struct AssociationResult {
 };
 
 AssociationResult associate(std::span<const FittedCluster> clusters,
-                            std::span<const VehicleHypothesis> vehicles, const AssociationConfig& config = {});
+                            std::span<const VehicleHypothesis> vehicles,
+                            const AssociationConfig& config = {});
 
 }  // namespace rsu::v2i

@@ -35,7 +35,7 @@ struct VehicleAnnouncement {
   BoxSize size;
   // Reference point minus footprint box centre, vehicle frame (zero: the pose is the box centre).
   Eigen::Vector2d reference_offset = Eigen::Vector2d::Zero();
-  Pose2 pose;  // of the reference point
+  Pose2 pose;                                                     // of the reference point
   Eigen::Matrix3d pose_covariance = Eigen::Matrix3d::Identity();  // (x, y, yaw)
   std::optional<double> speed_mps;
   std::optional<double> yaw_rate_rps;

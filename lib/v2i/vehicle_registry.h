@@ -43,7 +43,8 @@ enum class UpsertOutcome : std::uint8_t {
 
 const char* to_string(UpsertOutcome outcome);
 inline bool is_accepted(UpsertOutcome o) {
-  return o == UpsertOutcome::kAdded || o == UpsertOutcome::kUpdated || o == UpsertOutcome::kUpdatedSizeChanged;
+  return o == UpsertOutcome::kAdded || o == UpsertOutcome::kUpdated ||
+         o == UpsertOutcome::kUpdatedSizeChanged;
 }
 
 // True when sequence a comes after b modulo 2^32 (RFC 1982 serial-number arithmetic), so the counter
@@ -54,8 +55,8 @@ struct RegisteredVehicle {
   VehicleAnnouncement announcement;  // the latest accepted
   std::string source;                // the sender of that announcement, as passed to upsert
   TimeNs first_heard = 0;
-  TimeNs last_heard = 0;             // receive time (RSU clock), not the vehicle's generation time
-  std::uint64_t announcements = 0;   // accepted so far
+  TimeNs last_heard = 0;            // receive time (RSU clock), not the vehicle's generation time
+  std::uint64_t announcements = 0;  // accepted so far
 };
 
 struct RegistryStats {

@@ -28,7 +28,9 @@ void write_covariance(const Eigen::Matrix3d& in, pb::Covariance3& out) {
   }
 }
 
-Pose2 read_pose(const pb::Pose2D& in) { return {in.x(), in.y(), in.yaw()}; }
+Pose2 read_pose(const pb::Pose2D& in) {
+  return {in.x(), in.y(), in.yaw()};
+}
 
 void write_pose(const Pose2& in, pb::Pose2D& out) {
   out.set_x(in.x);

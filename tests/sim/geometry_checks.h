@@ -60,7 +60,8 @@ inline std::vector<TriangleMesh> components(const TriangleMesh& m) {
   std::iota(parent.begin(), parent.end(), 0);
   auto find = [&](int x) {
     while (parent[static_cast<std::size_t>(x)] != x) {
-      x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+      x = parent[static_cast<std::size_t>(x)] =
+          parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
     }
     return x;
   };
@@ -142,8 +143,8 @@ inline double distance_to_mesh(const Eigen::Vector3d& p, const TriangleMesh& m) 
 }
 
 // Nearest positive ray parameter where o + s d (d unit) meets the sphere |x - c| = r.
-inline std::optional<double> ray_sphere(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& c,
-                                        double r) {
+inline std::optional<double> ray_sphere(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                        const Eigen::Vector3d& c, double r) {
   const Eigen::Vector3d w = o - c;
   const double b = w.dot(d);
   const double disc = b * b - (w.squaredNorm() - r * r);
@@ -163,8 +164,8 @@ struct BoxHit {
   double s;
   Eigen::Vector3d normal;
 };
-inline std::optional<BoxHit> ray_box(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo,
-                                     const Eigen::Vector3d& hi) {
+inline std::optional<BoxHit> ray_box(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                     const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
   double enter = 0.0;
   double leave = std::numeric_limits<double>::infinity();
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();

@@ -31,11 +31,13 @@ Scene ground_only() {
   return s;
 }
 
-Eigen::Vector3d xyz(const LidarPoint& p) { return {p.x, p.y, p.z}; }
+Eigen::Vector3d xyz(const LidarPoint& p) {
+  return {p.x, p.y, p.z};
+}
 
 // A VLP-16 2 m above an empty ground plane: each downward ring draws a circle of radius
 // 2 / tan(|elevation|), if that is within the 100 m maximum range; no other ring returns.
-TEST(LidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
+TEST(SimLidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
   const SensorModel model = make_vlp16();
   const Raycaster rc(ground_only());
   const LidarSimulator sim(model, Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), rc);
@@ -59,7 +61,7 @@ TEST(LidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
     ASSERT_LT(w, 0.0) << "an upward ring returned";
     const double horizontal = 2.0 / std::tan(-w);
     // Quantisation: range to within half a distance unit (1 mm), plus float rounding.
-    EXPECT_NEAR(std::hypot(p.x, p.y), horizontal, 1e-3 + 1e-5 * horizontal);
+    EXPECT_NEAR(std::hypot(double{p.x}, double{p.y}), horizontal, 1e-3 + 1e-5 * horizontal);
     EXPECT_NEAR(p.z, -2.0, 1e-3);
     EXPECT_EQ(f.truth[i].surface, SurfaceClass::kGround);
     // Lambertian intensity: incidence cosine on a horizontal plane is sin|elevation|.
@@ -79,7 +81,7 @@ TEST(LidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
   EXPECT_EQ(per_ring.size(), 7U);
 }
 
-TEST(LidarSimulator, SameSeedSameFrameDifferentSeedDifferentFrame) {
+TEST(SimLidarSimulator, SameSeedSameFrameDifferentSeedDifferentFrame) {
   Scene scene = ground_only();
   Vehicle v;
   v.id = 3;
@@ -113,7 +115,7 @@ TEST(LidarSimulator, SameSeedSameFrameDifferentSeedDifferentFrame) {
 
 // Range noise: measured (quantised) range minus the true range along the cast ray is zero-mean with
 // the configured sigma (plus the quantisation's unit^2 / 12).
-TEST(LidarSimulator, RangeNoiseHasTheConfiguredSigma) {
+TEST(SimLidarSimulator, RangeNoiseHasTheConfiguredSigma) {
   const SensorModel model = make_vlp16();
   const Raycaster rc(ground_only());
   NoiseModel noise;
@@ -138,7 +140,7 @@ TEST(LidarSimulator, RangeNoiseHasTheConfiguredSigma) {
   int off_circle = 0;
   for (const LidarPoint& p : f.frame.points) {
     const double w = model.elevation_deg.at(p.ring) * kPi / 180.0;
-    off_circle += std::abs(std::hypot(p.x, p.y) - 2.0 / std::tan(-w)) > 0.05 ? 1 : 0;
+    off_circle += std::abs(std::hypot(double{p.x}, double{p.y}) - 2.0 / std::tan(-w)) > 0.05 ? 1 : 0;
   }
   EXPECT_GT(off_circle, 100);
 }
@@ -146,7 +148,7 @@ TEST(LidarSimulator, RangeNoiseHasTheConfiguredSigma) {
 // Every point labelled as the vehicle, put back into the map frame, lies on the vehicle's mesh
 // (distance computed here by brute force), within the distance quantum, when noise is off; within
 // a few sigma when it is on.
-TEST(LidarSimulator, VehiclePointsLieOnTheMeshSurface) {
+TEST(SimLidarSimulator, VehiclePointsLieOnTheMeshSurface) {
   Scene scene = ground_only();
   Vehicle v;
   v.id = 9;
@@ -183,7 +185,7 @@ TEST(LidarSimulator, VehiclePointsLieOnTheMeshSurface) {
 
 // A vehicle driving away at 30 m/s, seen from behind at belt height: the flat part of its rear face
 // is at x(t) - length / 2 at each point's own firing time t, so points fired later are farther.
-TEST(LidarSimulator, MovingVehicleIsSeenWhereItIsAtEachPointsTime) {
+TEST(SimLidarSimulator, MovingVehicleIsSeenWhereItIsAtEachPointsTime) {
   Scene scene = ground_only();
   Vehicle v;
   v.id = 1;
@@ -204,9 +206,9 @@ TEST(LidarSimulator, MovingVehicleIsSeenWhereItIsAtEachPointsTime) {
     if (f.truth[i].surface != SurfaceClass::kVehicle) {
       continue;
     }
-    const double z = p.z + 0.9;
+    const double z = double{p.z} + 0.9;
     // Flat rear face: between the arch tops and the belt line, clear of the rounded corners.
-    if (z < 0.82 || z > 0.98 || std::abs(p.y) > 0.5 * s.width - s.corner_radius - 0.05) {
+    if (z < 0.82 || z > 0.98 || std::abs(double{p.y}) > 0.5 * s.width - s.corner_radius - 0.05) {
       continue;
     }
     const double expected_x = x0 + speed * to_seconds(p.time_ns) - 0.5 * s.length;
@@ -221,7 +223,7 @@ TEST(LidarSimulator, MovingVehicleIsSeenWhereItIsAtEachPointsTime) {
 }
 
 // What the simulator calls a point is what a decoder rebuilds from the simulator's packets.
-TEST(LidarSimulator, FramePointsEqualDecodedPackets) {
+TEST(SimLidarSimulator, FramePointsEqualDecodedPackets) {
   Scene scene = ground_only();
   Vehicle v;
   v.id = 5;
@@ -269,7 +271,7 @@ TEST(LidarSimulator, FramePointsEqualDecodedPackets) {
 
 // Sector simulation casts only the firings in the window, and those come out exactly as in the full
 // frame (noise is keyed by firing, not by draw order).
-TEST(LidarSimulator, SectorMatchesTheFullFrameInsideTheWindow) {
+TEST(SimLidarSimulator, SectorMatchesTheFullFrameInsideTheWindow) {
   Scene scene = ground_only();
   Vehicle v;
   v.trajectory = StaticPose{{6.0, -6.0, 0.0}};
@@ -299,7 +301,7 @@ TEST(LidarSimulator, SectorMatchesTheFullFrameInsideTheWindow) {
   }
 }
 
-TEST(LidarSimulator, PacketsOutsideTheSectorReportNoReturn) {
+TEST(SimLidarSimulator, PacketsOutsideTheSectorReportNoReturn) {
   const Raycaster rc(ground_only());
   const LidarSimulator sim(make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), rc);
   // Packet 0 spans azimuths 0 .. 2.4 deg: a sector elsewhere leaves it empty.
@@ -309,13 +311,14 @@ TEST(LidarSimulator, PacketsOutsideTheSectorReportNoReturn) {
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     for (int c = 0; c < kChannelsPerBlock; ++c) {
       EXPECT_EQ(empty.distance_raw[static_cast<std::size_t>(b)][static_cast<std::size_t>(c)], 0);
-      full_returns += full.distance_raw[static_cast<std::size_t>(b)][static_cast<std::size_t>(c)] != 0 ? 1 : 0;
+      full_returns +=
+          full.distance_raw[static_cast<std::size_t>(b)][static_cast<std::size_t>(c)] != 0 ? 1 : 0;
     }
   }
   EXPECT_EQ(full_returns, 12 * 2 * 7);  // 7 downward rings reach the ground, 2 sequences per block
 }
 
-TEST(LidarSimulator, BadConfigurationThrows) {
+TEST(SimLidarSimulator, BadConfigurationThrows) {
   const Raycaster rc(ground_only());
   NoiseModel negative;
   negative.range_sigma_m = -1.0;
@@ -330,7 +333,7 @@ TEST(LidarSimulator, BadConfigurationThrows) {
   EXPECT_GT(generic.simulate_frame(0).frame.points.size(), 50000U);  // frames work without a packet format
 }
 
-TEST(LidarSimulator, OwnsItsRaycasterWhenBuiltFromAScene) {
+TEST(SimLidarSimulator, OwnsItsRaycasterWhenBuiltFromAScene) {
   const LidarSimulator sim(make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), ground_only());
   EXPECT_GT(sim.simulate_frame(0).frame.points.size(), 12000U);
 }

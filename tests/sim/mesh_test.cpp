@@ -15,7 +15,7 @@ namespace {
 using testing::closed_mesh_problem;
 using testing::signed_volume;
 
-TEST(Mesh, BoxIsClosedOutwardAndHasItsVolume) {
+TEST(SimMesh, BoxIsClosedOutwardAndHasItsVolume) {
   const TriangleMesh box = make_box({-1.0, -2.0, 0.0}, {3.0, 1.0, 2.5});
   EXPECT_EQ(box.triangles.size(), 12U);
   EXPECT_EQ(closed_mesh_problem(box), "");
@@ -29,7 +29,7 @@ TEST(Mesh, BoxIsClosedOutwardAndHasItsVolume) {
   }
 }
 
-TEST(Mesh, CylinderIsTheInscribedPolygonPrism) {
+TEST(SimMesh, CylinderIsTheInscribedPolygonPrism) {
   const int n = 12;
   const double r = 0.4;
   const TriangleMesh c = make_cylinder(r, 1.0, 4.0, n);
@@ -43,7 +43,7 @@ TEST(Mesh, CylinderIsTheInscribedPolygonPrism) {
   }
 }
 
-TEST(Mesh, EllipsoidVerticesOnSurfaceClosedAndVolumeBelowTrueVolume) {
+TEST(SimMesh, EllipsoidVerticesOnSurfaceClosedAndVolumeBelowTrueVolume) {
   const Eigen::Vector3d radii(2.0, 1.0, 0.5);
   for (int level = 0; level <= 3; ++level) {
     const TriangleMesh e = make_ellipsoid(radii, level);
@@ -60,7 +60,7 @@ TEST(Mesh, EllipsoidVerticesOnSurfaceClosedAndVolumeBelowTrueVolume) {
   }
 }
 
-TEST(Mesh, GroundSquareFacesUp) {
+TEST(SimMesh, GroundSquareFacesUp) {
   const TriangleMesh g = make_ground_square(50.0, 0.0);
   ASSERT_EQ(g.triangles.size(), 2U);
   for (const auto& t : g.triangles) {
@@ -76,7 +76,7 @@ TEST(Mesh, GroundSquareFacesUp) {
   EXPECT_NEAR(area, 100.0 * 100.0, 1e-3);
 }
 
-TEST(Mesh, RoundedRectangleHasExactExtentsAndIsConvexCounterClockwise) {
+TEST(SimMesh, RoundedRectangleHasExactExtentsAndIsConvexCounterClockwise) {
   const auto ring = rounded_rectangle(1.0, -2.0, 2.5, 1.0, 0.3, 6);
   ASSERT_EQ(ring.size(), 4U * 7U);
   double x_min = 1e9, x_max = -1e9, y_min = 1e9, y_max = -1e9;
@@ -101,7 +101,7 @@ TEST(Mesh, RoundedRectangleHasExactExtentsAndIsConvexCounterClockwise) {
   }
 }
 
-TEST(Mesh, ClipPolygonKeepsTheSlab) {
+TEST(SimMesh, ClipPolygonKeepsTheSlab) {
   const std::vector<Eigen::Vector2d> square = {{2, -1}, {2, 1}, {-2, 1}, {-2, -1}};
   const auto clipped = clip_polygon_x(square, -0.5, 1.0);
   double area = 0.0;
@@ -116,7 +116,7 @@ TEST(Mesh, ClipPolygonKeepsTheSlab) {
   EXPECT_EQ(clipped.size(), 4U);
 }
 
-TEST(Mesh, AppendAndTransformKeepComponentsClosed) {
+TEST(SimMesh, AppendAndTransformKeepComponentsClosed) {
   TriangleMesh m = make_box({0, 0, 0}, {1, 1, 1});
   m.append(make_sphere(0.5, 1));
   EXPECT_EQ(closed_mesh_problem(m), "");
@@ -127,7 +127,7 @@ TEST(Mesh, AppendAndTransformKeepComponentsClosed) {
   EXPECT_EQ(testing::components(m).size(), 2U);
 }
 
-TEST(Mesh, BadInputThrows) {
+TEST(SimMesh, BadInputThrows) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(make_box({0, 0, 0}, {nan, 1, 1}), std::invalid_argument);
   EXPECT_THROW(make_box({0, 0, 0}, {-1, 1, 1}), std::invalid_argument);

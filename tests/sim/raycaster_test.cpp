@@ -28,7 +28,7 @@ Scene ground_only() {
   return s;
 }
 
-TEST(Raycaster, HitsTheGroundPlaneExactly) {
+TEST(SimRaycaster, HitsTheGroundPlaneExactly) {
   const Raycaster rc(ground_only());
   std::mt19937 rng(1);
   const Eigen::Vector3d origin(1.0, 2.0, 3.0);
@@ -54,7 +54,7 @@ TEST(Raycaster, HitsTheGroundPlaneExactly) {
   EXPECT_TRUE(rc.cast(origin, {0.0, 0.0, -1.0}, 0, 3.1).hit());
 }
 
-TEST(Raycaster, HitsARotatedBuildingWhereTheSlabTestSays) {
+TEST(SimRaycaster, HitsARotatedBuildingWhereTheSlabTestSays) {
   Scene scene = ground_only();
   Building b;
   b.x = 20.0;
@@ -96,7 +96,7 @@ TEST(Raycaster, HitsARotatedBuildingWhereTheSlabTestSays) {
 // A fine icosphere is an inscribed polyhedron: every hit lies between the circumscribed sphere (its
 // vertices' radius r) and the inscribed sphere (the smallest distance from the centre to a face
 // plane, computed here from the mesh's faces), and the test requires the latter to be within 0.5 %.
-TEST(Raycaster, HitsASphereBetweenItsInscribedAndCircumscribedSpheres) {
+TEST(SimRaycaster, HitsASphereBetweenItsInscribedAndCircumscribedSpheres) {
   Scene scene = ground_only();
   Shrub ball;  // equal extents: a sphere of radius 1 centred 1 m above the ground
   ball.x = 8.0;
@@ -112,7 +112,8 @@ TEST(Raycaster, HitsASphereBetweenItsInscribedAndCircumscribedSpheres) {
   double r_in = std::numeric_limits<double>::infinity();
   for (const auto& t : mesh.triangles) {
     const Eigen::Vector3d a = testing::vertex(mesh, t[0]);
-    const Eigen::Vector3d n = (testing::vertex(mesh, t[1]) - a).cross(testing::vertex(mesh, t[2]) - a).normalized();
+    const Eigen::Vector3d n =
+        (testing::vertex(mesh, t[1]) - a).cross(testing::vertex(mesh, t[2]) - a).normalized();
     r_in = std::min(r_in, std::abs(n.dot(a - centre)));
   }
   ASSERT_GT(r_in, 0.995 * r);
@@ -134,7 +135,7 @@ TEST(Raycaster, HitsASphereBetweenItsInscribedAndCircumscribedSpheres) {
   }
 }
 
-TEST(Raycaster, BadRaysMissWithoutCrashing) {
+TEST(SimRaycaster, BadRaysMissWithoutCrashing) {
   const Raycaster rc(ground_only());
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(rc.cast({nan, 0, 1}, {0, 0, -1}, 0).hit());
@@ -155,7 +156,7 @@ TEST(Raycaster, BadRaysMissWithoutCrashing) {
   EXPECT_THROW(rc.cast_batch(rays, too_few), std::invalid_argument);
 }
 
-TEST(Raycaster, InvalidScenesThrowNamingTheObject) {
+TEST(SimRaycaster, InvalidScenesThrowNamingTheObject) {
   Scene scene = ground_only();
   scene.buildings.push_back(Building{});
   scene.buildings.push_back(Building{});
@@ -178,7 +179,7 @@ TEST(Raycaster, InvalidScenesThrowNamingTheObject) {
 
 // Side view of a parked car: a low horizontal ray over the wheel centre hits the tyre (slightly
 // inboard of the body side, through the arch); the same ray between the axles hits the body side.
-TEST(Raycaster, LowRaysHitTyresThroughTheArchesAndTheBodyBetweenThem) {
+TEST(SimRaycaster, LowRaysHitTyresThroughTheArchesAndTheBodyBetweenThem) {
   Scene scene = ground_only();
   Vehicle v;
   v.id = 42;
@@ -207,7 +208,7 @@ TEST(Raycaster, LowRaysHitTyresThroughTheArchesAndTheBodyBetweenThem) {
 }
 
 // A vehicle driving along +x at 30 m/s: each ray sees it where it is at that ray's own time.
-TEST(Raycaster, EachRaySeesTheVehicleAtItsOwnTime) {
+TEST(SimRaycaster, EachRaySeesTheVehicleAtItsOwnTime) {
   Scene scene = ground_only();
   Vehicle v;
   v.id = 7;
@@ -228,7 +229,7 @@ TEST(Raycaster, EachRaySeesTheVehicleAtItsOwnTime) {
   }
 }
 
-TEST(Raycaster, BatchedCastingMatchesSingleRays) {
+TEST(SimRaycaster, BatchedCastingMatchesSingleRays) {
   Scene scene = ground_only();
   for (int i = 0; i < 6; ++i) {
     Building b;

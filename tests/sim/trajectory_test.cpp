@@ -13,9 +13,11 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 // Angle difference folded into [0, pi], computed here with atan2 (not the library's wrap_angle).
-double angle_gap(double a, double b) { return std::abs(std::atan2(std::sin(a - b), std::cos(a - b))); }
+double angle_gap(double a, double b) {
+  return std::abs(std::atan2(std::sin(a - b), std::cos(a - b)));
+}
 
-TEST(Trajectory, StaticPoseIsConstant) {
+TEST(SimTrajectory, StaticPoseIsConstant) {
   const Trajectory t = StaticPose{{3.0, -4.0, 0.5}};
   for (const TimeNs time : {TimeNs{-5'000'000'000}, TimeNs{0}, TimeNs{123'456'789'000}}) {
     const Pose2 p = pose_at(t, time);
@@ -25,7 +27,7 @@ TEST(Trajectory, StaticPoseIsConstant) {
   }
 }
 
-TEST(Trajectory, SpinAngleAtTime) {
+TEST(SimTrajectory, SpinAngleAtTime) {
   Spin s;
   s.x = 10.0;
   s.y = 2.0;
@@ -47,7 +49,7 @@ TEST(Trajectory, SpinAngleAtTime) {
   EXPECT_DOUBLE_EQ(velocity_at(t, 0).yaw_rate, s.rate_rad_s);
 }
 
-TEST(Trajectory, WaypointsInterpolateLinearlyAndHoldAtTheEnds) {
+TEST(SimTrajectory, WaypointsInterpolateLinearlyAndHoldAtTheEnds) {
   Waypoints w;
   w.points = {{0, {0.0, 0.0, 0.0}}, {10'000'000'000, {10.0, 5.0, 0.5}}, {12'000'000'000, {10.0, 9.0, 0.5}}};
   const Trajectory t = w;
@@ -74,7 +76,7 @@ TEST(Trajectory, WaypointsInterpolateLinearlyAndHoldAtTheEnds) {
   EXPECT_EQ(held.vy, 0.0);
 }
 
-TEST(Trajectory, WaypointYawTakesTheShortWayRound) {
+TEST(SimTrajectory, WaypointYawTakesTheShortWayRound) {
   Waypoints w;
   const double from = 170.0 * kPi / 180.0;
   const double to = -170.0 * kPi / 180.0;
@@ -87,16 +89,17 @@ TEST(Trajectory, WaypointYawTakesTheShortWayRound) {
   EXPECT_NEAR(velocity_at(t, 1).yaw_rate, 10.0 * kPi / 180.0, 1e-12);
 }
 
-TEST(Trajectory, EqualTimesMakeAJump) {
+TEST(SimTrajectory, EqualTimesMakeAJump) {
   Waypoints w;
-  w.points = {{0, {0, 0, 0}}, {1'000'000'000, {1, 0, 0}}, {1'000'000'000, {5, 0, 0}}, {2'000'000'000, {6, 0, 0}}};
+  w.points = {
+      {0, {0, 0, 0}}, {1'000'000'000, {1, 0, 0}}, {1'000'000'000, {5, 0, 0}}, {2'000'000'000, {6, 0, 0}}};
   const Trajectory t = w;
   EXPECT_NEAR(pose_at(t, 999'999'999).x, 1.0, 1e-6);
   EXPECT_DOUBLE_EQ(pose_at(t, 1'000'000'000).x, 5.0);
   EXPECT_NEAR(pose_at(t, 1'500'000'000).x, 5.5, 1e-12);
 }
 
-TEST(Trajectory, PathVerticesIncludeInteriorWaypoints) {
+TEST(SimTrajectory, PathVerticesIncludeInteriorWaypoints) {
   Waypoints w;
   w.points = {{0, {0, 0, 0}}, {1'000'000'000, {4, 0, 0}}, {2'000'000'000, {4, 4, 0}}};
   const auto path = path_vertices(w, 500'000'000, 1'500'000'000);
@@ -107,7 +110,7 @@ TEST(Trajectory, PathVerticesIncludeInteriorWaypoints) {
   EXPECT_NEAR(path[2].y(), 2.0, 1e-12);
 }
 
-TEST(Trajectory, InvalidTrajectoriesThrow) {
+TEST(SimTrajectory, InvalidTrajectoriesThrow) {
   EXPECT_THROW(pose_at(Waypoints{}, 0), std::invalid_argument);
   EXPECT_THROW(validate_trajectory(Waypoints{}), std::invalid_argument);
   Waypoints backwards;

@@ -55,9 +55,11 @@ VehicleShape random_shape(std::mt19937& rng) {
   return s;
 }
 
-TEST(VehicleMesh, DefaultFootprintIsLengthByWidth) { expect_footprint(VehicleShape{}); }
+TEST(SimVehicleMesh, DefaultFootprintIsLengthByWidth) {
+  expect_footprint(VehicleShape{});
+}
 
-TEST(VehicleMesh, RandomShapesFootprintIsLengthByWidth) {
+TEST(SimVehicleMesh, RandomShapesFootprintIsLengthByWidth) {
   std::mt19937 rng(7);
   for (int i = 0; i < 40; ++i) {
     const VehicleShape s = random_shape(rng);
@@ -66,7 +68,7 @@ TEST(VehicleMesh, RandomShapesFootprintIsLengthByWidth) {
   }
 }
 
-TEST(VehicleMesh, EveryComponentIsClosedAndOutward) {
+TEST(SimVehicleMesh, EveryComponentIsClosedAndOutward) {
   std::mt19937 rng(11);
   for (int i = 0; i < 5; ++i) {
     const VehicleShape s = i == 0 ? VehicleShape{} : random_shape(rng);
@@ -81,7 +83,7 @@ TEST(VehicleMesh, EveryComponentIsClosedAndOutward) {
   }
 }
 
-TEST(VehicleMesh, IsShapedLikeACarNotABox) {
+TEST(SimVehicleMesh, IsShapedLikeACarNotABox) {
   const VehicleShape s;
   const TriangleMesh m = make_vehicle_mesh(s);
   const double half_l = 0.5 * s.length;
@@ -104,7 +106,7 @@ TEST(VehicleMesh, IsShapedLikeACarNotABox) {
   }
 }
 
-TEST(VehicleMesh, InconsistentShapesThrowNamingTheField) {
+TEST(SimVehicleMesh, InconsistentShapesThrowNamingTheField) {
   VehicleShape s;
   s.belt_height = 2.0;  // above the roof
   EXPECT_THROW(make_vehicle_mesh(s), std::invalid_argument);

@@ -49,28 +49,36 @@ TEST(AnnouncementValidation, EachDefectHasItsReason) {
       {"length 30", [](auto& a) { a.size.length_m = 30.0; }, R::kLengthOutOfRange},
       {"negative length", [](auto& a) { a.size.length_m = -4.0; }, R::kLengthOutOfRange},
       {"width 0.2", [](auto& a) { a.size.width_m = 0.2; }, R::kWidthOutOfRange},
-      {"width 6", [](auto& a) {
+      {"width 6",
+       [](auto& a) {
          a.size.width_m = 6.0;
          a.size.length_m = 12.0;
        },
        R::kWidthOutOfRange},
       {"height 9", [](auto& a) { a.size.height_m = 9.0; }, R::kHeightOutOfRange},
-      {"wider than long", [](auto& a) {
+      {"wider than long",
+       [](auto& a) {
          a.size.length_m = 2.0;
          a.size.width_m = 2.5;
          a.reference_offset = {0.0, 0.0};
        },
        R::kWiderThanLong},
-      {"offset beyond the bumper", [](auto& a) { a.reference_offset = {-3.5, 0.0}; }, R::kReferenceOffsetOutsideBox},
-      {"offset beside the car", [](auto& a) { a.reference_offset = {0.0, 1.6}; }, R::kReferenceOffsetOutsideBox},
+      {"offset beyond the bumper",
+       [](auto& a) {
+         a.reference_offset = {-3.5, 0.0};
+       },
+       R::kReferenceOffsetOutsideBox},
+      {"offset beside the car",
+       [](auto& a) {
+         a.reference_offset = {0.0, 1.6};
+       },
+       R::kReferenceOffsetOutsideBox},
       {"x 1e8", [](auto& a) { a.pose.x = 1e8; }, R::kPositionOutOfRange},
       {"yaw 1e3", [](auto& a) { a.pose.yaw = 1e3; }, R::kYawOutOfRange},
       {"asymmetric covariance", [](auto& a) { a.pose_covariance(0, 1) = 0.02; }, R::kCovarianceInvalid},
-      {"zero variance", [](auto& a) {
-         a.pose_covariance(2, 2) = 0.0;
-       },
-       R::kCovarianceInvalid},
-      {"indefinite covariance", [](auto& a) {
+      {"zero variance", [](auto& a) { a.pose_covariance(2, 2) = 0.0; }, R::kCovarianceInvalid},
+      {"indefinite covariance",
+       [](auto& a) {
          a.pose_covariance(0, 1) = a.pose_covariance(1, 0) = 0.3;  // |corr| > 1
        },
        R::kCovarianceInvalid},

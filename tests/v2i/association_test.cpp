@@ -74,9 +74,11 @@ TEST(Association, UnseenExtentWidensTheGateAlongTheMissingAxis) {
 TEST(Association, GlobalAssignmentBeatsNearestNeighbour) {
   // Vehicle 0 localises badly (sigma 1 m) and announces itself 1.9 m towards its neighbour, which
   // is 3.5 m away and localises well. Vehicle 0's nearest cluster is the neighbour's.
-  const std::vector<VehicleHypothesis> vehicles = {vehicle(1, 0.0, 1.9, 0.0, 1.0), vehicle(2, 0.0, 3.5, 0.0, 0.2)};
+  const std::vector<VehicleHypothesis> vehicles = {vehicle(1, 0.0, 1.9, 0.0, 1.0),
+                                                   vehicle(2, 0.0, 3.5, 0.0, 0.2)};
   const std::vector<FittedCluster> clusters = {full_view(0.0, 0.0, 0.0), full_view(0.0, 3.5, 0.0)};
-  ASSERT_LT((clusters[1].centre - vehicles[0].centre).norm(), (clusters[0].centre - vehicles[0].centre).norm());
+  ASSERT_LT((clusters[1].centre - vehicles[0].centre).norm(),
+            (clusters[0].centre - vehicles[0].centre).norm());
   const AssociationResult r = associate(clusters, vehicles);
   ASSERT_EQ(r.pairs.size(), 2U);
   EXPECT_EQ(r.pairs[0].cluster, 0U);
@@ -156,8 +158,8 @@ TEST(Association, NeverSwapsSideBySideVehicles) {
 
     const AssociationResult r = associate(clusters, vehicles);
     for (const AssociatedPair& p : r.pairs) {
-      ASSERT_EQ(p.cluster, truth_cluster_of_vehicle[p.vehicle]) << "trial " << trial << ": vehicle " << p.vehicle
-                                                                << " took another vehicle's cluster";
+      ASSERT_EQ(p.cluster, truth_cluster_of_vehicle[p.vehicle])
+          << "trial " << trial << ": vehicle " << p.vehicle << " took another vehicle's cluster";
     }
     both_matched += r.pairs.size() == 2 ? 1 : 0;
   }
@@ -171,7 +173,8 @@ TEST(Association, BadInputsAreSkippedNotFatal) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<VehicleHypothesis> vehicles = {vehicle(1, 0.0, 0.0, 0.0, 0.3), vehicle(2, 10.0, 0.0, 0.0, 0.3)};
   vehicles[1].covariance(0, 0) = -5.0;  // not a covariance
-  std::vector<FittedCluster> clusters = {full_view(0.0, 0.0, 0.0), full_view(nan, 0.0, 0.0), full_view(10.0, 0.0, 0.0)};
+  std::vector<FittedCluster> clusters = {full_view(0.0, 0.0, 0.0), full_view(nan, 0.0, 0.0),
+                                         full_view(10.0, 0.0, 0.0)};
   const AssociationResult r = associate(clusters, vehicles);
   ASSERT_EQ(r.pairs.size(), 1U);
   EXPECT_EQ(r.pairs[0].cluster, 0U);

@@ -8,7 +8,8 @@
 
 namespace rsu::v2i::testing {
 
-inline VehicleAnnouncement make_announcement(std::uint64_t id, std::uint32_t sequence, TimeNs generation_time) {
+inline VehicleAnnouncement make_announcement(std::uint64_t id, std::uint32_t sequence,
+                                             TimeNs generation_time) {
   VehicleAnnouncement a;
   a.vehicle_id = id;
   a.sequence = sequence;

@@ -62,9 +62,17 @@ TEST(VehicleHypothesis, UnknownSpeedStretchesTheGateAlongTheHeading) {
   a.speed_mps = 5.0;
   const VehicleHypothesis known = predict_hypothesis(a, kT0 + 500 * kNsPerMs);
   EXPECT_LT(known.covariance(1, 1), 0.2 * unknown.covariance(1, 1));
-  // With zero elapsed time the announced covariance comes through unchanged.
+  // With zero elapsed time and the box centre as reference point, the announced covariance comes
+  // through unchanged...
+  a.reference_offset = {0.0, 0.0};
   const VehicleHypothesis now = predict_hypothesis(a, kT0);
   EXPECT_NEAR((now.covariance - a.pose_covariance).norm(), 0.0, 1e-12);
+  // ...while a rear-axle reference point 1.35 m behind the centre adds the lever arm: yaw error swings
+  // the centre sideways (x, for a car facing north) by 1.35 m * yaw error.
+  a.reference_offset = {-1.35, 0.0};
+  const VehicleHypothesis lever = predict_hypothesis(a, kT0);
+  EXPECT_NEAR(lever.covariance(0, 0), 0.01 + 1.35 * 1.35 * 0.01, 1e-12);
+  EXPECT_NEAR(lever.covariance(1, 1), 0.01, 1e-12);
 }
 
 }  // namespace

@@ -63,8 +63,8 @@ TEST(VehicleRegistry, ExpiresAfterTheSilenceTimeout) {
   registry.upsert(make_announcement(8, 1, kT0 + kNsPerSecond), "s8", kT0 + kNsPerSecond);
 
   const TimeNs edge = kT0 + 2 * kNsPerSecond;
-  EXPECT_NE(registry.find(7, edge), nullptr);       // exactly the timeout: still there
-  EXPECT_EQ(registry.find(7, edge + 1), nullptr);   // one ns later: silent
+  EXPECT_NE(registry.find(7, edge), nullptr);      // exactly the timeout: still there
+  EXPECT_EQ(registry.find(7, edge + 1), nullptr);  // one ns later: silent
   EXPECT_NE(registry.find(8, edge + 1), nullptr);
   ASSERT_EQ(registry.active(edge + 1).size(), 1U);
   EXPECT_EQ(registry.active(edge + 1)[0]->announcement.vehicle_id, 8U);
@@ -89,11 +89,12 @@ TEST(VehicleRegistry, RefusesNewVehiclesWhenFull) {
   config.capacity = 3;
   VehicleRegistry registry(config);
   for (std::uint64_t id = 1; id <= 3; ++id) {
-    EXPECT_EQ(registry.upsert(make_announcement(id, 1, kT0), "s" + std::to_string(id), kT0), UpsertOutcome::kAdded);
+    EXPECT_EQ(registry.upsert(make_announcement(id, 1, kT0), std::to_string(id), kT0), UpsertOutcome::kAdded);
   }
   EXPECT_EQ(registry.upsert(make_announcement(4, 1, kT0), "s4", kT0), UpsertOutcome::kRegistryFull);
   // Known vehicles still update while full.
-  EXPECT_EQ(registry.upsert(make_announcement(2, 2, kT0 + kTick), "s2", kT0 + kTick), UpsertOutcome::kUpdated);
+  EXPECT_EQ(registry.upsert(make_announcement(2, 2, kT0 + kTick), "s2", kT0 + kTick),
+            UpsertOutcome::kUpdated);
   EXPECT_EQ(registry.stats().outcomes.count(UpsertOutcome::kRegistryFull), 1U);
   // Once vehicles 1 and 3 fall silent, their places are free.
   const TimeNs later = kT0 + 2 * kNsPerSecond + kTick / 2;
@@ -113,10 +114,12 @@ TEST(VehicleRegistry, RateLimitsPerSource) {
   // Another host is not affected.
   EXPECT_EQ(registry.upsert(make_announcement(8, 1, kT0), "192.0.2.2", kT0), UpsertOutcome::kAdded);
   // 20 tokens/s: one more after 50 ms.
-  EXPECT_EQ(registry.upsert(make_announcement(7, ++seq, kT0 + 49 * kNsPerMs), "192.0.2.1", kT0 + 49 * kNsPerMs),
-            UpsertOutcome::kRateLimited);
-  EXPECT_EQ(registry.upsert(make_announcement(7, ++seq, kT0 + 50 * kNsPerMs), "192.0.2.1", kT0 + 50 * kNsPerMs),
-            UpsertOutcome::kUpdated);
+  EXPECT_EQ(
+      registry.upsert(make_announcement(7, ++seq, kT0 + 49 * kNsPerMs), "192.0.2.1", kT0 + 49 * kNsPerMs),
+      UpsertOutcome::kRateLimited);
+  EXPECT_EQ(
+      registry.upsert(make_announcement(7, ++seq, kT0 + 50 * kNsPerMs), "192.0.2.1", kT0 + 50 * kNsPerMs),
+      UpsertOutcome::kUpdated);
   EXPECT_EQ(registry.stats().outcomes.count(UpsertOutcome::kRateLimited), 2U);
 }
 

@@ -138,7 +138,8 @@ TEST(WireCodec, TruncatedMessagesNeverDecodeAsOk) {
   for (std::size_t n = 1; n < bytes.size(); ++n) {
     const std::vector<std::uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
     const DecodeStatus s = decode_v2i_message(cut).status;
-    EXPECT_TRUE(s == DecodeStatus::kParseError || s == DecodeStatus::kNoBody) << "length " << n << ": " << to_string(s);
+    EXPECT_TRUE(s == DecodeStatus::kParseError || s == DecodeStatus::kNoBody)
+        << "length " << n << ": " << to_string(s);
   }
 }
 

@@ -1,0 +1,112 @@
+// The fix covariance grows where the fit is weakly constrained: fewer points, one face seen, longer
+// range. Checked on the model directly and end to end on scans of known boxes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+
+#include "common/angles.h"
+#include "perception/fix_covariance.h"
+#include "perception/l_shape_fitting.h"
+#include "perception/size_correction.h"
+#include "synthetic_scene.h"
+
+namespace rsu::perception {
+namespace {
+
+using test::TrueBox;
+
+// Variance of the position along unit direction d.
+double variance_along(const Eigen::Matrix3d& cov, const Eigen::Vector2d& d) {
+  return d.dot(cov.topLeftCorner<2, 2>() * d);
+}
+
+bool positive_semidefinite(const Eigen::Matrix3d& cov) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  return eig.eigenvalues().minCoeff() >= -1e-15 && (cov - cov.transpose()).norm() < 1e-15;
+}
+
+FixEvidence two_faces(double range, std::size_t points_per_face) {
+  FixEvidence e;
+  e.range_m = range;
+  e.yaw = 0.3;
+  e.lever = Eigen::Vector2d(1.5, 1.7);
+  e.length_axis = {AxisAnchor::face, points_per_face};
+  e.width_axis = {AxisAnchor::face, points_per_face};
+  e.seen_faces = {FaceEvidence{points_per_face, 4.8}, FaceEvidence{points_per_face, 1.9}};
+  return e;
+}
+
+TEST(FixCovariance, ModelIsMonotoneInPointsRangeAndFaces) {
+  const Eigen::Matrix3d base = fix_covariance(two_faces(15.0, 60));
+  ASSERT_TRUE(positive_semidefinite(base));
+  const Eigen::Vector2d u(std::cos(0.3), std::sin(0.3)), v(-u.y(), u.x());
+
+  const Eigen::Matrix3d few = fix_covariance(two_faces(15.0, 8));
+  EXPECT_GT(variance_along(few, u), variance_along(base, u));
+  EXPECT_GT(variance_along(few, v), variance_along(base, v));
+  EXPECT_GT(few(2, 2), base(2, 2));
+
+  const Eigen::Matrix3d far = fix_covariance(two_faces(40.0, 60));
+  EXPECT_GT(variance_along(far, u), variance_along(base, u));
+  EXPECT_GT(variance_along(far, v), variance_along(base, v));
+  EXPECT_GT(far(2, 2), base(2, 2));
+
+  // Only the front (perpendicular to the length axis) seen: the width-axis position comes from the
+  // front's two ends and the yaw from one short face.
+  FixEvidence front = two_faces(15.0, 60);
+  front.width_axis = {AxisAnchor::midpoint, 0};
+  front.seen_faces = {FaceEvidence{60, 1.9}, FaceEvidence{}};
+  const Eigen::Matrix3d one_face = fix_covariance(front);
+  EXPECT_GT(variance_along(one_face, v), variance_along(base, v));
+  EXPECT_GT(one_face(2, 2), base(2, 2));
+  FixEvidence one_end = front;
+  one_end.width_axis = {AxisAnchor::one_end, 0};
+  EXPECT_GT(variance_along(fix_covariance(one_end), v), variance_along(one_face, v));
+
+  // An uncertain length/width assignment adds the other hypothesis' spread.
+  FixEvidence doubtful = two_faces(15.0, 60);
+  doubtful.assignment_confidence = 0.6;
+  doubtful.alternative_offset = Eigen::Vector2d(1.4, -0.2);
+  const Eigen::Matrix3d mixed = fix_covariance(doubtful);
+  EXPECT_GT(mixed(0, 0), base(0, 0) + 0.3);
+  EXPECT_GT(mixed(2, 2), base(2, 2) + 0.3);
+  for (const auto& c : {few, far, one_face, mixed}) EXPECT_TRUE(positive_semidefinite(c));
+}
+
+CorrectedPose correct_scan(const TrueBox& box, const Eigen::Vector2d& lidar, double step_deg, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const auto pts = test::scan_box(box, lidar, deg_to_rad(step_deg), 0.02, rng);
+  const RectangleFit fit = fit_rectangle(pts, lidar);
+  EXPECT_TRUE(fit.ok());
+  return correct_improved(fit, pts, {box.length, box.width}, lidar, std::nullopt);
+}
+
+TEST(FixCovariance, EndToEndFewerPointsFartherAndOneFaceAreLessCertain) {
+  const TrueBox box{{0.0, 0.0}, 0.2, 4.89, 1.92};
+  const Eigen::Vector2d diagonal = -(box.u() * std::cos(0.6) + box.v() * std::sin(0.6));  // sees an L
+
+  const CorrectedPose near_dense = correct_scan(box, 12.0 * diagonal, 0.1, 1);
+  const CorrectedPose near_sparse = correct_scan(box, 12.0 * diagonal, 0.6, 1);
+  const CorrectedPose far_dense = correct_scan(box, 35.0 * diagonal, 0.1, 1);
+  for (const auto* r : {&near_dense, &near_sparse, &far_dense}) ASSERT_TRUE(r->ok());
+
+  EXPECT_GT(near_sparse.covariance.trace(), near_dense.covariance.trace());
+  EXPECT_GT(near_sparse.covariance(2, 2), near_dense.covariance(2, 2));
+  EXPECT_GT(far_dense.covariance(0, 0) + far_dense.covariance(1, 1),
+            near_dense.covariance(0, 0) + near_dense.covariance(1, 1));
+  EXPECT_GT(far_dense.covariance(2, 2), near_dense.covariance(2, 2));
+
+  // From straight ahead only the front shows: less certain across the car (along the front face).
+  const CorrectedPose front = correct_scan(box, 12.0 * box.u(), 0.1, 1);
+  ASSERT_TRUE(front.ok());
+  EXPECT_GT(variance_along(front.covariance, box.v()), variance_along(near_dense.covariance, box.v()));
+  EXPECT_GT(front.covariance(2, 2), near_dense.covariance(2, 2));
+  // ... and its uncertainty is larger across the car than along it.
+  EXPECT_GT(variance_along(front.covariance, box.v()), variance_along(front.covariance, box.u()));
+}
+
+}  // namespace
+}  // namespace rsu::perception
