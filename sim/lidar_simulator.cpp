@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "common/angles.h"
+#include "sim/trajectory.h"
 #include "common/random.h"
 
 namespace rsu::sim {
@@ -103,23 +104,25 @@ bool AzimuthSector::contains(double azimuth_rad) const {
 }
 
 LidarSimulator::LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
-                               const Raycaster& raycaster, TimeNs schedule_t0, double start_azimuth_deg)
-    : LidarSimulator(model, mount, noise, nullptr, &raycaster, schedule_t0, start_azimuth_deg) {}
+                               const Raycaster& raycaster, TimeNs schedule_t0, double start_azimuth_deg,
+                               const Trajectory* carrier)
+    : LidarSimulator(model, mount, noise, nullptr, &raycaster, schedule_t0, start_azimuth_deg, carrier) {}
 
 LidarSimulator::LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
                                const Scene& scene, TimeNs schedule_t0, double start_azimuth_deg)
     : LidarSimulator(model, mount, noise, std::make_shared<const Raycaster>(scene), nullptr, schedule_t0,
-                     start_azimuth_deg) {}
+                     start_azimuth_deg, nullptr) {}
 
 LidarSimulator::LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
                                std::shared_ptr<const Raycaster> owned, const Raycaster* borrowed,
-                               TimeNs schedule_t0, double start_azimuth_deg)
+                               TimeNs schedule_t0, double start_azimuth_deg, const Trajectory* carrier)
     : owned_raycaster_(std::move(owned)),
       raycaster_(owned_raycaster_ ? owned_raycaster_.get() : borrowed),
       schedule_(model, schedule_t0, start_azimuth_deg),
       schedule_t0_(schedule_t0),
       mount_(mount),
       mount_to_map_(mount.to_isometry()),
+      carrier_(carrier ? std::optional<Trajectory>(*carrier) : std::nullopt),
       noise_(noise) {
   validate(mount, noise);
   for (const double deg : model.elevation_deg) {
@@ -203,8 +206,16 @@ void LidarSimulator::run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end,
     // Sensor frame beam (lidar/sensor_model.h): (cos w cos a, -cos w sin a, sin w).
     const Eigen::Vector3d beam(cos_w * cos_a, -cos_w * sin_a, sin_w);
     Ray ray;
-    ray.origin = origin;
-    ray.direction = to_map * beam;
+    if (carrier_) {
+      // The carrier's pose at this firing: the sensor moves during the sweep.
+      const Pose2 v = pose_at(*carrier_, f.time_ns);
+      const Eigen::Isometry3d sensor_to_map = Pose3{v.x, v.y, 0.0, 0.0, 0.0, v.yaw}.to_isometry() * mount_to_map_;
+      ray.origin = sensor_to_map.translation();
+      ray.direction = sensor_to_map.linear() * beam;
+    } else {
+      ray.origin = origin;
+      ray.direction = to_map * beam;
+    }
     ray.time_ns = f.time_ns;
     ray.max_range = cast_limit;
     rays.push_back(ray);

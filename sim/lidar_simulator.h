@@ -70,8 +70,13 @@ class LidarSimulator {
   // `raycaster` must outlive the simulator. The schedule's packet 0 starts at `schedule_t0` with the
   // encoder at `start_azimuth_deg`. Throws std::invalid_argument for an unusable sensor model, a
   // non-finite mount or negative / non-finite noise sigmas.
+  // carrier: when given, the LiDAR rides on a vehicle following that trajectory (a vehicle's own roof
+  // LiDAR): `mount` is then in the vehicle frame, and each ray starts from where the vehicle is at the
+  // ray's firing time. Points stay in the sensor frame (with the sweep's motion in them, as a real
+  // moving LiDAR reports them).
   LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
-                 const Raycaster& raycaster, TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0);
+                 const Raycaster& raycaster, TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0,
+                 const Trajectory* carrier = nullptr);
   // Builds (and owns) the ray caster for `scene`.
   LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise, const Scene& scene,
                  TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0);
@@ -100,7 +105,7 @@ class LidarSimulator {
  private:
   LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
                  std::shared_ptr<const Raycaster> owned, const Raycaster* borrowed, TimeNs schedule_t0,
-                 double start_azimuth_deg);
+                 double start_azimuth_deg, const Trajectory* carrier);
 
   // One firing's outcome (parallel to the packet's firings); raw == 0 means no return.
   struct Outcome {
@@ -133,7 +138,8 @@ class LidarSimulator {
   FiringSchedule schedule_;
   TimeNs schedule_t0_;
   Pose3 mount_;
-  Eigen::Isometry3d mount_to_map_;
+  Eigen::Isometry3d mount_to_map_;  // without a carrier; with one, mount -> carrier vehicle frame
+  std::optional<Trajectory> carrier_;
   NoiseModel noise_;
   std::vector<double> elevation_rad_;  // per laser
   std::vector<double> cos_elevation_;  // per laser, nominal (the decoder's values)

@@ -20,8 +20,8 @@ struct CorridorFrames {
   std::string model_name;
   Eigen::Vector2d lidar_xy = Eigen::Vector2d::Zero();
   std::vector<std::vector<LidarPoint>> background;  // frames without vehicles
-  std::vector<LidarPoint> frame;                     // the vehicle in view
-  Pose2 vehicle_pose;                                // at the frame's middle
+  std::vector<LidarPoint> frame;                    // the vehicle in view
+  Pose2 vehicle_pose;                               // at the frame's middle
   sim::VehicleShape vehicle_shape;
 };
 

@@ -11,7 +11,7 @@ namespace rsu::perception {
 namespace {
 
 // Both implementations cluster the same valid points: finite, and inside the grid's coordinate domain
-// (+-2^20 cells; kilometres for any sensible tolerance).
+// (+-2^20 cells of the smallest cell size cluster_grid uses; kilometres for any sensible tolerance).
 struct ValidSubset {
   std::vector<std::uint32_t> index;  // into the frame
   std::vector<GridPoint> xyz;        // z = 0 in planar mode
@@ -22,7 +22,7 @@ ValidSubset valid_subset(std::span<const LidarPoint> points, std::span<const std
                          const ClusteringConfig& config) {
   const bool planar = config.distance == ClusterDistance::planar;
   const float tol = static_cast<float>(config.tolerance_m);
-  const float max_abs = tol > 0.0F ? tol * static_cast<float>((1 << 20) - 4) : 0.0F;
+  const float max_abs = tol / std::sqrt(3.0F) * 0.99F * static_cast<float>((1 << 20) - 4);
   ValidSubset out;
   if (!(tol > 0.0F) || !std::isfinite(tol)) {  // no meaningful tolerance: nothing can be clustered
     out.invalid = subset.size();
@@ -145,47 +145,55 @@ Clustering cluster_grid(std::span<const LidarPoint> points, std::span<const std:
   const bool planar = config.distance == ClusterDistance::planar;
   const float tol = static_cast<float>(config.tolerance_m);
   const float tol2 = tol * tol;
-  // Cell a hair larger than the tolerance: a pair at exactly the tolerance can never be two cells apart
-  // through float rounding.
-  const PointHashGrid grid(valid.xyz, tol * 1.001F, planar ? GridDims::planar : GridDims::spatial);
+  // Cell diagonal <= tolerance (cell = tol / sqrt(dims), a hair less against float rounding): all points
+  // of a cell are within the tolerance of each other, so a cell is connected without distance checks,
+  // and two cells need checking only until one pair connects them. Points within the tolerance are then
+  // at most 2 cells apart per axis.
+  const float cell = tol / std::sqrt(planar ? 2.0F : 3.0F) * 0.999F;
+  const PointHashGrid grid(valid.xyz, cell, planar ? GridDims::planar : GridDims::spatial);
   const auto pts = grid.points();
   UnionFind sets(pts.size());
 
-  // Each unordered pair of neighbouring cells is visited once: the home cell plus the 13 (spatial) or
-  // 4 (planar) offsets that are lexicographically positive.
+  // Each unordered pair of cells within reach is visited once: the offsets in [-2, 2]^d that are
+  // lexicographically positive (12 planar, 62 spatial).
   std::vector<CellCoord> forward;
-  for (int dz = planar ? 0 : -1; dz <= (planar ? 0 : 1); ++dz) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
+  const int z_reach = planar ? 0 : 2;
+  for (int dz = -z_reach; dz <= z_reach; ++dz) {
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
         if (dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)))) {
           forward.push_back({dx, dy, dz});
         }
       }
     }
   }
-  auto link = [&](std::uint32_t a, std::uint32_t b) {
-    const std::uint32_t ra = sets.find(a);
-    const std::uint32_t rb = sets.find(b);
-    if (ra != rb && squared_distance(pts[a], pts[b]) <= tol2) {
-      sets.unite(ra, rb);
+  for (std::size_t c = 0; c < grid.cell_count(); ++c) {
+    const CellRun run = grid.cell_run(c);
+    for (std::uint32_t a = run.begin + 1; a < run.end; ++a) {
+      sets.unite(sets.find(run.begin), sets.find(a));
     }
-  };
+  }
   for (std::size_t c = 0; c < grid.cell_count(); ++c) {
     const CellRun home = grid.cell_run(c);
-    for (std::uint32_t a = home.begin; a < home.end; ++a) {
-      for (std::uint32_t b = a + 1; b < home.end; ++b) {
-        link(a, b);
-      }
-    }
     const CellCoord hc = grid.cell_coord(c);
     for (const CellCoord& o : forward) {
       const auto other = grid.find({hc.x + o.x, hc.y + o.y, hc.z + o.z});
       if (!other) {
         continue;
       }
-      for (std::uint32_t a = home.begin; a < home.end; ++a) {
+      const std::uint32_t ra = sets.find(home.begin);
+      const std::uint32_t rb = sets.find(other->begin);
+      if (ra == rb) {
+        continue;  // already one component
+      }
+      bool linked = false;
+      for (std::uint32_t a = home.begin; a < home.end && !linked; ++a) {
         for (std::uint32_t b = other->begin; b < other->end; ++b) {
-          link(a, b);
+          if (squared_distance(pts[a], pts[b]) <= tol2) {
+            sets.unite(ra, rb);
+            linked = true;
+            break;
+          }
         }
       }
     }

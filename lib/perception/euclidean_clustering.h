@@ -9,8 +9,9 @@
 //
 // Two implementations that give the same clusters:
 //  - cluster_reference: breadth-first growth with brute-force neighbour search, O(n^2), obviously right;
-//  - cluster_grid: hash grid with cell = tolerance, union-find over the neighbouring cells with exact
-//    distance checks, O(n) expected.
+//  - cluster_grid: hash grid with cells whose diagonal is the tolerance (so a cell is connected by
+//    construction), union-find over the cells within reach, each pair of cells checked only until one
+//    point pair within the tolerance connects them; O(n) expected.
 // Both return clusters with ascending indices, ordered by their smallest index.
 #pragma once
 
@@ -26,9 +27,9 @@ namespace rsu::perception {
 enum class ClusterDistance { planar, spatial };
 
 struct ClusteringConfig {
-  double tolerance_m = 0.7;      // Autoware euclidean_cluster default
-  std::size_t min_points = 10;   // Autoware default
-  std::size_t max_points = 1000; // Autoware default
+  double tolerance_m = 0.7;       // Autoware euclidean_cluster default
+  std::size_t min_points = 10;    // Autoware default
+  std::size_t max_points = 1000;  // Autoware default
   ClusterDistance distance = ClusterDistance::planar;
 };
 

@@ -31,7 +31,8 @@ Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig
   double yaw_information = 0.0;
   for (const auto& face : e.seen_faces) {
     if (face.points >= 2 && face.length_m > 0.0) {
-      yaw_information += static_cast<double>(face.points) * face.length_m * face.length_m / (12.0 * noise_var);
+      yaw_information +=
+          static_cast<double>(face.points) * face.length_m * face.length_m / (12.0 * noise_var);
     }
   }
   const double max_var = config.max_yaw_sigma_rad * config.max_yaw_sigma_rad;
@@ -40,7 +41,7 @@ Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig
   var_yaw = std::min(var_yaw, max_var);
 
   const Eigen::Vector2d u(std::cos(e.yaw), std::sin(e.yaw));  // length axis
-  const Eigen::Vector2d v(-u.y(), u.x());                      // width axis
+  const Eigen::Vector2d v(-u.y(), u.x());                     // width axis
   const double var_u = axis_variance(e.length_axis, noise_var, spacing, shape_var);
   const double var_v = axis_variance(e.width_axis, noise_var, spacing, shape_var);
   Eigen::Matrix2d pos = var_u * u * u.transpose() + var_v * v * v.transpose();

@@ -32,11 +32,11 @@
 namespace rsu::perception {
 
 struct CovarianceModelConfig {
-  double range_sigma_m = 0.02;                       // DESIGN.md §2 (simulator default)
-  double angle_sigma_rad = 0.001;                    // DESIGN.md §2
-  double shape_sigma_m = 0.03;                       // vehicle vs box
-  double azimuth_resolution_rad = deg_to_rad(0.2);   // VLP at 600 rpm (DESIGN.md §2)
-  double search_resolution_rad = deg_to_rad(0.02);   // the orientation search's final step
+  double range_sigma_m = 0.02;                      // DESIGN.md §2 (simulator default)
+  double angle_sigma_rad = 0.001;                   // DESIGN.md §2
+  double shape_sigma_m = 0.03;                      // vehicle vs box
+  double azimuth_resolution_rad = deg_to_rad(0.2);  // VLP at 600 rpm (DESIGN.md §2)
+  double search_resolution_rad = deg_to_rad(0.02);  // the orientation search's final step
   double max_yaw_sigma_rad = 0.5;
 };
 
@@ -53,12 +53,12 @@ struct FaceEvidence {
 };
 
 struct FixEvidence {
-  double range_m = 0.0;                              // LiDAR to the fix
-  double yaw = 0.0;                                  // direction of the length axis
-  Eigen::Vector2d lever = Eigen::Vector2d::Zero();   // centre - anchor point, map frame
-  AxisEvidence length_axis;                          // centre coordinate along the length axis
-  AxisEvidence width_axis;                           // and along the width axis
-  std::array<FaceEvidence, 2> seen_faces{};          // unused entries have points = 0
+  double range_m = 0.0;                             // LiDAR to the fix
+  double yaw = 0.0;                                 // direction of the length axis
+  Eigen::Vector2d lever = Eigen::Vector2d::Zero();  // centre - anchor point, map frame
+  AxisEvidence length_axis;                         // centre coordinate along the length axis
+  AxisEvidence width_axis;                          // and along the width axis
+  std::array<FaceEvidence, 2> seen_faces{};         // unused entries have points = 0
   double assignment_confidence = 1.0;
   Eigen::Vector2d alternative_offset = Eigen::Vector2d::Zero();  // other assignment's centre - centre
 };

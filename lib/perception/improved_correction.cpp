@@ -19,7 +19,9 @@ double fold_half_turn(double a) {
   return a <= -kPi / 2.0 ? a + kPi : a;
 }
 
-double logistic(double x) { return 1.0 / (1.0 + std::exp(-std::clamp(x, -50.0, 50.0))); }
+double logistic(double x) {
+  return 1.0 / (1.0 + std::exp(-std::clamp(x, -50.0, 50.0)));
+}
 
 // The fitted rectangle's own frame: origin at its centre, axes e1 (axis 0) and e2 (axis 1). Its edges
 // perpendicular to axis a are, on the low side, edge kLowEdge[a], on the high side kHighEdge[a].
@@ -30,7 +32,9 @@ struct Frame {
   Eigen::Vector2d origin;
   Eigen::Vector2d e1;
   Eigen::Vector2d e2;
-  Eigen::Vector2d local(const Eigen::Vector2d& p) const { return {(p - origin).dot(e1), (p - origin).dot(e2)}; }
+  Eigen::Vector2d local(const Eigen::Vector2d& p) const {
+    return {(p - origin).dot(e1), (p - origin).dot(e2)};
+  }
   Eigen::Vector2d map(const Eigen::Vector2d& c) const { return origin + c.x() * e1 + c.y() * e2; }
 };
 
@@ -41,7 +45,7 @@ struct AxisOption {
 };
 
 struct Hypothesis {
-  int length_axis = 0;  // 0: the vehicle's length lies along e1; 1: along e2
+  int length_axis = 0;                               // 0: the vehicle's length lies along e1; 1: along e2
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // local
   Eigen::Vector2d half = Eigen::Vector2d::Zero();    // half sizes along e1, e2
   Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // local
@@ -57,8 +61,8 @@ double median(std::vector<double>& v) {
 
 class Corrector {
  public:
-  Corrector(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy, const Eigen::Vector2d& lidar_xy,
-            const CorrectionConfig& config)
+  Corrector(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy,
+            const Eigen::Vector2d& lidar_xy, const CorrectionConfig& config)
       : fit_(fit), config_(config), frame_{fit.center, fit.axis0(), fit.axis1()} {
     for (const auto& p : cluster_xy) {
       if (p.allFinite()) {
@@ -143,8 +147,10 @@ class Corrector {
         if (std::abs(pts_[i][b]) > half_extent_[b] + d) {
           continue;  // beyond the ends of both faces perpendicular to axis a
         }
-        for (const std::size_t edge : {kLowEdge[static_cast<std::size_t>(a)], kHighEdge[static_cast<std::size_t>(a)]}) {
-          const double bound = edge == kLowEdge[static_cast<std::size_t>(a)] ? -half_extent_[a] : half_extent_[a];
+        for (const std::size_t edge :
+             {kLowEdge[static_cast<std::size_t>(a)], kHighEdge[static_cast<std::size_t>(a)]}) {
+          const double bound =
+              edge == kLowEdge[static_cast<std::size_t>(a)] ? -half_extent_[a] : half_extent_[a];
           const double dist = std::abs(pts_[i][a] - bound);
           if (fit_.edges[edge].seen && dist <= nearest) {
             nearest = dist;
@@ -158,7 +164,8 @@ class Corrector {
   // Median coordinate on axis a of the points on the face at the low or high bound: robust to the
   // outward bias of the extreme point that bounds the fitted rectangle.
   double face_position(int a, bool low) const {
-    const std::size_t edge = low ? kLowEdge[static_cast<std::size_t>(a)] : kHighEdge[static_cast<std::size_t>(a)];
+    const std::size_t edge =
+        low ? kLowEdge[static_cast<std::size_t>(a)] : kHighEdge[static_cast<std::size_t>(a)];
     std::vector<double> v;
     for (std::size_t i = 0; i < pts_.size(); ++i) {
       if (face_of_point_[i] == static_cast<int>(edge)) {
@@ -178,7 +185,8 @@ class Corrector {
         ++outside;
       }
     }
-    const double outside_fraction = pts_.empty() ? 0.0 : static_cast<double>(outside) / static_cast<double>(pts_.size());
+    const double outside_fraction =
+        pts_.empty() ? 0.0 : static_cast<double>(outside) / static_cast<double>(pts_.size());
 
     double expected = 0.0;
     double missing = 0.0;
@@ -263,8 +271,9 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
     return out;
   }
 
-  const RectangleFit refined =
-      config.refine_on_faces ? refine_on_faces(fit, cluster_xy, lidar_xy, config.fit, config.refinement) : fit;
+  const RectangleFit refined = config.refine_on_faces
+                                   ? refine_on_faces(fit, cluster_xy, lidar_xy, config.fit, config.refinement)
+                                   : fit;
   const Corrector corrector(refined, cluster_xy, lidar_xy, config);
   const std::array<Hypothesis, 2> best = corrector.best_hypotheses(size);
 
@@ -315,7 +324,8 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
     if (refined.edges[i].seen) {
-      evidence.seen_faces[f++] = {refined.edges[i].support_points, i % 2 == 0 ? refined.length0 : refined.length1};
+      evidence.seen_faces[f++] = {refined.edges[i].support_points,
+                                  i % 2 == 0 ? refined.length0 : refined.length1};
     }
   }
   evidence.assignment_confidence = out.confidence;

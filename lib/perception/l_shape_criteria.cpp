@@ -10,48 +10,54 @@ namespace {
 // Zhang's D for one direction picks the edge whose distance vector has the smaller 2-norm:
 // ||C - c_min||^2 <= ||c_max - C||^2. Expanding both sums of squares, this is mean(C) <= (c_min + c_max) / 2:
 // the edge on the side of the points' mean, one comparison instead of a pass over the points.
-bool nearer_min_edge(double sum, std::size_t n, double c_min, double c_max) {
-  return 2.0 * sum <= static_cast<double>(n) * (c_min + c_max);
+bool nearer_min_edge(float sum, Eigen::Index n, float c_min, float c_max) {
+  return 2.0F * sum <= static_cast<float>(n) * (c_min + c_max);
 }
 
-double population_variance(double sum, double sum_sq, std::size_t n) {
-  if (n == 0) {
+// Distances of each point to the chosen edge of one direction.
+Eigen::ArrayXf edge_distances(const Eigen::ArrayXf& c, float sum, float c_min, float c_max) {
+  return nearer_min_edge(sum, c.size(), c_min, c_max) ? Eigen::ArrayXf(c - c_min) : Eigen::ArrayXf(c_max - c);
+}
+
+double population_variance(double sum, double sum_sq, double n) {
+  if (n <= 0.0) {
     return 0.0;
   }
-  const double mean = sum / static_cast<double>(n);
-  return std::max(0.0, sum_sq / static_cast<double>(n) - mean * mean);
+  const double mean = sum / n;
+  return std::max(0.0, sum_sq / n - mean * mean);
 }
 
 }  // namespace
 
 CriterionEvaluator::CriterionEvaluator(std::span<const double> x, std::span<const double> y,
                                        const CriterionConfig& config)
-    : x_(x), y_(y.first(std::min(x.size(), y.size()))), config_(config), c1_(y_.size()), c2_(y_.size()) {
-  x_ = x_.first(y_.size());
+    : config_(config) {
+  const auto n = static_cast<Eigen::Index>(std::min(x.size(), y.size()));
+  x_.resize(n);
+  y_.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    x_[i] = static_cast<float>(x[static_cast<std::size_t>(i)]);
+    y_[i] = static_cast<float>(y[static_cast<std::size_t>(i)]);
+  }
+  c1_.resize(n);
+  c2_.resize(n);
 }
 
 double CriterionEvaluator::operator()(double theta) {
   ++evaluations_;
-  if (x_.empty()) {
+  if (x_.size() == 0) {
     return 0.0;
   }
-  const double c = std::cos(theta);
-  const double s = std::sin(theta);
-  c1_min_ = c2_min_ = std::numeric_limits<double>::infinity();
-  c1_max_ = c2_max_ = -std::numeric_limits<double>::infinity();
-  c1_sum_ = c2_sum_ = 0.0;
-  for (std::size_t i = 0; i < x_.size(); ++i) {
-    const double a = x_[i] * c + y_[i] * s;
-    const double b = -x_[i] * s + y_[i] * c;
-    c1_[i] = a;
-    c2_[i] = b;
-    c1_sum_ += a;
-    c2_sum_ += b;
-    c1_min_ = std::min(c1_min_, a);
-    c1_max_ = std::max(c1_max_, a);
-    c2_min_ = std::min(c2_min_, b);
-    c2_max_ = std::max(c2_max_, b);
-  }
+  const auto c = static_cast<float>(std::cos(theta));
+  const auto s = static_cast<float>(std::sin(theta));
+  c1_ = x_ * c + y_ * s;
+  c2_ = y_ * c - x_ * s;
+  c1_min_ = c1_.minCoeff();
+  c1_max_ = c1_.maxCoeff();
+  c2_min_ = c2_.minCoeff();
+  c2_max_ = c2_.maxCoeff();
+  c1_sum_ = c1_.sum();
+  c2_sum_ = c2_.sum();
   switch (config_.criterion) {
     case LShapeCriterion::area:
       return area();
@@ -65,55 +71,40 @@ double CriterionEvaluator::operator()(double theta) {
   return 0.0;
 }
 
-double CriterionEvaluator::area() const { return -(c1_max_ - c1_min_) * (c2_max_ - c2_min_); }
+double CriterionEvaluator::area() const {
+  return -static_cast<double>(c1_max_ - c1_min_) * static_cast<double>(c2_max_ - c2_min_);
+}
 
 double CriterionEvaluator::closeness_zhang() const {
-  const bool min1 = nearer_min_edge(c1_sum_, c1_.size(), c1_min_, c1_max_);
-  const bool min2 = nearer_min_edge(c2_sum_, c2_.size(), c2_min_, c2_max_);
-  const double d0 = config_.closeness_d0_m;
-  double beta = 0.0;
-  for (std::size_t i = 0; i < c1_.size(); ++i) {
-    const double d1 = min1 ? c1_[i] - c1_min_ : c1_max_ - c1_[i];
-    const double d2 = min2 ? c2_[i] - c2_min_ : c2_max_ - c2_[i];
-    beta += 1.0 / std::max(std::min(d1, d2), d0);
-  }
-  return beta;
+  const Eigen::ArrayXf d1 = edge_distances(c1_, c1_sum_, c1_min_, c1_max_);
+  const Eigen::ArrayXf d2 = edge_distances(c2_, c2_sum_, c2_min_, c2_max_);
+  const auto d0 = static_cast<float>(config_.closeness_d0_m);
+  return static_cast<double>(d1.min(d2).max(d0).inverse().sum());
 }
 
 double CriterionEvaluator::variance() const {
-  const bool min1 = nearer_min_edge(c1_sum_, c1_.size(), c1_min_, c1_max_);
-  const bool min2 = nearer_min_edge(c2_sum_, c2_.size(), c2_min_, c2_max_);
-  double s1 = 0.0, q1 = 0.0, s2 = 0.0, q2 = 0.0;
-  std::size_t n1 = 0, n2 = 0;
-  for (std::size_t i = 0; i < c1_.size(); ++i) {
-    const double d1 = min1 ? c1_[i] - c1_min_ : c1_max_ - c1_[i];
-    const double d2 = min2 ? c2_[i] - c2_min_ : c2_max_ - c2_[i];
-    if (d1 < d2) {
-      s1 += d1;
-      q1 += d1 * d1;
-      ++n1;
-    } else if (d2 < d1) {
-      s2 += d2;
-      q2 += d2 * d2;
-      ++n2;
-    }
-  }
-  return -population_variance(s1, q1, n1) - population_variance(s2, q2, n2);
+  const Eigen::ArrayXf d1 = edge_distances(c1_, c1_sum_, c1_min_, c1_max_);
+  const Eigen::ArrayXf d2 = edge_distances(c2_, c2_sum_, c2_min_, c2_max_);
+  // E1 = {D1(i) : D1(i) < D2(i)}, E2 = {D2(i) : D2(i) < D1(i)}; ties belong to neither.
+  const auto in1 = (d1 < d2).cast<float>();
+  const auto in2 = (d2 < d1).cast<float>();
+  const double v1 =
+      population_variance(static_cast<double>((in1 * d1).sum()), static_cast<double>((in1 * d1 * d1).sum()),
+                          static_cast<double>(in1.sum()));
+  const double v2 =
+      population_variance(static_cast<double>((in2 * d2).sum()), static_cast<double>((in2 * d2 * d2).sum()),
+                          static_cast<double>(in2.sum()));
+  return -v1 - v2;
 }
 
 double CriterionEvaluator::closeness_autoware() const {
-  const double max_sq = config_.autoware_max_dist_m * config_.autoware_max_dist_m;
-  double beta = 0.0;
-  for (std::size_t i = 0; i < c1_.size(); ++i) {
-    const double v1 = std::min(c1_max_ - c1_[i], c1_[i] - c1_min_);
-    const double v2 = std::min(c2_max_ - c2_[i], c2_[i] - c2_min_);
-    const double d = std::min(v1 * v1, v2 * v2);
-    if (d > max_sq) {
-      continue;
-    }
-    beta += 1.0 / std::max(d, config_.autoware_min_sq_m2);
-  }
-  return beta;
+  // Element-wise nearer edge, squared.
+  const Eigen::ArrayXf v1 = (c1_max_ - c1_).min(c1_ - c1_min_);
+  const Eigen::ArrayXf v2 = (c2_max_ - c2_).min(c2_ - c2_min_);
+  const Eigen::ArrayXf d = (v1 * v1).min(v2 * v2);
+  const auto max_sq = static_cast<float>(config_.autoware_max_dist_m * config_.autoware_max_dist_m);
+  const auto min_sq = static_cast<float>(config_.autoware_min_sq_m2);
+  return static_cast<double>((d <= max_sq).select(d.max(min_sq).inverse(), 0.0F).sum());
 }
 
 }  // namespace rsu::perception

@@ -18,7 +18,8 @@
 
 #include <cstddef>
 #include <span>
-#include <vector>
+
+#include <Eigen/Core>
 
 namespace rsu::perception {
 
@@ -26,14 +27,15 @@ enum class LShapeCriterion { area, closeness, variance, autoware_closeness };
 
 struct CriterionConfig {
   LShapeCriterion criterion = LShapeCriterion::closeness;
-  double closeness_d0_m = 0.01;          // Zhang's d0
-  double autoware_min_sq_m2 = 0.01;      // Autoware: floor of the squared distance
-  double autoware_max_dist_m = 0.4;      // Autoware: points farther than this from both edges ignored
+  double closeness_d0_m = 0.01;      // Zhang's d0
+  double autoware_min_sq_m2 = 0.01;  // Autoware: floor of the squared distance
+  double autoware_max_dist_m = 0.4;  // Autoware: points farther than this from both edges ignored
 };
 
 // Evaluates the chosen criterion on a fixed point set (x, y given relative to any origin; centring them
 // near the centroid keeps the projections well conditioned). Keeps scratch buffers, so one evaluator is
-// meant for one point set and one thread.
+// meant for one point set and one thread. Single precision on Eigen arrays (vectorised): coordinates
+// are centred within a few metres, so float resolves them to micrometres, far below d0.
 class CriterionEvaluator {
  public:
   CriterionEvaluator(std::span<const double> x, std::span<const double> y, const CriterionConfig& config);
@@ -47,13 +49,13 @@ class CriterionEvaluator {
   double variance() const;
   double closeness_autoware() const;
 
-  std::span<const double> x_;
-  std::span<const double> y_;
   CriterionConfig config_;
-  std::vector<double> c1_;
-  std::vector<double> c2_;
-  double c1_min_ = 0, c1_max_ = 0, c2_min_ = 0, c2_max_ = 0;
-  double c1_sum_ = 0, c2_sum_ = 0;
+  Eigen::ArrayXf x_;
+  Eigen::ArrayXf y_;
+  Eigen::ArrayXf c1_;
+  Eigen::ArrayXf c2_;
+  float c1_min_ = 0, c1_max_ = 0, c2_min_ = 0, c2_max_ = 0;
+  float c1_sum_ = 0, c2_sum_ = 0;
   std::size_t evaluations_ = 0;
 };
 

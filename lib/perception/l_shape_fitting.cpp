@@ -57,8 +57,12 @@ std::string_view to_string(FitStatus status) {
   return "unknown";
 }
 
-Eigen::Vector2d RectangleFit::axis0() const { return {std::cos(yaw), std::sin(yaw)}; }
-Eigen::Vector2d RectangleFit::axis1() const { return {-std::sin(yaw), std::cos(yaw)}; }
+Eigen::Vector2d RectangleFit::axis0() const {
+  return {std::cos(yaw), std::sin(yaw)};
+}
+Eigen::Vector2d RectangleFit::axis1() const {
+  return {-std::sin(yaw), std::cos(yaw)};
+}
 
 void set_rectangle_geometry(RectangleFit& fit, const Eigen::Vector2d& origin, double c1_min, double c1_max,
                             double c2_min, double c2_max) {
@@ -95,8 +99,8 @@ void set_edge_observations(RectangleFit& fit, std::span<const Eigen::Vector2d> p
       }
     }
     edge.faces_lidar = (lidar_xy - 0.5 * (a + b)).dot(outward) > 0.0;
-    edge.seen = edge.faces_lidar && len >= config.min_face_length_m &&
-                edge.support_points >= config.min_face_points;
+    edge.seen =
+        edge.faces_lidar && len >= config.min_face_length_m && edge.support_points >= config.min_face_points;
   }
 }
 

@@ -17,14 +17,14 @@
 namespace rsu::perception {
 
 struct LShapeFitConfig {
-  CriterionConfig criterion;          // closeness (Zhang, d0 = 0.01 m) by default
-  OrientationSearchConfig search;     // coarse-to-fine by default; exhaustive 1 deg is the reference
+  CriterionConfig criterion;       // closeness (Zhang, d0 = 0.01 m) by default
+  OrientationSearchConfig search;  // coarse-to-fine by default; exhaustive 1 deg is the reference
   std::size_t min_points = 3;
   // Points spread less than this across their best line (or along it) are degenerate. 1 mm: real
   // returns of a vehicle face carry ~2 cm noise, so only synthetic or garbage input is this thin.
   double min_extent_m = 1e-3;
-  double edge_support_m = 0.15;       // a point within this of an edge supports it (> 3 sigma of noise)
-  double min_face_length_m = 0.3;     // shorter edges are not counted as seen faces
+  double edge_support_m = 0.15;    // a point within this of an edge supports it (> 3 sigma of noise)
+  double min_face_length_m = 0.3;  // shorter edges are not counted as seen faces
   std::size_t min_face_points = 3;
 };
 

@@ -68,7 +68,8 @@ OrientationResult search_exhaustive(CriterionEvaluator& criterion, double step_r
   return best;
 }
 
-OrientationResult search_coarse_to_fine(CriterionEvaluator& criterion, const OrientationSearchConfig& config) {
+OrientationResult search_coarse_to_fine(CriterionEvaluator& criterion,
+                                        const OrientationSearchConfig& config) {
   const std::size_t evaluations_before = criterion.evaluations();
   const double coarse = deg_to_rad(std::clamp(config.coarse_step_deg, 0.1, 30.0));
   const double fine = deg_to_rad(std::clamp(config.fine_resolution_deg, 1e-4, config.coarse_step_deg));
@@ -92,10 +93,10 @@ OrientationResult search_coarse_to_fine(CriterionEvaluator& criterion, const Ori
   if (peaks.empty()) {  // constant criterion
     peaks.push_back(0);
   }
-  std::sort(peaks.begin(), peaks.end(), [&](int a, int b) {
-    return q[static_cast<std::size_t>(a)] > q[static_cast<std::size_t>(b)];
-  });
-  peaks.resize(std::min<std::size_t>(peaks.size(), static_cast<std::size_t>(std::max(1, config.coarse_peaks))));
+  std::sort(peaks.begin(), peaks.end(),
+            [&](int a, int b) { return q[static_cast<std::size_t>(a)] > q[static_cast<std::size_t>(b)]; });
+  peaks.resize(
+      std::min<std::size_t>(peaks.size(), static_cast<std::size_t>(std::max(1, config.coarse_peaks))));
 
   OrientationResult best;
   best.value = -std::numeric_limits<double>::infinity();
@@ -129,7 +130,8 @@ OrientationResult search_coarse_to_fine(CriterionEvaluator& criterion, const Ori
     }
   }
   // Then successively finer grids around the best, each spanning +-1 step of the previous.
-  for (double sub = dense / 5.0, half = dense; half > fine * 1.0001; half = sub, sub = std::max(sub / 5.0, fine)) {
+  for (double sub = dense / 5.0, half = dense; half > fine * 1.0001;
+       half = sub, sub = std::max(sub / 5.0, fine)) {
     const double centre = best.theta;
     const auto m = static_cast<int>(std::round(half / sub));
     for (int j = -m; j <= m; ++j) {

@@ -5,7 +5,10 @@
 namespace rsu::perception {
 
 PerceptionPipeline::PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector2d& lidar_xy)
-    : config_(config), lidar_xy_(lidar_xy), ground_(config.ground), range_image_(lidar_xy, config.range_image) {}
+    : config_(config),
+      lidar_xy_(lidar_xy),
+      ground_(config.ground),
+      range_image_(lidar_xy, config.range_image) {}
 
 void PerceptionPipeline::add_background_frame(std::span<const LidarPoint> points) {
   switch (config_.background) {
@@ -96,9 +99,9 @@ CorrectedPose PerceptionPipeline::correct(const DetectedObject& object, const Ve
   return perception::correct(object.fit, object.footprint, size, lidar_xy_, prior, config_);
 }
 
-CorrectedPose correct(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy, const VehicleSize& size,
-                      const Eigen::Vector2d& lidar_xy, const std::optional<YawPrior>& prior,
-                      const PerceptionConfig& config) {
+CorrectedPose correct(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy,
+                      const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
+                      const std::optional<YawPrior>& prior, const PerceptionConfig& config) {
   // The fix's yaw is quantised by the orientation search that produced the fit.
   CorrectionConfig correction = config.correction;
   correction.fit = config.fit;

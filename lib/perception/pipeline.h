@@ -40,8 +40,8 @@ struct PerceptionConfig {
   ClusteringMethod clustering_method = ClusteringMethod::grid;
   // Autoware's tolerance and minimum, but a larger maximum: a car 10 m from a 32- or 128-ring LiDAR
   // returns several thousand points, and Autoware's 1000 would drop it whole.
-  ClusteringConfig clustering{.tolerance_m = 0.7, .min_points = 10, .max_points = 20000,
-                              .distance = ClusterDistance::planar};
+  ClusteringConfig clustering{
+      .tolerance_m = 0.7, .min_points = 10, .max_points = 20000, .distance = ClusterDistance::planar};
 
   LShapeFitConfig fit;
   CorrectionMethod correction_method = CorrectionMethod::improved;
@@ -101,8 +101,8 @@ class PerceptionPipeline {
 };
 
 // The same correction as PerceptionPipeline::correct, for callers holding a fit and its points.
-CorrectedPose correct(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy, const VehicleSize& size,
-                      const Eigen::Vector2d& lidar_xy, const std::optional<YawPrior>& prior,
-                      const PerceptionConfig& config = {});
+CorrectedPose correct(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy,
+                      const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
+                      const std::optional<YawPrior>& prior, const PerceptionConfig& config = {});
 
 }  // namespace rsu::perception

@@ -48,8 +48,8 @@ class PointHashGrid {
   std::optional<CellCoord> cell_of(const GridPoint& q) const;
   std::optional<CellRun> find(CellCoord c) const;
 
-  std::span<const GridPoint> points() const { return points_; }             // sorted by cell
-  std::span<const std::uint32_t> source_index() const { return source_; }   // input index per point
+  std::span<const GridPoint> points() const { return points_; }            // sorted by cell
+  std::span<const std::uint32_t> source_index() const { return source_; }  // input index per point
   std::size_t cell_count() const { return cells_.size(); }
   CellCoord cell_coord(std::size_t cell) const { return cells_[cell]; }
   CellRun cell_run(std::size_t cell) const { return runs_[cell]; }
@@ -70,8 +70,8 @@ class PointHashGrid {
   std::vector<std::uint32_t> source_;
   std::vector<CellCoord> cells_;
   std::vector<CellRun> runs_;
-  std::vector<std::uint64_t> slot_key_;   // hash table: key per slot
-  std::vector<std::int32_t> slot_cell_;   // hash table: cell index per slot, -1 = empty
+  std::vector<std::uint64_t> slot_key_;  // hash table: key per slot
+  std::vector<std::int32_t> slot_cell_;  // hash table: cell index per slot, -1 = empty
   std::uint64_t slot_mask_ = 0;
   std::size_t skipped_ = 0;
 };

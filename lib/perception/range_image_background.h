@@ -38,7 +38,7 @@ struct RangeImageBackgroundConfig {
   double near_percentile = 0.1;  // of a cell's training ranges
   double margin_m = 0.3;
   double margin_per_m = 0.01;
-  int max_rings = 256;           // rings >= this are invalid (a guard against garbage ring numbers)
+  int max_rings = 256;  // rings >= this are invalid (a guard against garbage ring numbers)
 };
 
 class RangeImageBackground {

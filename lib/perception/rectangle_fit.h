@@ -30,9 +30,9 @@ struct RectangleEdge {
 struct RectangleFit {
   FitStatus status = FitStatus::too_few_points;
   Eigen::Vector2d center = Eigen::Vector2d::Zero();
-  double yaw = 0.0;       // direction of the first edge (corners[0] -> corners[1]), [0, pi/2)
-  double length0 = 0.0;   // first edge (along yaw)
-  double length1 = 0.0;   // second edge (along yaw + pi/2)
+  double yaw = 0.0;      // direction of the first edge (corners[0] -> corners[1]), [0, pi/2)
+  double length0 = 0.0;  // first edge (along yaw)
+  double length1 = 0.0;  // second edge (along yaw + pi/2)
   // Counter-clockwise, starting at the corner with the smallest coordinates along (yaw, yaw + pi/2).
   std::array<Eigen::Vector2d, 4> corners{};
   std::array<RectangleEdge, 4> edges{};

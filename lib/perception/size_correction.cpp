@@ -47,8 +47,8 @@ std::string_view to_string(AmbiguityResolution resolution) {
   return "unknown";
 }
 
-CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
-                                 const CovarianceModelConfig& covariance) {
+CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& size,
+                                 const Eigen::Vector2d& lidar_xy, const CovarianceModelConfig& covariance) {
   CorrectedPose out;
   if (!fit.ok()) {
     out.status = CorrectionStatus::no_fit;
@@ -83,7 +83,8 @@ CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& siz
   const RectangleEdge& edge_along_r = fit.edges[k];
   const RectangleEdge& edge_along_l = fit.edges[k_left];
   auto axis_evidence = [](const RectangleEdge& face) {
-    return face.seen ? AxisEvidence{AxisAnchor::face, face.support_points} : AxisEvidence{AxisAnchor::one_end, 0};
+    return face.seen ? AxisEvidence{AxisAnchor::face, face.support_points}
+                     : AxisEvidence{AxisAnchor::one_end, 0};
   };
 
   Eigen::Vector2d c;

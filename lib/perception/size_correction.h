@@ -46,9 +46,9 @@ struct YawPrior {
 
 enum class CorrectionStatus {
   ok,
-  no_fit,              // the rectangle fit failed (see its status)
-  invalid_size,        // size not finite and positive
-  invalid_input,       // LiDAR position or prior not finite
+  no_fit,         // the rectangle fit failed (see its status)
+  invalid_size,   // size not finite and positive
+  invalid_input,  // LiDAR position or prior not finite
 };
 
 enum class AmbiguityResolution {
@@ -63,7 +63,7 @@ std::string_view to_string(AmbiguityResolution resolution);
 
 struct CorrectedPose {
   CorrectionStatus status = CorrectionStatus::no_fit;
-  Pose2 pose;                                          // footprint centre; yaw of the length axis
+  Pose2 pose;                                            // footprint centre; yaw of the length axis
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // (x, y, yaw), see fix_covariance.h
   AmbiguityResolution resolution = AmbiguityResolution::unresolved;
   double confidence = 0.0;  // probability the length/width assignment is right; 1 for Algorithm 1
@@ -87,7 +87,8 @@ struct CorrectionConfig {
   CovarianceModelConfig covariance;
 };
 
-CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
+CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& size,
+                                 const Eigen::Vector2d& lidar_xy,
                                  const CovarianceModelConfig& covariance = {});
 
 // cluster_xy: the cluster's footprint points (the ones the fit was made from); non-finite ones ignored.

@@ -101,7 +101,8 @@ struct LabelledPoint {
 };
 
 // Ray against the scene: nearest of ground plane, wall cylinder (inside), vehicle boxes.
-inline std::pair<double, HitKind> cast_3d(const Scene3d& scene, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+inline std::pair<double, HitKind> cast_3d(const Scene3d& scene, const Eigen::Vector3d& o,
+                                          const Eigen::Vector3d& d) {
   double best = std::numeric_limits<double>::infinity();
   HitKind kind = HitKind::none;
   if (d.z() < 0.0) {
@@ -133,7 +134,8 @@ inline std::pair<double, HitKind> cast_3d(const Scene3d& scene, const Eigen::Vec
         return origin >= lo && origin <= hi;
       }
       double ta = (lo - origin) / dir, tb = (hi - origin) / dir;
-      if (ta > tb) std::swap(ta, tb);
+      if (ta > tb)
+        std::swap(ta, tb);
       t0 = std::max(t0, ta);
       t1 = std::min(t1, tb);
       return t0 <= t1;

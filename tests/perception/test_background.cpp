@@ -61,7 +61,8 @@ TEST(PointHashGrid, AnyWithinMatchesBruteForce) {
 
 TEST(PointHashGrid, SkipsNonFiniteAndHugeCoordinates) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  const std::vector<GridPoint> pts = {{0, 0, 0}, {nan, 0, 0}, {1e30F, 0, 0}, {0, std::numeric_limits<float>::infinity(), 0}};
+  const std::vector<GridPoint> pts = {
+      {0, 0, 0}, {nan, 0, 0}, {1e30F, 0, 0}, {0, std::numeric_limits<float>::infinity(), 0}};
   const PointHashGrid grid(pts, 0.3F, GridDims::spatial);
   EXPECT_EQ(grid.points().size(), 1U);
   EXPECT_EQ(grid.skipped(), 3U);
@@ -78,8 +79,10 @@ TEST(ReferenceFrameBackground, SameAnswerAsNearestNeighbourTest) {
   const auto ref = random_cloud(4000, 8.0F, rng);
   const auto cur = random_cloud(4000, 9.0F, rng);
   std::vector<LidarPoint> ref_pts, cur_pts;
-  for (const auto& p : ref) ref_pts.push_back({p.x, p.y, p.z});
-  for (const auto& p : cur) cur_pts.push_back({p.x, p.y, p.z});
+  for (const auto& p : ref)
+    ref_pts.push_back({p.x, p.y, p.z});
+  for (const auto& p : cur)
+    cur_pts.push_back({p.x, p.y, p.z});
   const double r = 0.3;
   const ReferenceFrameBackground bg(ref_pts, {.match_radius_m = r});
   const ForegroundSelection sel = bg.select_foreground(cur_pts);
@@ -92,7 +95,8 @@ TEST(ReferenceFrameBackground, SameAnswerAsNearestNeighbourTest) {
                    dz = static_cast<double>(p.z - cur[i].z);
       nearest = std::min(nearest, std::sqrt(dx * dx + dy * dy + dz * dz));
     }
-    if (nearest > r) expected.push_back(static_cast<std::uint32_t>(i));
+    if (nearest > r)
+      expected.push_back(static_cast<std::uint32_t>(i));
   }
   EXPECT_EQ(sel.indices, expected);
   EXPECT_EQ(sel.background + sel.indices.size(), cur.size());
@@ -101,8 +105,12 @@ TEST(ReferenceFrameBackground, SameAnswerAsNearestNeighbourTest) {
 }
 
 TEST(GroundHeightFilter, KeepsExactlyThePointsAboveThreshold) {
-  const std::vector<LidarPoint> pts = {{0, 0, 0.0F}, {1, 0, 0.19F}, {2, 0, 0.21F}, {3, 0, 1.5F},
-                                       {4, 0, std::numeric_limits<float>::quiet_NaN()}, {5, 0, -0.5F}};
+  const std::vector<LidarPoint> pts = {{0, 0, 0.0F},
+                                       {1, 0, 0.19F},
+                                       {2, 0, 0.21F},
+                                       {3, 0, 1.5F},
+                                       {4, 0, std::numeric_limits<float>::quiet_NaN()},
+                                       {5, 0, -0.5F}};
   const GroundHeightFilter filter({.ground_z = 0.0, .min_height = 0.2});
   const auto sel = filter.select_foreground(pts);
   EXPECT_EQ(sel.indices, (std::vector<std::uint32_t>{2, 3}));
@@ -124,8 +132,8 @@ struct Street {
 };
 
 struct Scores {
-  double recall;            // vehicle points kept
-  double false_positive;    // ground/wall points kept, as a fraction of them
+  double recall;          // vehicle points kept
+  double false_positive;  // ground/wall points kept, as a fraction of them
 };
 
 template <class Classifier>
@@ -134,7 +142,8 @@ Scores score(const std::vector<test::LabelledPoint>& frame, Classifier&& classif
   for (const auto& lp : frame) {
     const bool fg = classify(lp.point) == PointClass::foreground;
     if (lp.kind == HitKind::vehicle) {
-      if (skip_low_vehicle && lp.point.z < 0.5F) continue;  // within the margins of the ground by design
+      if (skip_low_vehicle && lp.point.z < 0.5F)
+        continue;  // within the margins of the ground by design
       ++veh;
       veh_kept += fg ? 1 : 0;
     } else {
@@ -143,7 +152,8 @@ Scores score(const std::vector<test::LabelledPoint>& frame, Classifier&& classif
     }
   }
   EXPECT_GT(veh, 50U);
-  return {static_cast<double>(veh_kept) / static_cast<double>(veh), static_cast<double>(bg_kept) / static_cast<double>(bg)};
+  return {static_cast<double>(veh_kept) / static_cast<double>(veh),
+          static_cast<double>(bg_kept) / static_cast<double>(bg)};
 }
 
 TEST(RangeImageBackground, SeparatesVehiclesFromLearnedBackground) {
@@ -157,7 +167,8 @@ TEST(RangeImageBackground, SeparatesVehiclesFromLearnedBackground) {
   EXPECT_EQ(model.rings(), 16);
   EXPECT_EQ(model.training_frames(), 8);
   const auto frame = test::scan_3d(s.busy, s.lidar, phase(rng), rng);
-  const Scores sc = score(frame, [&](const LidarPoint& p) { return model.classify(p); }, true);
+  const Scores sc = score(
+      frame, [&](const LidarPoint& p) { return model.classify(p); }, true);
   EXPECT_GT(sc.recall, 0.99);
   EXPECT_LT(sc.false_positive, 0.002);
 }
@@ -170,7 +181,8 @@ TEST(RangeImageBackground, NeverReturnedCellsAreSkyAndAnythingThereIsForeground)
   model.add_training_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.3, rng)));
   // Ring 15 points 15 deg up: at the 40 m wall that is z = 12.7 m, above the wall: sky.
   EXPECT_TRUE(std::isinf(model.background_range(15, 1.0F)));
-  EXPECT_NEAR(static_cast<double>(model.background_range(0, 1.0F)), 2.0 / std::tan(15.0 * test::kPi / 180.0), 0.1);
+  EXPECT_NEAR(static_cast<double>(model.background_range(0, 1.0F)), 2.0 / std::tan(15.0 * test::kPi / 180.0),
+              0.1);
   LidarPoint bird{5.0F, 0.0F, 3.3F};
   bird.ring = 15;
   bird.azimuth_rad = 0.0F;
@@ -187,9 +199,9 @@ TEST(RangeImageBackground, InvalidPointsAreCountedNotCrashed) {
   model.add_training_frame(train);
   std::vector<LidarPoint> frame(4, LidarPoint{5.0F, 0.0F, 0.0F});
   frame[0].x = std::numeric_limits<float>::quiet_NaN();
-  frame[1].ring = 64;                                       // beyond max_rings: garbage
+  frame[1].ring = 64;  // beyond max_rings: garbage
   frame[2].azimuth_rad = std::numeric_limits<float>::infinity();
-  frame[3].azimuth_rad = 7.5F;                              // outside [0, 2 pi): wrapped, still judged
+  frame[3].azimuth_rad = 7.5F;  // outside [0, 2 pi): wrapped, still judged
   const auto sel = model.select_foreground(frame);
   EXPECT_EQ(sel.invalid, 3U);
   EXPECT_EQ(sel.indices, (std::vector<std::uint32_t>{3}));  // 5 m is well in front of the 10 m background

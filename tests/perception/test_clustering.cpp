@@ -16,13 +16,16 @@ namespace {
 
 std::vector<std::uint32_t> all_indices(std::size_t n) {
   std::vector<std::uint32_t> v(n);
-  for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<std::uint32_t>(i);
+  for (std::size_t i = 0; i < n; ++i)
+    v[i] = static_cast<std::uint32_t>(i);
   return v;
 }
 
 using ClusterSet = std::set<std::vector<std::uint32_t>>;
 
-ClusterSet as_set(const Clustering& c) { return {c.clusters.begin(), c.clusters.end()}; }
+ClusterSet as_set(const Clustering& c) {
+  return {c.clusters.begin(), c.clusters.end()};
+}
 
 // Blobs of various sizes and spreads plus uniform clutter: many merges, chains and singletons.
 std::vector<LidarPoint> blobs_and_clutter(std::mt19937_64& rng) {
@@ -35,9 +38,11 @@ std::vector<LidarPoint> blobs_and_clutter(std::mt19937_64& rng) {
     const float cx = where(rng), cy = where(rng), s = spread(rng);
     std::normal_distribution<float> g(0.0F, s);
     const int n = count(rng);
-    for (int i = 0; i < n; ++i) pts.push_back({cx + g(rng), cy + g(rng), height(rng)});
+    for (int i = 0; i < n; ++i)
+      pts.push_back({cx + g(rng), cy + g(rng), height(rng)});
   }
-  for (int i = 0; i < 800; ++i) pts.push_back({where(rng), where(rng), height(rng)});
+  for (int i = 0; i < 800; ++i)
+    pts.push_back({where(rng), where(rng), height(rng)});
   return pts;
 }
 
@@ -65,8 +70,10 @@ TEST(EuclideanClustering, FindsTheClustersTheTestBuilt) {
   // Three groups: a chain of points 0.6 m apart across many cells (one cluster), a tight blob, and a
   // pair 0.71 m apart (two singletons at tolerance 0.7, dropped as small).
   std::vector<LidarPoint> pts;
-  for (int i = 0; i < 20; ++i) pts.push_back({0.6F * static_cast<float>(i), 0.0F, 0.0F});  // 0..19
-  for (int i = 0; i < 12; ++i) pts.push_back({50.0F + 0.01F * static_cast<float>(i), 50.0F, 0.0F});  // 20..31
+  for (int i = 0; i < 20; ++i)
+    pts.push_back({0.6F * static_cast<float>(i), 0.0F, 0.0F});  // 0..19
+  for (int i = 0; i < 12; ++i)
+    pts.push_back({50.0F + 0.01F * static_cast<float>(i), 50.0F, 0.0F});  // 20..31
   pts.push_back({-30.0F, 0.0F, 0.0F});
   pts.push_back({-30.71F, 0.0F, 0.0F});
   const ClusteringConfig cfg{.tolerance_m = 0.7, .min_points = 2, .max_points = 1000};
@@ -75,7 +82,8 @@ TEST(EuclideanClustering, FindsTheClustersTheTestBuilt) {
     ASSERT_EQ(result.clusters.size(), 2U);
     EXPECT_EQ(result.clusters[0], all_indices(20));
     std::vector<std::uint32_t> blob;
-    for (std::uint32_t i = 20; i < 32; ++i) blob.push_back(i);
+    for (std::uint32_t i = 20; i < 32; ++i)
+      blob.push_back(i);
     EXPECT_EQ(result.clusters[1], blob);
     EXPECT_EQ(result.dropped_small, 2U);
   }
@@ -95,8 +103,10 @@ TEST(EuclideanClustering, PlanarIgnoresHeightSpatialDoesNot) {
 
 TEST(EuclideanClustering, OversizedClustersAreDroppedWholeLikePcl) {
   std::vector<LidarPoint> pts;
-  for (int i = 0; i < 30; ++i) pts.push_back({0.1F * static_cast<float>(i), 0.0F, 0.0F});
-  for (int i = 0; i < 12; ++i) pts.push_back({20.0F + 0.1F * static_cast<float>(i), 0.0F, 0.0F});
+  for (int i = 0; i < 30; ++i)
+    pts.push_back({0.1F * static_cast<float>(i), 0.0F, 0.0F});
+  for (int i = 0; i < 12; ++i)
+    pts.push_back({20.0F + 0.1F * static_cast<float>(i), 0.0F, 0.0F});
   const ClusteringConfig cfg{.tolerance_m = 0.7, .min_points = 10, .max_points = 20};
   for (const auto& r : {cluster_reference(pts, all_indices(pts.size()), cfg),
                         cluster_grid(pts, all_indices(pts.size()), cfg)}) {
@@ -108,9 +118,11 @@ TEST(EuclideanClustering, OversizedClustersAreDroppedWholeLikePcl) {
 
 TEST(EuclideanClustering, SubsetIndicesReferToTheFrame) {
   std::vector<LidarPoint> pts;
-  for (int i = 0; i < 40; ++i) pts.push_back({0.1F * static_cast<float>(i), 0.0F, 0.0F});
+  for (int i = 0; i < 40; ++i)
+    pts.push_back({0.1F * static_cast<float>(i), 0.0F, 0.0F});
   std::vector<std::uint32_t> odd;
-  for (std::uint32_t i = 1; i < 40; i += 2) odd.push_back(i);
+  for (std::uint32_t i = 1; i < 40; i += 2)
+    odd.push_back(i);
   const auto r = cluster_grid(pts, odd, {.min_points = 5});
   ASSERT_EQ(r.clusters.size(), 1U);
   EXPECT_EQ(r.clusters[0], odd);
@@ -124,7 +136,8 @@ TEST(EuclideanClustering, BadInputIsCountedNotCrashed) {
   pts[5].x = 1e30F;
   std::vector<std::uint32_t> idx = all_indices(pts.size());
   idx.push_back(1000);  // outside the frame
-  for (const auto& r : {cluster_reference(pts, idx, {.min_points = 5}), cluster_grid(pts, idx, {.min_points = 5})}) {
+  for (const auto& r :
+       {cluster_reference(pts, idx, {.min_points = 5}), cluster_grid(pts, idx, {.min_points = 5})}) {
     EXPECT_EQ(r.invalid_points, 4U);
     ASSERT_EQ(r.clusters.size(), 1U);
     EXPECT_EQ(r.clusters[0].size(), 9U);

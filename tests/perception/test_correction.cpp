@@ -19,7 +19,9 @@ using test::kPi;
 using test::TrueBox;
 
 // Orientation error of a box (no front): in [0, pi/2].
-double axis_error(double a, double b) { return std::abs(std::remainder(a - b, kPi)); }
+double axis_error(double a, double b) {
+  return std::abs(std::remainder(a - b, kPi));
+}
 
 double centre_error(const CorrectedPose& r, const TrueBox& box) {
   return std::hypot(r.pose.x - box.centre.x(), r.pose.y - box.centre.y());
@@ -32,7 +34,8 @@ RectangleFit fit_from_corners(const Eigen::Vector2d& origin, const Eigen::Vector
   const std::array<Eigen::Vector2d, 4> c = {origin, origin + a * u, origin + a * u + b * v, origin + b * v};
   RectangleFit fit;
   fit.status = FitStatus::ok;
-  for (int k = 0; k < 4; ++k) fit.corners[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>((k + rotate) % 4)];
+  for (int k = 0; k < 4; ++k)
+    fit.corners[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>((k + rotate) % 4)];
   const Eigen::Vector2d e0 = fit.corners[1] - fit.corners[0];
   fit.yaw = std::atan2(e0.y(), e0.x());
   fit.length0 = e0.norm();
@@ -45,10 +48,13 @@ TEST(Algorithm1, ExactCentreFromExactCorners) {
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int trial = 0; trial < 200; ++trial) {
-    const TrueBox box{{-20.0 + 40.0 * u(rng), -20.0 + 40.0 * u(rng)}, 2.0 * kPi * u(rng), 3.5 + 2.5 * u(rng),
+    const TrueBox box{{-20.0 + 40.0 * u(rng), -20.0 + 40.0 * u(rng)},
+                      2.0 * kPi * u(rng),
+                      3.5 + 2.5 * u(rng),
                       1.5 + 0.7 * u(rng)};
     const double bearing = 2.0 * kPi * u(rng);
-    const Eigen::Vector2d lidar = box.centre + (5.0 + 30.0 * u(rng)) * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+    const Eigen::Vector2d lidar =
+        box.centre + (5.0 + 30.0 * u(rng)) * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
     const auto corners = box.corners();
     const RectangleFit fit = fit_from_corners(corners[0], box.u(), box.length, box.width, trial % 4);
     const CorrectedPose r = correct_algorithm1(fit, {box.length, box.width}, lidar);
@@ -60,7 +66,8 @@ TEST(Algorithm1, ExactCentreFromExactCorners) {
     EXPECT_EQ(r.resolution, AmbiguityResolution::edge_lengths);
     // The alignment point is the true corner nearest the LiDAR.
     double nearest = std::numeric_limits<double>::infinity();
-    for (const auto& c : corners) nearest = std::min(nearest, (c - lidar).norm());
+    for (const auto& c : corners)
+      nearest = std::min(nearest, (c - lidar).norm());
     EXPECT_NEAR((r.alignment_point - lidar).norm(), nearest, 1e-9);
   }
 }
@@ -99,7 +106,8 @@ TEST(Correction, FrontOnlyViewFailsAlgorithm1AndNotTheImprovedCorrection) {
   EXPECT_LT(centre_error(geometric, box), 0.1);
   EXPECT_FALSE(geometric.heading_from_prior);
 
-  const CorrectedPose with_prior = correct_improved(fit, pts, size, lidar, YawPrior{box.yaw + deg_to_rad(8.0), deg_to_rad(10.0)});
+  const CorrectedPose with_prior =
+      correct_improved(fit, pts, size, lidar, YawPrior{box.yaw + deg_to_rad(8.0), deg_to_rad(10.0)});
   EXPECT_EQ(with_prior.resolution, AmbiguityResolution::prior);
   EXPECT_LT(centre_error(with_prior, box), 0.1);
   EXPECT_TRUE(with_prior.heading_from_prior);
@@ -115,7 +123,10 @@ struct RandomView {
 RandomView random_view(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   RandomView v;
-  v.box = {{-50.0 + 100.0 * u(rng), -50.0 + 100.0 * u(rng)}, 2.0 * kPi * u(rng), 3.5 + 2.5 * u(rng), 1.5 + 0.7 * u(rng)};
+  v.box = {{-50.0 + 100.0 * u(rng), -50.0 + 100.0 * u(rng)},
+           2.0 * kPi * u(rng),
+           3.5 + 2.5 * u(rng),
+           1.5 + 0.7 * u(rng)};
   const double range = 6.0 + 24.0 * u(rng), bearing = 2.0 * kPi * u(rng);
   v.lidar = v.box.centre + range * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
   v.points = test::scan_box(v.box, v.lidar, deg_to_rad(0.2), 0.02, rng);
@@ -135,8 +146,10 @@ TEST(Correction, RandomViewsWithAPriorWithinTenDegrees) {
     const CorrectedPose r = correct_improved(fit, v.points, size, v.lidar, prior);
     ASSERT_TRUE(r.ok());
     EXPECT_LT(centre_error(r, v.box), 0.1) << "trial " << trial;
-    EXPECT_LT(rad_to_deg(angle_distance(r.pose.yaw, v.box.yaw)), 5.0) << "trial " << trial;  // no off-by-90 or 180
-    algorithm1_off_by_90 += axis_error(correct_algorithm1(fit, size, v.lidar).pose.yaw, v.box.yaw) > kPi / 4.0;
+    EXPECT_LT(rad_to_deg(angle_distance(r.pose.yaw, v.box.yaw)), 5.0)
+        << "trial " << trial;  // no off-by-90 or 180
+    algorithm1_off_by_90 +=
+        axis_error(correct_algorithm1(fit, size, v.lidar).pose.yaw, v.box.yaw) > kPi / 4.0;
   }
   EXPECT_GT(algorithm1_off_by_90, 0);  // the sample holds the views that defeat Algorithm 1
 }
@@ -146,7 +159,8 @@ TEST(Correction, RandomViewsWithoutPriorResolvedByGeometry) {
   for (int trial = 0; trial < 300; ++trial) {
     const RandomView v = random_view(rng);
     const RectangleFit fit = fit_rectangle(v.points, v.lidar);
-    const CorrectedPose r = correct_improved(fit, v.points, {v.box.length, v.box.width}, v.lidar, std::nullopt);
+    const CorrectedPose r =
+        correct_improved(fit, v.points, {v.box.length, v.box.width}, v.lidar, std::nullopt);
     ASSERT_TRUE(r.ok());
     EXPECT_LT(rad_to_deg(axis_error(r.pose.yaw, v.box.yaw)), 5.0) << "trial " << trial;
     EXPECT_LT(centre_error(r, v.box), 0.1) << "trial " << trial;
@@ -176,7 +190,8 @@ TEST(Correction, AnUndecisivePriorLeavesTheDecisionToGeometry) {
   const auto pts = test::scan_box(box, lidar, deg_to_rad(0.2), 0.02, rng);
   const RectangleFit fit = fit_rectangle(pts, lidar);
   // 45 deg between the axes: the prior says nothing about which is the length.
-  const CorrectedPose r = correct_improved(fit, pts, {4.89, 1.92}, lidar, YawPrior{deg_to_rad(45.0), deg_to_rad(10.0)});
+  const CorrectedPose r =
+      correct_improved(fit, pts, {4.89, 1.92}, lidar, YawPrior{deg_to_rad(45.0), deg_to_rad(10.0)});
   EXPECT_EQ(r.resolution, AmbiguityResolution::geometry);
   EXPECT_LT(rad_to_deg(axis_error(r.pose.yaw, box.yaw)), 3.0);
 }
@@ -199,8 +214,10 @@ TEST(Correction, BadInputGivesAStatusNotACrash) {
     EXPECT_EQ(correct_improved(fit, pts, bad, lidar, std::nullopt).status, CorrectionStatus::invalid_size);
   }
   EXPECT_EQ(correct_algorithm1(fit, size, Eigen::Vector2d(nan, 0.0)).status, CorrectionStatus::invalid_input);
-  EXPECT_EQ(correct_improved(fit, pts, size, lidar, YawPrior{nan, 0.1}).status, CorrectionStatus::invalid_input);
-  EXPECT_EQ(correct_improved(fit, pts, size, lidar, YawPrior{0.0, 0.0}).status, CorrectionStatus::invalid_input);
+  EXPECT_EQ(correct_improved(fit, pts, size, lidar, YawPrior{nan, 0.1}).status,
+            CorrectionStatus::invalid_input);
+  EXPECT_EQ(correct_improved(fit, pts, size, lidar, YawPrior{0.0, 0.0}).status,
+            CorrectionStatus::invalid_input);
   EXPECT_EQ(to_string(CorrectionStatus::invalid_size), "invalid_size");
 
   // No points (or only garbage) beside a valid fit: still a finite answer.

@@ -73,10 +73,12 @@ TEST(FixCovariance, ModelIsMonotoneInPointsRangeAndFaces) {
   const Eigen::Matrix3d mixed = fix_covariance(doubtful);
   EXPECT_GT(mixed(0, 0), base(0, 0) + 0.3);
   EXPECT_GT(mixed(2, 2), base(2, 2) + 0.3);
-  for (const auto& c : {few, far, one_face, mixed}) EXPECT_TRUE(positive_semidefinite(c));
+  for (const auto& c : {few, far, one_face, mixed})
+    EXPECT_TRUE(positive_semidefinite(c));
 }
 
-CorrectedPose correct_scan(const TrueBox& box, const Eigen::Vector2d& lidar, double step_deg, std::uint64_t seed) {
+CorrectedPose correct_scan(const TrueBox& box, const Eigen::Vector2d& lidar, double step_deg,
+                           std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   const auto pts = test::scan_box(box, lidar, deg_to_rad(step_deg), 0.02, rng);
   const RectangleFit fit = fit_rectangle(pts, lidar);
@@ -91,7 +93,8 @@ TEST(FixCovariance, EndToEndFewerPointsFartherAndOneFaceAreLessCertain) {
   const CorrectedPose near_dense = correct_scan(box, 12.0 * diagonal, 0.1, 1);
   const CorrectedPose near_sparse = correct_scan(box, 12.0 * diagonal, 0.6, 1);
   const CorrectedPose far_dense = correct_scan(box, 35.0 * diagonal, 0.1, 1);
-  for (const auto* r : {&near_dense, &near_sparse, &far_dense}) ASSERT_TRUE(r->ok());
+  for (const auto* r : {&near_dense, &near_sparse, &far_dense})
+    ASSERT_TRUE(r->ok());
 
   EXPECT_GT(near_sparse.covariance.trace(), near_dense.covariance.trace());
   EXPECT_GT(near_sparse.covariance(2, 2), near_dense.covariance(2, 2));

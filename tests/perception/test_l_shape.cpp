@@ -55,7 +55,8 @@ TEST(LShapeFit, CleanLRecoversYawForEachCriterion) {
         const RectangleFit fit = fit_rectangle(pts, lidar, config_for(crit, method));
         ASSERT_TRUE(fit.ok());
         EXPECT_LT(rad_to_deg(quarter_turn_error(fit.yaw, box.yaw)), 1.0)
-            << "yaw " << yaw_deg << " criterion " << static_cast<int>(crit) << " method " << static_cast<int>(method);
+            << "yaw " << yaw_deg << " criterion " << static_cast<int>(crit) << " method "
+            << static_cast<int>(method);
       }
     }
   }
@@ -75,10 +76,12 @@ TEST(LShapeFit, GeometryMatchesTheTrueRectangleOnACleanL) {
   const auto truth = box.corners();
   Eigen::Vector2d true_near = truth[0];
   for (const auto& c : truth) {
-    if ((c - lidar).norm() < (true_near - lidar).norm()) true_near = c;
+    if ((c - lidar).norm() < (true_near - lidar).norm())
+      true_near = c;
   }
   double nearest_fit_corner = std::numeric_limits<double>::infinity();
-  for (const auto& c : fit.corners) nearest_fit_corner = std::min(nearest_fit_corner, (c - true_near).norm());
+  for (const auto& c : fit.corners)
+    nearest_fit_corner = std::min(nearest_fit_corner, (c - true_near).norm());
   EXPECT_LT(nearest_fit_corner, 0.02);
   // Lengths match the box (in either order) to within the ray spacing at the far ends.
   const double big = std::max(fit.length0, fit.length1), small = std::min(fit.length0, fit.length1);
@@ -87,7 +90,8 @@ TEST(LShapeFit, GeometryMatchesTheTrueRectangleOnACleanL) {
   // Internal consistency of the output.
   EXPECT_NEAR((fit.corners[1] - fit.corners[0]).norm(), fit.length0, 1e-9);
   EXPECT_NEAR((fit.corners[2] - fit.corners[1]).norm(), fit.length1, 1e-9);
-  EXPECT_LT((0.25 * (fit.corners[0] + fit.corners[1] + fit.corners[2] + fit.corners[3]) - fit.center).norm(), 1e-9);
+  EXPECT_LT((0.25 * (fit.corners[0] + fit.corners[1] + fit.corners[2] + fit.corners[3]) - fit.center).norm(),
+            1e-9);
   const Eigen::Vector2d e0 = fit.corners[1] - fit.corners[0], e1 = fit.corners[2] - fit.corners[1];
   EXPECT_GT(e0.x() * e1.y() - e0.y() * e1.x(), 0.0);  // counter-clockwise
   EXPECT_EQ(fit.points_used, pts.size());
@@ -112,7 +116,8 @@ TEST(LShapeFit, EdgesReportSupportAndWhichFaceTheLidar) {
     std::size_t support = 0;
     for (const auto& p : pts) {
       const double s = (p - a).dot(t);
-      if (s >= -0.15 && s <= (b - a).norm() + 0.15 && std::abs((p - a).dot(n)) <= 0.15) ++support;
+      if (s >= -0.15 && s <= (b - a).norm() + 0.15 && std::abs((p - a).dot(n)) <= 0.15)
+        ++support;
     }
     EXPECT_EQ(fit.edges[k].support_points, support);
     seen += fit.edges[k].seen ? 1 : 0;
@@ -132,21 +137,23 @@ std::vector<Eigen::Vector2d> random_cluster(std::mt19937_64& rng, Eigen::Vector2
   const double range = 5.0 + 35.0 * u(rng), bearing = 2.0 * kPi * u(rng);
   lidar = Eigen::Vector2d(range * std::cos(bearing), range * std::sin(bearing));
   auto pts = test::scan_box(box, lidar, deg_to_rad(0.2), 0.02, rng);
-  if (u(rng) < 0.3) add_roof(box, pts);
+  if (u(rng) < 0.3)
+    add_roof(box, pts);
   return pts;
 }
 
 TEST(OrientationSearch, CoarseToFineFindsTheOptimumOfATenthDegreeSearch) {
   std::mt19937_64 rng(4);
   constexpr int kCases = 150;
-  for (const auto crit : {LShapeCriterion::closeness, LShapeCriterion::autoware_closeness, LShapeCriterion::variance,
-                          LShapeCriterion::area}) {
+  for (const auto crit : {LShapeCriterion::closeness, LShapeCriterion::autoware_closeness,
+                          LShapeCriterion::variance, LShapeCriterion::area}) {
     int cases = 0, matched = 0;
     std::size_t fast_evals = 0, slow_evals = 0;
     while (cases < kCases) {
       Eigen::Vector2d lidar;
       const auto pts = random_cluster(rng, lidar);
-      if (pts.size() < 5) continue;
+      if (pts.size() < 5)
+        continue;
       ++cases;
       std::vector<double> x, y;
       for (const auto& p : pts) {
@@ -166,10 +173,10 @@ TEST(OrientationSearch, CoarseToFineFindsTheOptimumOfATenthDegreeSearch) {
       // The variance criterion's maximum can be an isolated spike away from every coarse peak (1 case
       // in 2000 in the search's own study); the others must match every time.
       if (crit != LShapeCriterion::variance) {
-        EXPECT_TRUE(as_good || same_angle) << "criterion " << static_cast<int>(crit) << " case " << cases
-                                           << ": fast " << rad_to_deg(found.theta) << " deg q " << found.value
-                                           << ", reference " << rad_to_deg(reference.theta) << " deg q "
-                                           << reference.value;
+        EXPECT_TRUE(as_good || same_angle)
+            << "criterion " << static_cast<int>(crit) << " case " << cases << ": fast "
+            << rad_to_deg(found.theta) << " deg q " << found.value << ", reference "
+            << rad_to_deg(reference.theta) << " deg q " << reference.value;
       }
     }
     EXPECT_GE(matched, kCases * 99 / 100) << "criterion " << static_cast<int>(crit);
@@ -186,20 +193,24 @@ TEST(LShapeFit, BadInputGivesAReasonNotACrash) {
   const std::vector<Eigen::Vector2d> two = {{1.0, 1.0}, {2.0, 1.5}};
   EXPECT_EQ(fit_rectangle(two, lidar).status, FitStatus::too_few_points);
 
-  const std::vector<Eigen::Vector2d> mostly_nan = {{nan, 1.0}, {1.0, inf}, {nan, nan}, {1.0, 1.0}, {2.0, 1.5}};
+  const std::vector<Eigen::Vector2d> mostly_nan = {
+      {nan, 1.0}, {1.0, inf}, {nan, nan}, {1.0, 1.0}, {2.0, 1.5}};
   const RectangleFit f1 = fit_rectangle(mostly_nan, lidar);
   EXPECT_EQ(f1.status, FitStatus::non_finite_points);
   EXPECT_EQ(f1.non_finite_dropped, 3U);
 
-  std::vector<Eigen::Vector2d> some_nan = {{10.0, 0.0}, {10.0, 1.0}, {10.0, 2.0}, {11.0, 0.0}, {12.0, 0.0}, {nan, 3.0}};
+  std::vector<Eigen::Vector2d> some_nan = {{10.0, 0.0}, {10.0, 1.0}, {10.0, 2.0},
+                                           {11.0, 0.0}, {12.0, 0.0}, {nan, 3.0}};
   const RectangleFit f2 = fit_rectangle(some_nan, lidar);
   EXPECT_EQ(f2.status, FitStatus::ok);
   EXPECT_EQ(f2.non_finite_dropped, 1U);
   EXPECT_EQ(f2.points_used, 5U);
-  for (const auto& c : f2.corners) EXPECT_TRUE(c.allFinite());
+  for (const auto& c : f2.corners)
+    EXPECT_TRUE(c.allFinite());
 
   std::vector<Eigen::Vector2d> line;
-  for (int i = 0; i < 20; ++i) line.emplace_back(5.0 + 0.1 * i, 3.0 + 0.05 * i);
+  for (int i = 0; i < 20; ++i)
+    line.emplace_back(5.0 + 0.1 * i, 3.0 + 0.05 * i);
   EXPECT_EQ(fit_rectangle(line, lidar).status, FitStatus::degenerate);
 
   const std::vector<Eigen::Vector2d> spot(10, Eigen::Vector2d(4.0, 4.0));
@@ -209,7 +220,8 @@ TEST(LShapeFit, BadInputGivesAReasonNotACrash) {
   // A NaN LiDAR position only loses the facing information, never the fit.
   const RectangleFit f3 = fit_rectangle(some_nan, Eigen::Vector2d(nan, 0.0));
   EXPECT_TRUE(f3.ok());
-  for (const auto& e : f3.edges) EXPECT_FALSE(e.seen);
+  for (const auto& e : f3.edges)
+    EXPECT_FALSE(e.seen);
 }
 
 }  // namespace

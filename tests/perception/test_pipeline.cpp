@@ -22,15 +22,14 @@ struct Street {
   // Both vehicles show an L. (Seen end-on from 2 m, a box's roof returns land metres behind its front
   // face, beyond the clustering tolerance, and form a cluster of their own; the Algorithm 1 test below
   // has that case.)
-  Street() {
-    busy.vehicles = {{{12.0, 3.0}, 1.0, 4.89, 1.92}, {{-6.0, -15.0}, 0.3, 4.5, 1.8}};
-  }
+  Street() { busy.vehicles = {{{12.0, 3.0}, 1.0, 4.89, 1.92}, {{-6.0, -15.0}, 0.3, 4.5, 1.8}}; }
 };
 
 const TrueBox* nearest_vehicle(const test::Scene3d& scene, const Eigen::Vector2d& p) {
   const TrueBox* best = nullptr;
   for (const auto& v : scene.vehicles) {
-    if (best == nullptr || (v.centre - p).norm() < (best->centre - p).norm()) best = &v;
+    if (best == nullptr || (v.centre - p).norm() < (best->centre - p).norm())
+      best = &v;
   }
   return best;
 }
@@ -54,11 +53,13 @@ void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, cons
     }
     // Sweep time: the mean firing time of the object's points.
     double mean_t = 0.0;
-    for (const std::uint32_t i : object.point_indices) mean_t += static_cast<double>(frame[i].time_ns);
+    for (const std::uint32_t i : object.point_indices)
+      mean_t += static_cast<double>(frame[i].time_ns);
     mean_t /= static_cast<double>(object.point_indices.size());
     EXPECT_NEAR(static_cast<double>(object.sweep_time_ns), mean_t, 1.0);
 
-    const CorrectedPose fix = pipeline.correct(object, {truth.length, truth.width}, YawPrior{truth.yaw + 0.1, 0.17});
+    const CorrectedPose fix =
+        pipeline.correct(object, {truth.length, truth.width}, YawPrior{truth.yaw + 0.1, 0.17});
     ASSERT_TRUE(fix.ok());
     EXPECT_LT(std::hypot(fix.pose.x - truth.centre.x(), fix.pose.y - truth.centre.y()), 0.1);
     EXPECT_LT(angle_distance(fix.pose.yaw, truth.yaw), deg_to_rad(3.0));
@@ -69,8 +70,10 @@ TEST(PerceptionPipeline, RangeImageBackground) {
   Street s;
   std::mt19937_64 rng(1);
   PerceptionPipeline pipeline({}, s.lidar.position.head<2>());
-  for (const double phase : {0.1, 0.4, 0.7, 0.9}) pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, phase, rng)));
-  expect_finds_and_corrects_vehicles(pipeline, s.busy, test::points_of(test::scan_3d(s.busy, s.lidar, 0.55, rng)));
+  for (const double phase : {0.1, 0.4, 0.7, 0.9})
+    pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, phase, rng)));
+  expect_finds_and_corrects_vehicles(pipeline, s.busy,
+                                     test::points_of(test::scan_3d(s.busy, s.lidar, 0.55, rng)));
 }
 
 TEST(PerceptionPipeline, ReferenceFrameBackgroundWithReferenceClustering) {
@@ -82,7 +85,8 @@ TEST(PerceptionPipeline, ReferenceFrameBackgroundWithReferenceClustering) {
   PerceptionPipeline pipeline(config, s.lidar.position.head<2>());
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.2, rng)));
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.7, rng)));
-  expect_finds_and_corrects_vehicles(pipeline, s.busy, test::points_of(test::scan_3d(s.busy, s.lidar, 0.45, rng)));
+  expect_finds_and_corrects_vehicles(pipeline, s.busy,
+                                     test::points_of(test::scan_3d(s.busy, s.lidar, 0.45, rng)));
 }
 
 TEST(PerceptionPipeline, GroundHeightInAnEmptySceneLikeThePilot) {
@@ -93,7 +97,8 @@ TEST(PerceptionPipeline, GroundHeightInAnEmptySceneLikeThePilot) {
   config.background = BackgroundMethod::ground_height;
   config.fit.search.method = OrientationSearchMethod::exhaustive;  // the paper's 1 deg search
   const PerceptionPipeline pipeline(config, s.lidar.position.head<2>());
-  expect_finds_and_corrects_vehicles(pipeline, s.busy, test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
+  expect_finds_and_corrects_vehicles(pipeline, s.busy,
+                                     test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
 }
 
 TEST(PerceptionPipeline, GridAndReferenceClusteringGiveTheSameObjects) {
@@ -110,7 +115,8 @@ TEST(PerceptionPipeline, GridAndReferenceClusteringGiveTheSameObjects) {
   const auto frame = test::points_of(test::scan_3d(s.busy, s.lidar, 0.1, rng));
   const auto ra = a.process(frame), rb = b.process(frame);
   ASSERT_EQ(ra.objects.size(), rb.objects.size());
-  for (std::size_t i = 0; i < ra.objects.size(); ++i) EXPECT_EQ(ra.objects[i].point_indices, rb.objects[i].point_indices);
+  for (std::size_t i = 0; i < ra.objects.size(); ++i)
+    EXPECT_EQ(ra.objects[i].point_indices, rb.objects[i].point_indices);
 }
 
 TEST(PerceptionPipeline, Algorithm1IsSelectable) {
@@ -126,7 +132,8 @@ TEST(PerceptionPipeline, Algorithm1IsSelectable) {
   ASSERT_GE(result.objects.size(), 1U);  // the front, and maybe the roof on its own
   const DetectedObject* front = &result.objects[0];
   for (const auto& o : result.objects) {
-    if (o.point_indices.size() > front->point_indices.size()) front = &o;
+    if (o.point_indices.size() > front->point_indices.size())
+      front = &o;
   }
   EXPECT_LT(std::abs(front->fit.center.x() - 12.555), 0.1);  // the front face at x = 15 - 4.89 / 2
   const CorrectedPose fix = paper.correct(*front, {4.89, 1.92});

@@ -50,6 +50,9 @@ int run_stream(const std::vector<std::string>& args) {
       "fast", "send as fast as possible instead of at real time")(
       "clock", po::value<std::string>()->default_value("sim"),
       "packet time base: sim (scenario time) or wall (shifted to the host clock at start)")(
+      "epoch-ns", po::value<long long>(),
+      "host-clock time (ns since the Unix epoch) of scenario time 0: packets carry scenario time + epoch and "
+      "are paced against the host clock, so that other processes given the same epoch share the clock")(
       "scenario", po::value<std::string>(), "scenario YAML file");
   po::positional_options_description positional;
   positional.add("scenario", 1);
@@ -83,13 +86,22 @@ int run_stream(const std::vector<std::string>& args) {
   const std::int64_t last = simulator.packet_index_at(sim_start + from_seconds(seconds));
   const auto wall_start = std::chrono::steady_clock::now();
   // Shifts only the packets' timestamps: the scene keeps moving on the scenario's clock.
-  const TimeNs clock_offset = clock == "wall" ? wall_now_ns() - sim_start : 0;
+  const bool has_epoch = vm.count("epoch-ns") > 0;
+  const TimeNs clock_offset = has_epoch ? static_cast<TimeNs>(vm["epoch-ns"].as<long long>())
+                              : clock == "wall" ? wall_now_ns() - sim_start
+                                                : 0;
   std::array<std::uint8_t, kPacketBytes> payload{};
   std::uint64_t sent = 0, failed = 0;
   for (std::int64_t k = first; k < last; ++k) {
     PacketReturns returns = simulator.simulate_packet(k);
     const TimeNs since_start = returns.blocks.first_firing_ns - sim_start;
-    if (!vm.count("fast")) std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(since_start));
+    if (has_epoch && !vm.count("fast")) {
+      std::this_thread::sleep_until(std::chrono::system_clock::time_point(
+          std::chrono::duration_cast<std::chrono::system_clock::duration>(
+              std::chrono::nanoseconds(returns.blocks.first_firing_ns + clock_offset))));
+    } else if (!vm.count("fast")) {
+      std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(since_start));
+    }
     returns.blocks.first_firing_ns += clock_offset;
     encode_packet(scenario.lidar.model, returns, payload);
     boost::system::error_code ec;

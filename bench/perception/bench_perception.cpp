@@ -1,0 +1,362 @@
+// Per-frame perception on simulated corridor frames (scenarios/corridor.yaml; VLP-16, VLP-32C and a
+// generic 128-ring sensor): this library's pipeline against a baseline written as a PCL user would
+// write the paper's pipeline (k-d tree nearest neighbour against the reference frame,
+// pcl::EuclideanClusterExtraction, exhaustive 1 deg closeness search, Algorithm 1).
+//
+// Both sides get the same inputs and the same parameters: reference = three frames with the vehicles
+// removed, ground points (z < 0.2 m) dropped first, match radius 0.3 m, clustering in 2D (Autoware's
+// use_height: false) with tolerance 0.7 m and 10..20000 points. The baseline's cloud is converted to
+// PCL outside the timed loop.
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
+
+#include "corridor_frames.h"
+#include "perception/pipeline.h"
+
+namespace {
+
+using rsu::LidarPoint;
+using namespace rsu::perception;
+
+constexpr std::array<const char*, 3> kModels = {"vlp16", "vlp32c", "generic128"};
+constexpr float kGroundZ = 0.2F;
+constexpr float kMatchRadius = 0.3F;
+
+// Simulating a frame takes longer than processing it: each model's frames are made once.
+const rsu::bench::CorridorFrames& frames(int model) {
+  static std::array<std::unique_ptr<rsu::bench::CorridorFrames>, kModels.size()> cache;
+  auto& slot = cache[static_cast<std::size_t>(model)];
+  if (!slot) {
+    slot = std::make_unique<rsu::bench::CorridorFrames>(
+        rsu::bench::make_corridor_frames(kModels[static_cast<std::size_t>(model)]));
+  }
+  return *slot;
+}
+
+VehicleSize vehicle_size(const rsu::bench::CorridorFrames& f) {
+  return {f.vehicle_shape.length, f.vehicle_shape.width};
+}
+
+// The vehicle's own yaw estimate as it would announce it, a few degrees off.
+YawPrior vehicle_prior(const rsu::bench::CorridorFrames& f) {
+  return {f.vehicle_pose.yaw + 0.05, 0.17};
+}
+
+PerceptionPipeline make_pipeline(const rsu::bench::CorridorFrames& f, const PerceptionConfig& config = {}) {
+  PerceptionPipeline p(config, f.lidar_xy);
+  for (const auto& b : f.background) {
+    p.add_background_frame(b);
+  }
+  return p;
+}
+
+void set_counters(benchmark::State& state, const rsu::bench::CorridorFrames& f, std::size_t objects) {
+  state.counters["points"] = static_cast<double>(f.frame.size());
+  state.counters["objects"] = static_cast<double>(objects);
+}
+
+// --- this library -------------------------------------------------------------------------------------
+
+void BM_Pipeline(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  const PerceptionPipeline pipeline = make_pipeline(f);
+  std::size_t objects = 0;
+  for (auto _ : state) {
+    const PerceptionResult result = pipeline.process(f.frame);
+    for (const auto& object : result.objects) {
+      if (object.fit.ok()) {
+        benchmark::DoNotOptimize(pipeline.correct(object, vehicle_size(f), vehicle_prior(f)));
+      }
+    }
+    objects = result.objects.size();
+  }
+  set_counters(state, f, objects);
+}
+
+void BM_PipelineReferenceFrame(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  PerceptionConfig config;
+  config.background = BackgroundMethod::reference_frame;
+  const PerceptionPipeline pipeline = make_pipeline(f, config);
+  std::size_t objects = 0;
+  for (auto _ : state) {
+    const PerceptionResult result = pipeline.process(f.frame);
+    for (const auto& object : result.objects) {
+      if (object.fit.ok()) {
+        benchmark::DoNotOptimize(pipeline.correct(object, vehicle_size(f), vehicle_prior(f)));
+      }
+    }
+    objects = result.objects.size();
+  }
+  set_counters(state, f, objects);
+}
+
+void BM_BackgroundRangeImage(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  RangeImageBackground model_bg(f.lidar_xy);
+  for (const auto& b : f.background) {
+    model_bg.add_training_frame(b);
+  }
+  const GroundHeightFilter ground;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(select_foreground(f.frame, [&](const LidarPoint& p) {
+      const PointClass c = ground.classify(p);
+      return c == PointClass::foreground ? model_bg.classify(p) : c;
+    }));
+  }
+  set_counters(state, f, 0);
+}
+
+std::vector<LidarPoint> concatenated_background(const rsu::bench::CorridorFrames& f) {
+  std::vector<LidarPoint> ref;
+  for (const auto& b : f.background) {
+    for (const auto& p : b) {
+      if (p.z >= kGroundZ) {
+        ref.push_back(p);
+      }
+    }
+  }
+  return ref;
+}
+
+void BM_BackgroundReferenceGrid(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  const ReferenceFrameBackground model_bg(concatenated_background(f), {.match_radius_m = kMatchRadius});
+  const GroundHeightFilter ground;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(select_foreground(f.frame, [&](const LidarPoint& p) {
+      const PointClass c = ground.classify(p);
+      return c == PointClass::foreground ? model_bg.classify(p) : c;
+    }));
+  }
+  set_counters(state, f, 0);
+}
+
+// --- the PCL baseline -----------------------------------------------------------------------------------
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+Cloud::Ptr to_cloud(const std::vector<LidarPoint>& points) {
+  Cloud::Ptr cloud(new Cloud);
+  cloud->reserve(points.size());
+  for (const auto& p : points) {
+    cloud->push_back(pcl::PointXYZ(p.x, p.y, p.z));
+  }
+  return cloud;
+}
+
+struct Baseline {
+  Cloud::Ptr reference;
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  Cloud::Ptr frame;
+  Eigen::Vector2d lidar_xy;
+};
+
+Cloud::Ptr baseline_background(const Baseline& b) {
+  Cloud::Ptr foreground(new Cloud);
+  std::vector<int> index(1);
+  std::vector<float> d2(1);
+  for (const auto& p : b.frame->points) {
+    if (p.z < kGroundZ) {
+      continue;
+    }
+    if (b.tree.nearestKSearch(p, 1, index, d2) < 1 || d2[0] > kMatchRadius * kMatchRadius) {
+      foreground->push_back(pcl::PointXYZ(p.x, p.y, 0.0F));  // flattened, as Autoware clusters
+    }
+  }
+  return foreground;
+}
+
+std::vector<pcl::PointIndices> baseline_clusters(const Cloud::Ptr& foreground) {
+  std::vector<pcl::PointIndices> clusters;
+  if (foreground->empty()) {
+    return clusters;
+  }
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
+  tree->setInputCloud(foreground);
+  pcl::EuclideanClusterExtraction<pcl::PointXYZ> ec;
+  ec.setClusterTolerance(0.7);
+  ec.setMinClusterSize(10);
+  ec.setMaxClusterSize(20000);
+  ec.setSearchMethod(tree);
+  ec.setInputCloud(foreground);
+  ec.extract(clusters);
+  return clusters;
+}
+
+LShapeFitConfig exhaustive_1deg() {
+  LShapeFitConfig config;
+  config.search.method = OrientationSearchMethod::exhaustive;
+  config.search.exhaustive_step_deg = 1.0;
+  return config;
+}
+
+std::unique_ptr<Baseline> make_baseline(const rsu::bench::CorridorFrames& f) {
+  auto b = std::make_unique<Baseline>();
+  b->reference = to_cloud(concatenated_background(f));
+  b->tree.setInputCloud(b->reference);
+  b->frame = to_cloud(f.frame);
+  b->lidar_xy = f.lidar_xy;
+  return b;
+}
+
+void BM_BaselinePipeline(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  const auto b = make_baseline(f);
+  const LShapeFitConfig fit_config = exhaustive_1deg();
+  std::size_t objects = 0;
+  for (auto _ : state) {
+    const Cloud::Ptr foreground = baseline_background(*b);
+    const auto clusters = baseline_clusters(foreground);
+    for (const auto& c : clusters) {
+      std::vector<Eigen::Vector2d> xy;
+      xy.reserve(c.indices.size());
+      for (const int i : c.indices) {
+        const auto& p = (*foreground)[static_cast<std::size_t>(i)];
+        xy.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y));
+      }
+      const RectangleFit fit = fit_rectangle(xy, b->lidar_xy, fit_config);
+      benchmark::DoNotOptimize(correct_algorithm1(fit, vehicle_size(f), b->lidar_xy));
+    }
+    objects = clusters.size();
+  }
+  set_counters(state, f, objects);
+}
+
+void BM_BaselineBackgroundKdTree(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  const auto b = make_baseline(f);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(baseline_background(*b));
+  }
+  set_counters(state, f, 0);
+}
+
+// --- clustering and fitting alone, on this frame's foreground -----------------------------------------
+
+// The foreground of the frame after this library's default background removal.
+std::vector<std::uint32_t> foreground_of(const rsu::bench::CorridorFrames& f) {
+  RangeImageBackground model_bg(f.lidar_xy);
+  for (const auto& b : f.background) {
+    model_bg.add_training_frame(b);
+  }
+  const GroundHeightFilter ground;
+  return select_foreground(f.frame,
+                           [&](const LidarPoint& p) {
+                             const PointClass c = ground.classify(p);
+                             return c == PointClass::foreground ? model_bg.classify(p) : c;
+                           })
+      .indices;
+}
+
+const ClusteringConfig kClustering{.tolerance_m = 0.7, .min_points = 10, .max_points = 20000};
+
+void BM_ClusterGrid(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  const auto fg = foreground_of(f);
+  std::size_t objects = 0;
+  for (auto _ : state) {
+    const Clustering c = cluster_grid(f.frame, fg, kClustering);
+    objects = c.clusters.size();
+    benchmark::DoNotOptimize(c);
+  }
+  set_counters(state, f, objects);
+  state.counters["foreground"] = static_cast<double>(fg.size());
+}
+
+void BM_BaselineClusterPcl(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  const auto fg = foreground_of(f);
+  Cloud::Ptr cloud(new Cloud);
+  for (const std::uint32_t i : fg) {
+    cloud->push_back(pcl::PointXYZ(f.frame[i].x, f.frame[i].y, 0.0F));
+  }
+  std::size_t objects = 0;
+  for (auto _ : state) {
+    const auto clusters = baseline_clusters(cloud);
+    objects = clusters.size();
+    benchmark::DoNotOptimize(clusters);
+  }
+  set_counters(state, f, objects);
+  state.counters["foreground"] = static_cast<double>(fg.size());
+}
+
+// The vehicle's cluster (the largest).
+std::vector<Eigen::Vector2d> vehicle_cluster(const rsu::bench::CorridorFrames& f) {
+  const Clustering c = cluster_grid(f.frame, foreground_of(f), kClustering);
+  std::vector<Eigen::Vector2d> xy;
+  const Cluster* largest = nullptr;
+  for (const auto& cluster : c.clusters) {
+    if (largest == nullptr || cluster.size() > largest->size()) {
+      largest = &cluster;
+    }
+  }
+  if (largest != nullptr) {
+    for (const std::uint32_t i : *largest) {
+      xy.emplace_back(static_cast<double>(f.frame[i].x), static_cast<double>(f.frame[i].y));
+    }
+  }
+  return xy;
+}
+
+void run_fit(benchmark::State& state, int model, const LShapeFitConfig& config) {
+  const auto& f = frames(model);
+  const auto xy = vehicle_cluster(f);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(fit_rectangle(xy, f.lidar_xy, config));
+  }
+  state.counters["cluster_points"] = static_cast<double>(xy.size());
+}
+
+void BM_FitCoarseToFine(benchmark::State& state, int model) {
+  run_fit(state, model, LShapeFitConfig{});
+}
+
+void BM_BaselineFitExhaustive1deg(benchmark::State& state, int model) {
+  run_fit(state, model, exhaustive_1deg());
+}
+
+void BM_FitExhaustive0p1deg(benchmark::State& state, int model) {
+  LShapeFitConfig config = exhaustive_1deg();
+  config.search.exhaustive_step_deg = 0.1;
+  run_fit(state, model, config);
+}
+
+void BM_CorrectImproved(benchmark::State& state, int model) {
+  const auto& f = frames(model);
+  const auto xy = vehicle_cluster(f);
+  const RectangleFit fit = fit_rectangle(xy, f.lidar_xy);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(correct_improved(fit, xy, vehicle_size(f), f.lidar_xy, std::nullopt));
+  }
+  state.counters["cluster_points"] = static_cast<double>(xy.size());
+}
+
+}  // namespace
+
+#define RSU_PER_MODEL(fn)                                          \
+  BENCHMARK_CAPTURE(fn, vlp16, 0)->Unit(benchmark::kMicrosecond);  \
+  BENCHMARK_CAPTURE(fn, vlp32c, 1)->Unit(benchmark::kMicrosecond); \
+  BENCHMARK_CAPTURE(fn, generic128, 2)->Unit(benchmark::kMicrosecond)
+
+RSU_PER_MODEL(BM_Pipeline);
+RSU_PER_MODEL(BM_BaselinePipeline);
+RSU_PER_MODEL(BM_PipelineReferenceFrame);
+RSU_PER_MODEL(BM_BackgroundRangeImage);
+RSU_PER_MODEL(BM_BackgroundReferenceGrid);
+RSU_PER_MODEL(BM_BaselineBackgroundKdTree);
+RSU_PER_MODEL(BM_ClusterGrid);
+RSU_PER_MODEL(BM_BaselineClusterPcl);
+RSU_PER_MODEL(BM_FitCoarseToFine);
+RSU_PER_MODEL(BM_BaselineFitExhaustive1deg);
+RSU_PER_MODEL(BM_FitExhaustive0p1deg);
+RSU_PER_MODEL(BM_CorrectImproved);

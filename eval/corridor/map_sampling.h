@@ -1,0 +1,18 @@
+// A point-cloud map of the static scene for NDT (paper Sec. 4.1 used Tier IV's HD point-cloud map of the
+// digital twin): the static surfaces' triangles sampled uniformly by area, seeded.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sim/mesh.h"
+
+namespace rsu::eval {
+
+// About one point per spacing^2 of surface; every triangle gets at least one point if it is larger than
+// half a cell.
+std::vector<Eigen::Vector3f> sample_surface(const sim::TriangleMesh& mesh, double spacing_m, std::uint64_t seed);
+
+}  // namespace rsu::eval

@@ -1,0 +1,47 @@
+// Scores the realistic experiment against the scenario's truth and writes the paper's table (Table 2:
+// mean absolute error for +-36 m and +-50 m along the road) with RMSE, 95th percentile and maximum,
+// every frame's error (frames.csv) and summary.json.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "eval/corridor/experiment_config.h"
+
+namespace rsu::eval {
+
+// One estimate to score: when, where, and where the vehicle truly was then.
+struct ScoredEstimate {
+  TimeNs time_ns = 0;
+  double along_road_m = 0;  // true x relative to the RSU LiDAR
+  double error_m = 0;       // planar position error
+  double yaw_error_deg = 0; // mod 180 for RSU fixes (a box has no front)
+};
+
+struct ErrorStats {
+  std::size_t count = 0;
+  double mae_m = 0, rmse_m = 0, p95_m = 0, max_m = 0;
+};
+
+struct ExperimentScores {
+  // method ("ndt", "rsu_vlp16", "fused_vlp16", ...) -> estimates
+  std::map<std::string, std::vector<ScoredEstimate>> estimates;
+  // method -> range ("pm36", "pm50") -> stats
+  std::map<std::string, std::map<std::string, ErrorStats>> stats;
+  // NDT frames in each range, for the RSU's coverage (how many got a fix)
+  std::map<std::string, std::size_t> frames_in_range;
+};
+
+// Reads <dir>/ndt.csv and, per RSU model m, <dir>/corrections_<m>.csv and <dir>/fused_<m>.csv (columns
+// named in their header rows; time_ns, x, y, yaw required). Missing files are reported as errors.
+ExperimentScores score_experiment(const CorridorExperimentConfig& config, const std::string& dir);
+
+ErrorStats error_stats(const std::vector<double>& errors);
+
+// The table as text, and summary.json.
+std::string format_table(const ExperimentScores& scores, const std::vector<std::string>& methods);
+std::string summary_json(const ExperimentScores& scores, const std::vector<std::string>& methods);
+void write_frames_csv(const ExperimentScores& scores, const std::string& path);
+
+}  // namespace rsu::eval

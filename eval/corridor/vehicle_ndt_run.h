@@ -1,0 +1,27 @@
+// The vehicle's own localization over the drive: its roof LiDAR simulated frame by frame (carried by the
+// vehicle, each ray at its own firing time), de-skewed with the velocity of the last two NDT poses, and
+// matched against the map by NDT with the initial guess from the previous pose plus constant-velocity
+// motion (paper Sec. 4.1: scan matching only).
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "eval/corridor/experiment_config.h"
+
+namespace rsu::eval {
+
+struct NdtSample {
+  TimeNs time_ns = 0;   // the scan's reference time (its last firing)
+  Pose2 pose;           // NDT's vehicle pose
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  bool converged = false;
+  int iterations = 0;
+  Pose2 truth;          // the true pose at time_ns
+};
+
+// progress(done, total) is called after each frame.
+std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
+                                       const std::function<void(int, int)>& progress = {});
+
+}  // namespace rsu::eval

@@ -1,0 +1,41 @@
+// What became of one datagram received on the announcement port: accepted into the registry, or the
+// stage that refused it and why. Every refusal has a reason, so the daemon counts and logs instead of
+// crashing or guessing (issue #4: garbage, truncated, oversized, unknown version, absurd sizes, floods).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "v2i/announcement_validation.h"
+#include "v2i/vehicle_registry.h"
+#include "v2i/wire_codec.h"
+
+namespace rsu::core {
+
+enum class DatagramStage : std::uint8_t {
+  kAccepted,         // the registry took it (upsert says added / updated)
+  kFloodLimited,     // the source host exceeded the pre-decode datagram rate
+  kDecode,           // not a well-formed V2iMessage (see `decode`)
+  kNotAnnouncement,  // a well-formed correction or advertisement sent to the announcement port
+  kValidation,       // an announcement with implausible content (see `validation`)
+  kReplyToMismatch,  // reply_to is not the sender's address (RsuCoreConfig::require_reply_to_source_address)
+  kRegistry,         // refused by the registry: rate limit, stale sequence, full (see `upsert`)
+  kCount,
+};
+
+const char* to_string(DatagramStage stage);
+
+struct DatagramOutcome {
+  DatagramStage stage = DatagramStage::kDecode;
+  v2i::DecodeStatus decode = v2i::DecodeStatus::kOk;
+  v2i::AnnouncementReason validation = v2i::AnnouncementReason::kValid;
+  v2i::UpsertOutcome upsert = v2i::UpsertOutcome::kCount;  // kCount: the registry was not reached
+  std::uint64_t vehicle_id = 0;                             // when decoded as an announcement
+
+  bool accepted() const { return stage == DatagramStage::kAccepted; }
+  // "stage" or "stage:detail", e.g. "decode:parse_error", "validation:length_out_of_range": a stable
+  // key for counting and rate-limited logging.
+  std::string reason() const;
+};
+
+}  // namespace rsu::core

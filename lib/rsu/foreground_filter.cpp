@@ -1,0 +1,52 @@
+#include "rsu/foreground_filter.h"
+
+namespace rsu::core {
+
+using perception::BackgroundMethod;
+using perception::PointClass;
+
+ForegroundFilter::ForegroundFilter(const perception::PerceptionConfig& config, const Eigen::Vector2d& lidar_xy)
+    : config_(config), ground_(config.ground), range_image_(lidar_xy, config.range_image) {}
+
+void ForegroundFilter::add_background_frame(std::span<const LidarPoint> points) {
+  ++frames_;
+  switch (config_.background) {
+    case BackgroundMethod::ground_height:
+      return;
+    case BackgroundMethod::reference_frame:
+      for (const LidarPoint& p : points) {
+        // Points the ground prefilter drops anyway would only slow the look-ups (as the pipeline does).
+        if (!config_.ground_prefilter || ground_.classify(p) == PointClass::foreground) {
+          reference_points_.push_back(p);
+        }
+      }
+      reference_.emplace(reference_points_, config_.reference_frame);
+      return;
+    case BackgroundMethod::range_image:
+      range_image_.add_training_frame(points);
+      return;
+  }
+}
+
+PointClass ForegroundFilter::classify(const LidarPoint& p) const {
+  if (config_.background == BackgroundMethod::ground_height || config_.ground_prefilter) {
+    const PointClass c = ground_.classify(p);
+    if (c != PointClass::foreground || config_.background == BackgroundMethod::ground_height) {
+      return c;
+    }
+  }
+  switch (config_.background) {
+    case BackgroundMethod::ground_height:
+      break;
+    case BackgroundMethod::reference_frame:
+      if (!reference_) {
+        return perception::is_finite_point(p) ? PointClass::foreground : PointClass::invalid;
+      }
+      return reference_->classify(p);
+    case BackgroundMethod::range_image:
+      return range_image_.classify(p);
+  }
+  return PointClass::invalid;
+}
+
+}  // namespace rsu::core

@@ -1,0 +1,72 @@
+// Everything RsuCore needs to know, as plain structs holding the defaults (KISS-ICP style). The daemon
+// fills it from its YAML file (daemon/config.h); tests fill it by hand.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "common/pose.h"
+#include "lidar/sensor_model.h"
+#include "perception/pipeline.h"
+#include "v2i/announcement_validation.h"
+#include "v2i/association.h"
+#include "v2i/source_rate_limiter.h"
+#include "v2i/vehicle_hypothesis.h"
+#include "v2i/vehicle_registry.h"
+
+namespace rsu::core {
+
+// How background learning ends (DESIGN.md §1: the static scene is removed before clustering).
+struct BackgroundLearningConfig {
+  // Whole rotations recorded at start-up, while no vehicle is expected in view, that train the model.
+  // Ignored when the caller loads a background (e.g. PCD files) with RsuCore::load_background().
+  int learning_frames = 10;
+};
+
+// The sector release rule of SweepClusterer (sweep_clusterer.h).
+struct SweepConfig {
+  // Extra azimuth the sweep must be past a cluster before it is released, on top of the spread of
+  // the sensor's per-laser azimuth offsets (computed from the model): covers the interpolation of
+  // firing azimuths between blocks and a slightly tilted mount.
+  double release_margin_deg = 0.5;
+  // Foreground points waiting for their cluster to close; beyond this the oldest are dropped (a flood
+  // of foreground, e.g. before any background exists, cannot grow memory without bound).
+  std::size_t max_pending_points = 200000;
+  // A gap in the point stream longer than this many rotations, or time going backwards, restarts it.
+  double max_gap_rotations = 2.0;
+};
+
+struct RsuCoreConfig {
+  std::uint64_t rsu_id = 1;
+
+  // The LiDAR: its model and its surveyed pose in the map frame (sensor -> map).
+  std::string sensor_model = "vlp16";
+  Pose3 mount;
+
+  BackgroundLearningConfig background;
+  SweepConfig sweep;
+  perception::PerceptionConfig perception;
+
+  // Clusters whose fitted centre is farther than this from the LiDAR get no correction: beyond it the
+  // fit is too sparse to beat the vehicle's own estimate (paper Table 2: VLP-16 beyond 36 m).
+  double coverage_radius_m = 50.0;
+
+  // V2I: validation limits, registry (expiry, capacity, per-source rate), association gates.
+  v2i::AnnouncementLimits announcement_limits;
+  v2i::VehicleRegistryConfig registry;
+  v2i::AssociationConfig association;
+  v2i::HypothesisConfig hypothesis;
+  // A cheap per-source-host limit applied to every datagram BEFORE decoding, so a flood of garbage
+  // costs one table lookup per datagram. Looser than the registry's per-source announcement limit.
+  v2i::RateLimitConfig datagram_flood{.bucket = {.rate_per_s = 200.0, .burst = 100.0}, .max_sources = 4096};
+  // Corrections go only to the address the announcement came from: otherwise anyone could aim the
+  // RSU's corrections at a third party (a reflection attack).
+  bool require_reply_to_source_address = true;
+
+  // For the RSU advertisement (v2i::RsuAdvertisement).
+  std::uint16_t announcement_port = 0;
+  std::uint16_t correction_port = 0;
+};
+
+}  // namespace rsu::core

@@ -1,0 +1,209 @@
+#include "rsu/sweep_clusterer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+#include "common/angles.h"
+
+namespace rsu::core {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * kPi;
+
+// The component's azimuth span and whether it is closed (file comment of sweep_clusterer.h).
+struct ComponentState {
+  double min_u = std::numeric_limits<double>::infinity();
+  double max_u = -std::numeric_limits<double>::infinity();
+  bool closed = true;
+};
+
+}  // namespace
+
+SweepClusterer::SweepClusterer(const SweepConfig& config, const perception::ClusteringConfig& clustering,
+                               const Eigen::Vector2d& lidar_xy, double rotation_hz, double azimuth_spread_rad)
+    : config_(config),
+      clustering_(clustering),
+      min_points_(clustering.min_points),
+      max_points_(clustering.max_points),
+      lidar_xy_(lidar_xy) {
+  if (!(rotation_hz > 0.0) || !std::isfinite(rotation_hz)) {
+    throw std::invalid_argument("SweepClusterer: rotation rate must be finite and > 0");
+  }
+  if (!std::isfinite(azimuth_spread_rad) || azimuth_spread_rad < 0.0 || !std::isfinite(config.release_margin_deg) ||
+      config.release_margin_deg < 0.0 || !(config.max_gap_rotations > 0.0) || !lidar_xy.allFinite()) {
+    throw std::invalid_argument("SweepClusterer: spread, margin, gap and LiDAR position must be finite, >= 0");
+  }
+  clustering_.min_points = 1;  // every component is returned so that noise can be released (and dropped)
+  clustering_.max_points = std::numeric_limits<std::size_t>::max();
+  radians_per_ns_ = kTwoPi * rotation_hz * 1e-9;
+  max_gap_ns_ = static_cast<TimeNs>(config.max_gap_rotations / rotation_hz * 1e9);
+  lag_rad_ = azimuth_spread_rad + deg_to_rad(config.release_margin_deg);
+}
+
+void SweepClusterer::restart() {
+  stats_.points_dropped_restart += points_.size();
+  points_.clear();
+  azimuth_.clear();
+  range_.clear();
+  running_ = false;
+  ++stats_.restarts;
+}
+
+void SweepClusterer::add(const LidarPoint& p, bool foreground) {
+  ++stats_.points_seen;
+  if (!std::isfinite(p.azimuth_rad) || !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+    ++stats_.invalid_points;
+    return;
+  }
+  const double a = wrap_angle_positive(static_cast<double>(p.azimuth_rad));
+  if (running_ && (p.time_ns < last_time_ || p.time_ns - last_time_ > max_gap_ns_)) {
+    restart();
+  }
+  if (!running_) {
+    running_ = true;
+    sweep_ = a;
+    last_time_ = p.time_ns;
+  }
+  // Unwrap against where the sweep should be by now: robust to lost packets shorter than half a turn.
+  const double expected = sweep_ + radians_per_ns_ * static_cast<double>(p.time_ns - last_time_);
+  const double u = a + kTwoPi * std::round((expected - a) / kTwoPi);
+  sweep_ = std::max(sweep_, u);
+  last_time_ = p.time_ns;
+  if (!foreground) {
+    return;
+  }
+  ++stats_.foreground_points;
+  if (points_.size() >= config_.max_pending_points) {
+    // Drop the oldest (the front is roughly the smallest azimuth). Rare: only a foreground flood.
+    const std::size_t n = std::max<std::size_t>(1, points_.size() / 8);
+    points_.erase(points_.begin(), points_.begin() + static_cast<std::ptrdiff_t>(n));
+    azimuth_.erase(azimuth_.begin(), azimuth_.begin() + static_cast<std::ptrdiff_t>(n));
+    range_.erase(range_.begin(), range_.begin() + static_cast<std::ptrdiff_t>(n));
+    stats_.points_dropped_overflow += n;
+  }
+  points_.push_back(p);
+  azimuth_.push_back(u);
+  range_.push_back(std::hypot(static_cast<double>(p.x) - lidar_xy_.x(), static_cast<double>(p.y) - lidar_xy_.y()));
+}
+
+void SweepClusterer::drop_stale() {
+  const double oldest_allowed = sweep_ - kPi;
+  std::size_t keep = 0;
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    if (azimuth_[i] < oldest_allowed) {
+      ++stats_.points_dropped_stale;
+      continue;
+    }
+    points_[keep] = points_[i];
+    azimuth_[keep] = azimuth_[i];
+    range_[keep] = range_[i];
+    ++keep;
+  }
+  points_.resize(keep);
+  azimuth_.resize(keep);
+  range_.resize(keep);
+}
+
+std::vector<SweptCluster> SweepClusterer::release_closed() { return release(false); }
+
+std::vector<SweptCluster> SweepClusterer::release_all() { return release(true); }
+
+std::vector<SweptCluster> SweepClusterer::release(bool everything) {
+  std::vector<SweptCluster> out;
+  if (!everything) {
+    drop_stale();
+  }
+  if (points_.empty()) {
+    // Nothing pending: bring the unwrapped sweep back near [0, 2 pi) so it never loses precision.
+    sweep_ = std::fmod(sweep_, kTwoPi);
+    return out;
+  }
+  const double a_future = sweep_ - lag_rad_;
+  if (!everything) {
+    // Cheap exit for the common case (a packet that closes nothing): no point is behind a_future.
+    const double min_u = *std::min_element(azimuth_.begin(), azimuth_.end());
+    if (min_u >= a_future) {
+      return out;
+    }
+  }
+
+  std::vector<std::uint32_t> all(points_.size());
+  std::iota(all.begin(), all.end(), 0U);
+  const perception::Clustering components = perception::cluster_grid(points_, all, clustering_);
+
+  const double tolerance = clustering_.tolerance_m;
+  std::vector<ComponentState> state(components.clusters.size());
+  for (std::size_t c = 0; c < components.clusters.size(); ++c) {
+    ComponentState& s = state[c];
+    for (const std::uint32_t i : components.clusters[c]) {
+      s.min_u = std::min(s.min_u, azimuth_[i]);
+      s.max_u = std::max(s.max_u, azimuth_[i]);
+      if (s.closed && !everything) {
+        const double behind = a_future - azimuth_[i];
+        const double distance = behind <= 0.0 ? 0.0 : behind >= kPi / 2.0 ? range_[i] : range_[i] * std::sin(behind);
+        s.closed = distance > tolerance;
+      }
+    }
+  }
+
+  std::vector<bool> take(points_.size(), false);
+  for (std::size_t c = 0; c < components.clusters.size(); ++c) {
+    if (!state[c].closed) {
+      continue;
+    }
+    bool overlaps_open = false;
+    for (std::size_t o = 0; o < components.clusters.size() && !overlaps_open; ++o) {
+      overlaps_open = !state[o].closed && state[o].min_u <= state[c].max_u && state[o].max_u >= state[c].min_u;
+    }
+    if (overlaps_open) {
+      continue;
+    }
+    const perception::Cluster& members = components.clusters[c];
+    for (const std::uint32_t i : members) {
+      take[i] = true;
+    }
+    if (members.size() < min_points_) {
+      ++stats_.clusters_dropped_small;
+      continue;
+    }
+    if (members.size() > max_points_) {
+      ++stats_.clusters_dropped_large;
+      continue;
+    }
+    SweptCluster cluster;
+    cluster.points.reserve(members.size());
+    for (const std::uint32_t i : members) {
+      cluster.points.push_back(points_[i]);
+    }
+    out.push_back(std::move(cluster));
+    ++stats_.clusters_released;
+  }
+  // Points cluster_grid refused (none should remain: every pending point is finite) are left pending
+  // and age out as stale.
+  std::size_t keep = 0;
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    if (take[i]) {
+      continue;
+    }
+    points_[keep] = points_[i];
+    azimuth_[keep] = azimuth_[i];
+    range_[keep] = range_[i];
+    ++keep;
+  }
+  points_.resize(keep);
+  azimuth_.resize(keep);
+  range_.resize(keep);
+  if (everything) {
+    stats_.invalid_points += points_.size();
+    points_.clear();
+    azimuth_.clear();
+    range_.clear();
+  }
+  return out;
+}
+
+}  // namespace rsu::core

@@ -1,0 +1,67 @@
+// Decides whether a datagram received on the vehicle's correction port is a correction this vehicle
+// should use, and counts every refusal by reason. Pure computation (no socket): the VehicleClient
+// feeds it the bytes, the tests feed it crafted ones.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <span>
+
+#include "common/time.h"
+#include "v2i/enum_counter.h"
+#include "v2i/messages.h"
+
+namespace rsu::vehicle_client {
+
+enum class CorrectionVerdict : std::uint8_t {
+  kAccepted,
+  kGarbage,             // not a decodable V2iMessage (empty, too large, not protobuf, no body, bad covariance)
+  kNotACorrection,      // a valid message of another kind (an announcement or advertisement)
+  kUnknownVersion,      // protocol_version this client does not speak
+  kWrongVehicleId,      // meant for another vehicle
+  kInvalidContent,      // NaN/inf pose, or a covariance that is not symmetric positive definite
+  kDuplicate,           // the same RSU sequence and sweep time as the last one accepted from that RSU
+  kStale,               // a sweep no newer than the last one accepted from that RSU (reordered or replayed)
+  kCount,
+};
+
+const char* to_string(CorrectionVerdict verdict);
+
+struct CorrectionFilterConfig {
+  std::uint64_t vehicle_id = 0;
+  // Per-RSU ordering state is kept for at most this many RSU ids, so that a flood of forged ids cannot
+  // grow memory; the least recently heard one is forgotten first.
+  std::size_t max_tracked_rsus = 64;
+};
+
+class CorrectionFilter {
+ public:
+  explicit CorrectionFilter(const CorrectionFilterConfig& config) : config_(config) {}
+
+  // Decodes and checks one datagram; on kAccepted `out` holds the correction.
+  CorrectionVerdict check(std::span<const std::uint8_t> datagram, v2i::Correction& out);
+
+  const v2i::EnumCounter<CorrectionVerdict>& counts() const { return counts_; }
+  // Accepted corrections whose sequence went backwards while the sweep time moved on: the RSU daemon
+  // restarted (its per-vehicle counter starts again), which must not lock the vehicle out.
+  std::uint64_t sequence_restarts() const { return sequence_restarts_; }
+
+ private:
+  struct RsuOrder {
+    std::uint32_t last_sequence = 0;
+    TimeNs last_sweep_time = 0;
+    std::uint64_t last_heard = 0;  // check() call count, for least-recently-heard eviction
+  };
+
+  CorrectionVerdict classify(std::span<const std::uint8_t> datagram, v2i::Correction& out);
+  void remember(const v2i::Correction& correction);
+
+  CorrectionFilterConfig config_;
+  v2i::EnumCounter<CorrectionVerdict> counts_;
+  std::map<std::uint64_t, RsuOrder> order_by_rsu_;
+  std::uint64_t checks_ = 0;
+  std::uint64_t sequence_restarts_ = 0;
+};
+
+}  // namespace rsu::vehicle_client

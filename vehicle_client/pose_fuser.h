@@ -1,0 +1,60 @@
+// The vehicle's pose fuser: lib/fusion's CTRV EKF (x, y, yaw, speed, yaw rate) fed with the vehicle's
+// NDT poses and the RSU corrections it receives, each at its own time with its own covariance. An RSU
+// correction counts at its sweep time (DESIGN.md §3), its box yaw is used modulo pi, one arriving after
+// newer NDT poses is inserted and the later ones re-applied, and an outlier (an off-by-90 deg box, a
+// wrong cluster) is refused by the Mahalanobis gate so it never moves the pose (issue 4, item 3).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "common/pose.h"
+#include "common/time.h"
+#include "fusion/vehicle_ekf.h"
+#include "v2i/messages.h"
+
+namespace rsu::vehicle_client {
+
+struct PoseFuserConfig {
+  // reference_offset must equal the one announced to the RSU (corrections give the box centre).
+  fusion::VehicleEkfConfig ekf;
+};
+
+// Decisions at arrival, per source. A late measurement can change the decision about later ones when
+// they are re-applied; the EKF's own counts (ekf_stats()) follow those changes.
+struct PoseFuserStats {
+  std::uint64_t ndt_accepted = 0;  // including the pose that started the filter
+  std::uint64_t ndt_rejected = 0;
+  std::uint64_t rsu_accepted = 0;
+  std::uint64_t rsu_rejected_gate = 0;        // chi-square gate on the innovation
+  std::uint64_t rsu_rejected_yaw_branch = 0;  // box yaw about 90 deg off: the L-shape failure
+  std::uint64_t rsu_rejected_other = 0;       // too old, before any NDT pose, invalid
+  std::uint64_t late = 0;                     // arrived older than the newest fused measurement
+  std::uint64_t reapplied = 0;                // later measurement updates redone because of a late one
+
+  std::uint64_t rsu_rejected_by_gate() const { return rsu_rejected_gate + rsu_rejected_yaw_branch; }
+};
+
+class PoseFuser {
+ public:
+  explicit PoseFuser(const PoseFuserConfig& config = {});
+
+  // The vehicle's own NDT pose of its reference point (full heading) at `time`.
+  fusion::MeasurementOutcome add_ndt(const Pose2& pose, const Eigen::Matrix3d& covariance, TimeNs time);
+  // An RSU correction: box centre and box yaw (mod pi) at the correction's sweep time.
+  fusion::MeasurementOutcome add_rsu(const v2i::Correction& correction);
+
+  // The fused estimate at `time` (predicted from the nearest earlier state). Empty before the first NDT
+  // pose.
+  std::optional<fusion::StateEstimate> pose_at(TimeNs time) const;
+  std::optional<fusion::StateEstimate> latest() const { return ekf_.latest(); }
+
+  PoseFuserStats stats() const;
+  const fusion::EkfStats& ekf_stats() const { return ekf_.stats(); }
+
+ private:
+  fusion::VehicleEkf ekf_;
+  PoseFuserStats stats_;
+};
+
+}  // namespace rsu::vehicle_client

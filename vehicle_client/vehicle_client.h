@@ -1,0 +1,116 @@
+// The vehicle's V2I client: announces the vehicle (size, own pose, where to reply) to the RSUs over UDP
+// and receives their corrections, delivered by callback and by poll(). Boost.Asio at the edge; runs on
+// an io_context the caller owns (ThreadedVehicleClient runs its own thread). All public methods are
+// thread-safe; the callback runs on the io_context's thread.
+#pragma once
+
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
+
+#include <Eigen/Core>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/udp.hpp>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/pose.h"
+#include "common/time.h"
+#include "v2i/announcement_validation.h"
+#include "v2i/enum_counter.h"
+#include "v2i/messages.h"
+#include "vehicle_client/clock.h"
+#include "vehicle_client/correction_filter.h"
+#include "vehicle_client/vehicle_client_config.h"
+
+namespace rsu::vehicle_client {
+
+// The vehicle's own estimate of its reference point, as announced (map frame, DESIGN.md §3).
+struct VehicleState {
+  TimeNs time = 0;  // when the pose was valid (e.g. the NDT scan time): the generation time
+  Pose2 pose;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  // (x, y, yaw)
+  std::optional<double> speed_mps;
+  std::optional<double> yaw_rate_rps;
+};
+
+struct ReceivedCorrection {
+  v2i::Correction correction;
+  TimeNs received_time = 0;  // client clock
+  std::string sender;        // "ADDR:PORT" of the datagram's source
+};
+
+struct VehicleClientStats {
+  std::uint64_t announcements_sent = 0;  // datagrams, one per RSU per announcement
+  std::uint64_t keepalive_announcements = 0;
+  std::uint64_t send_errors = 0;
+  std::uint64_t announcements_refused = 0;  // announce() refused the state (see announce())
+  std::uint64_t datagrams_received = 0;
+  std::uint64_t receive_errors = 0;
+  v2i::EnumCounter<CorrectionVerdict> corrections;  // accepted, and rejected by reason
+  std::uint64_t sequence_restarts = 0;              // an RSU restarted (CorrectionFilter)
+  std::uint64_t dropped_unpolled = 0;               // over max_pending_corrections
+
+  std::uint64_t accepted() const { return corrections.count(CorrectionVerdict::kAccepted); }
+  std::uint64_t rejected() const { return corrections.total() - accepted(); }
+};
+
+class VehicleClient {
+ public:
+  using CorrectionCallback = std::function<void(const ReceivedCorrection&)>;
+
+  // Opens and binds the socket and starts receiving. Throws std::invalid_argument for a bad config
+  // (no RSU, vehicle id 0, unparsable endpoint, mixed address families) and boost::system::system_error
+  // when the socket cannot be bound.
+  VehicleClient(boost::asio::io_context& io, const VehicleClientConfig& config,
+                Clock clock = system_clock_now);
+  ~VehicleClient();  // stops; the callback is not called after it returns
+  VehicleClient(const VehicleClient&) = delete;
+  VehicleClient& operator=(const VehicleClient&) = delete;
+
+  // Announces the state to every RSU now (the send runs on the io_context) and keeps it for the
+  // keep-alive. Returns kValid when queued; otherwise the reason the announcement would be refused by
+  // an RSU (NaN, bad covariance, absurd size, ...), and nothing is sent. The generation time is not
+  // checked against the clock: the RSU judges age.
+  v2i::AnnouncementReason announce(const VehicleState& state);
+
+  // Corrections accepted since the last call, oldest first.
+  std::vector<ReceivedCorrection> poll();
+  // Also called for every accepted correction (in addition to poll()).
+  void set_correction_callback(CorrectionCallback callback);
+
+  VehicleClientStats stats() const;
+  // The bound correction endpoint (the port is the real one when 0 was configured).
+  boost::asio::ip::udp::endpoint local_endpoint() const;
+  // The announcement endpoints, resolved.
+  const std::vector<boost::asio::ip::udp::endpoint>& rsu_endpoints() const;
+  // Sequence number the next announcement will carry.
+  std::uint32_t next_sequence() const;
+
+  // Stops receiving and announcing (idempotent). Pending handlers finish on the io_context.
+  void stop();
+
+ private:
+  class Impl;
+  std::shared_ptr<Impl> impl_;
+};
+
+// A VehicleClient with its own io_context and thread, for callers without an event loop (the CLI).
+class ThreadedVehicleClient {
+ public:
+  explicit ThreadedVehicleClient(const VehicleClientConfig& config, Clock clock = system_clock_now);
+  ~ThreadedVehicleClient();
+  ThreadedVehicleClient(const ThreadedVehicleClient&) = delete;
+  ThreadedVehicleClient& operator=(const ThreadedVehicleClient&) = delete;
+
+  VehicleClient& client() { return *client_; }
+
+ private:
+  struct Loop;
+  std::unique_ptr<Loop> loop_;
+  std::unique_ptr<VehicleClient> client_;
+};
+
+}  // namespace rsu::vehicle_client
