@@ -79,6 +79,20 @@ void read_objects(const YamlField& list, std::vector<T>& out, ReadOne read_one) 
   }
 }
 
+// Buildings and shrubs: an object at (x, y) turned by yaw, with length, width and height.
+template <typename T>
+T read_placed_box(const YamlField& f) {
+  f.expect_map({"x", "y", "yaw_deg", "length", "width", "height", "repeat"});
+  T o;
+  o.x = f.number_or("x", 0);
+  o.y = f.number_or("y", 0);
+  o.yaw = f.angle_deg_or("yaw_deg", 0);
+  o.length = f.positive_or("length", o.length);
+  o.width = f.positive_or("width", o.width);
+  o.height = f.positive_or("height", o.height);
+  return o;
+}
+
 VehicleShape read_shape(const YamlField& f) {
   f.expect_map({"length", "width", "height", "corner_radius", "ground_clearance", "belt_height",
                 "cabin_inset", "hood_length", "windscreen_run", "rear_slope_run", "wheel_radius",
@@ -161,19 +175,7 @@ Scene read_scene(const YamlField& f) {
     read("vegetation", scene.reflectivity.vegetation);
     read("vehicle", scene.reflectivity.vehicle);
   }
-  if (f.has("buildings")) {
-    read_objects(f.child("buildings"), scene.buildings, [](const YamlField& b) {
-      b.expect_map({"x", "y", "yaw_deg", "length", "width", "height", "repeat"});
-      Building o;
-      o.x = b.number_or("x", 0);
-      o.y = b.number_or("y", 0);
-      o.yaw = b.angle_deg_or("yaw_deg", 0);
-      o.length = b.positive_or("length", o.length);
-      o.width = b.positive_or("width", o.width);
-      o.height = b.positive_or("height", o.height);
-      return o;
-    });
-  }
+  if (f.has("buildings")) read_objects(f.child("buildings"), scene.buildings, read_placed_box<Building>);
   if (f.has("poles")) {
     read_objects(f.child("poles"), scene.poles, [](const YamlField& p) {
       p.expect_map({"x", "y", "radius", "height", "arm_length", "arm_yaw_deg", "repeat"});
@@ -199,19 +201,7 @@ Scene read_scene(const YamlField& f) {
       return o;
     });
   }
-  if (f.has("shrubs")) {
-    read_objects(f.child("shrubs"), scene.shrubs, [](const YamlField& s) {
-      s.expect_map({"x", "y", "yaw_deg", "length", "width", "height", "repeat"});
-      Shrub o;
-      o.x = s.number_or("x", 0);
-      o.y = s.number_or("y", 0);
-      o.yaw = s.angle_deg_or("yaw_deg", 0);
-      o.length = s.positive_or("length", o.length);
-      o.width = s.positive_or("width", o.width);
-      o.height = s.positive_or("height", o.height);
-      return o;
-    });
-  }
+  if (f.has("shrubs")) read_objects(f.child("shrubs"), scene.shrubs, read_placed_box<Shrub>);
   return scene;
 }
 
