@@ -12,7 +12,7 @@ packages=(
   libyaml-cpp-dev libsystemd-dev libpng-dev libsodium-dev
   cyclonedds-dev cyclonedds-tools
   systemd
-  python3 python3-numpy python3-matplotlib
+  python3 python3-numpy python3-matplotlib python3-yaml
 )
 
 missing=()

@@ -83,9 +83,9 @@ void CorrectionFilter::remember(const v2i::Correction& correction) {
   auto known = order_by_rsu_.find(correction.rsu_id);
   if (known == order_by_rsu_.end()) {
     if (order_by_rsu_.size() >= std::max<std::size_t>(config_.max_tracked_rsus, 1)) {
-      const auto oldest = std::min_element(order_by_rsu_.begin(), order_by_rsu_.end(), [](const auto& a, const auto& b) {
-        return a.second.last_heard < b.second.last_heard;
-      });
+      const auto oldest = std::min_element(
+          order_by_rsu_.begin(), order_by_rsu_.end(),
+          [](const auto& a, const auto& b) { return a.second.last_heard < b.second.last_heard; });
       order_by_rsu_.erase(oldest);
     }
     known = order_by_rsu_.emplace(correction.rsu_id, RsuOrder{}).first;

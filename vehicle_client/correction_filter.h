@@ -16,13 +16,13 @@ namespace rsu::vehicle_client {
 
 enum class CorrectionVerdict : std::uint8_t {
   kAccepted,
-  kGarbage,             // not a decodable V2iMessage (empty, too large, not protobuf, no body, bad covariance)
-  kNotACorrection,      // a valid message of another kind (an announcement or advertisement)
-  kUnknownVersion,      // protocol_version this client does not speak
-  kWrongVehicleId,      // meant for another vehicle
-  kInvalidContent,      // NaN/inf pose, or a covariance that is not symmetric positive definite
-  kDuplicate,           // the same RSU sequence and sweep time as the last one accepted from that RSU
-  kStale,               // a sweep no newer than the last one accepted from that RSU (reordered or replayed)
+  kGarbage,         // not a decodable V2iMessage (empty, too large, not protobuf, no body, bad covariance)
+  kNotACorrection,  // a valid message of another kind (an announcement or advertisement)
+  kUnknownVersion,  // protocol_version this client does not speak
+  kWrongVehicleId,  // meant for another vehicle
+  kInvalidContent,  // NaN/inf pose, or a covariance that is not symmetric positive definite
+  kDuplicate,       // the same RSU sequence and sweep time as the last one accepted from that RSU
+  kStale,           // a sweep no newer than the last one accepted from that RSU (reordered or replayed)
   kCount,
 };
 

@@ -26,7 +26,8 @@ std::vector<std::string_view> split_fields(std::string_view line) {
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = line.find(',', start);
-    fields.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+    fields.push_back(
+        trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
     if (comma == std::string_view::npos) {
       return fields;
     }
@@ -64,7 +65,10 @@ std::optional<NdtPoseRow> NdtCsvParser::parse_line(std::string_view raw) {
   if (columns_ == 0) {
     std::string header;
     for (std::size_t i = 0; i < fields.size(); ++i) {
-      header += (i ? "," : "") + std::string(fields[i]);
+      if (i > 0) {
+        header += ',';
+      }
+      header.append(fields[i]);
     }
     if (header == kShortHeader || header == kLongHeader) {
       columns_ = fields.size();

@@ -18,6 +18,15 @@ namespace rsu::vehicle_client {
 struct PoseFuserConfig {
   // reference_offset must equal the one announced to the RSU (corrections give the box centre).
   fusion::VehicleEkfConfig ekf;
+  // Divergence recovery. The gate protects the pose from a bad RSU fix, but it also locks out good fixes
+  // once the filter itself has drifted (NDT in a featureless street claims 0.15 m while it is metres
+  // off). When `reanchor_after` RSU fixes in a row fail the gate yet agree with each other (each within
+  // `reanchor_agreement_m` of the previous one carried forward with the filter's own speed and yaw), the
+  // filter is the one that is wrong: it is re-initialised at the latest fix. An off-by-90 deg box fails
+  // the yaw-branch test instead and never counts.
+  int reanchor_after = 3;
+  double reanchor_agreement_m = 0.3;
+  TimeNs reanchor_max_gap = 500'000'000;  // fixes farther apart do not form a run
 };
 
 // Decisions at arrival, per source. A late measurement can change the decision about later ones when
@@ -31,6 +40,7 @@ struct PoseFuserStats {
   std::uint64_t rsu_rejected_other = 0;       // too old, before any NDT pose, invalid
   std::uint64_t late = 0;                     // arrived older than the newest fused measurement
   std::uint64_t reapplied = 0;                // later measurement updates redone because of a late one
+  std::uint64_t rsu_reanchors = 0;            // filter re-initialised at a run of agreeing RSU fixes
 
   std::uint64_t rsu_rejected_by_gate() const { return rsu_rejected_gate + rsu_rejected_yaw_branch; }
 };
@@ -53,8 +63,14 @@ class PoseFuser {
   const fusion::EkfStats& ekf_stats() const { return ekf_.stats(); }
 
  private:
+  // Re-initialises the filter at `correction` when it completes a run of agreeing, gate-rejected fixes.
+  void track_rejected_fix(const v2i::Correction& correction);
+
+  PoseFuserConfig config_;
   fusion::VehicleEkf ekf_;
   PoseFuserStats stats_;
+  std::optional<v2i::Correction> last_rejected_;
+  int rejected_run_ = 0;
 };
 
 }  // namespace rsu::vehicle_client

@@ -1,10 +1,10 @@
 #include "vehicle_client/vehicle_client.h"
 
+#include <array>
 #include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
-#include <array>
 #include <chrono>
 #include <deque>
 #include <mutex>
@@ -53,8 +53,8 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
     for (const std::string& text : config_.rsu_endpoints) {
       rsus_.push_back(parse_udp_endpoint(text));
       if (rsus_.back().protocol() != rsus_.front().protocol()) {
-        throw std::invalid_argument("RSU endpoints mix IPv4 and IPv6: " + config_.rsu_endpoints.front() + ", " +
-                                    text);
+        throw std::invalid_argument("RSU endpoints mix IPv4 and IPv6: " + config_.rsu_endpoints.front() +
+                                    ", " + text);
       }
     }
     udp::endpoint bind_to(rsus_.front().protocol(), config_.bind_port);
@@ -70,6 +70,9 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
     }
     socket_.open(bind_to.protocol());
     socket_.bind(bind_to);
+    // Sends are synchronous on the io thread: non-blocking, so a full send buffer drops (and counts) a
+    // datagram instead of stalling the receive side.
+    socket_.non_blocking(true);
     local_ = socket_.local_endpoint();
     for (const udp::endpoint& rsu : rsus_) {
       reply_addresses_.push_back(reply_address_for(rsu));
@@ -211,8 +214,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
       std::uint64_t failed = 0;
       for (const Outgoing& o : outgoing) {
         boost::system::error_code ec;
-        // A UDP send on a non-full socket buffer does not block; a full one means the link is down and
-        // the datagram may as well be lost.
+        // A full send buffer (would_block) means the link is down: that datagram is lost, and counted.
         self->socket_.send_to(asio::buffer(o.bytes), o.destination, 0, ec);
         ec ? ++failed : ++sent;
       }
@@ -297,7 +299,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
   }
 
   asio::strand<asio::io_context::executor_type> strand_;
-  udp::socket socket_;        // used on strand_ only
+  udp::socket socket_;            // used on strand_ only
   asio::steady_timer keepalive_;  // used on strand_ only
   const VehicleClientConfig config_;
   const Clock clock_;
@@ -325,18 +327,34 @@ VehicleClient::VehicleClient(asio::io_context& io, const VehicleClientConfig& co
   impl_->start();
 }
 
-VehicleClient::~VehicleClient() { impl_->stop(); }
+VehicleClient::~VehicleClient() {
+  impl_->stop();
+}
 
-v2i::AnnouncementReason VehicleClient::announce(const VehicleState& state) { return impl_->announce(state); }
-std::vector<ReceivedCorrection> VehicleClient::poll() { return impl_->poll(); }
+v2i::AnnouncementReason VehicleClient::announce(const VehicleState& state) {
+  return impl_->announce(state);
+}
+std::vector<ReceivedCorrection> VehicleClient::poll() {
+  return impl_->poll();
+}
 void VehicleClient::set_correction_callback(CorrectionCallback callback) {
   impl_->set_callback(std::move(callback));
 }
-VehicleClientStats VehicleClient::stats() const { return impl_->stats(); }
-udp::endpoint VehicleClient::local_endpoint() const { return impl_->local_endpoint(); }
-const std::vector<udp::endpoint>& VehicleClient::rsu_endpoints() const { return impl_->rsu_endpoints(); }
-std::uint32_t VehicleClient::next_sequence() const { return impl_->next_sequence(); }
-void VehicleClient::stop() { impl_->stop(); }
+VehicleClientStats VehicleClient::stats() const {
+  return impl_->stats();
+}
+udp::endpoint VehicleClient::local_endpoint() const {
+  return impl_->local_endpoint();
+}
+const std::vector<udp::endpoint>& VehicleClient::rsu_endpoints() const {
+  return impl_->rsu_endpoints();
+}
+std::uint32_t VehicleClient::next_sequence() const {
+  return impl_->next_sequence();
+}
+void VehicleClient::stop() {
+  impl_->stop();
+}
 
 struct ThreadedVehicleClient::Loop {
   asio::io_context io;

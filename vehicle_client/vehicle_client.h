@@ -73,7 +73,7 @@ class VehicleClient {
   // Announces the state to every RSU now (the send runs on the io_context) and keeps it for the
   // keep-alive. Returns kValid when queued; otherwise the reason the announcement would be refused by
   // an RSU (NaN, bad covariance, absurd size, ...), and nothing is sent. The generation time is not
-  // checked against the clock: the RSU judges age.
+  // checked against the clock: the RSU judges age. After stop() it sends nothing and returns kValid.
   v2i::AnnouncementReason announce(const VehicleState& state);
 
   // Corrections accepted since the last call, oldest first.
@@ -106,6 +106,7 @@ class ThreadedVehicleClient {
   ThreadedVehicleClient& operator=(const ThreadedVehicleClient&) = delete;
 
   VehicleClient& client() { return *client_; }
+  const VehicleClient& client() const { return *client_; }
 
  private:
   struct Loop;

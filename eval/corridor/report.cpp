@@ -64,9 +64,14 @@ std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, c
   const std::size_t ct = t.column("time_ns", path), cx = t.column("x", path), cy = t.column("y", path),
                     cyaw = t.column("yaw", path);
   const sim::Vehicle& vehicle = vehicle_of(config);
+  // The fused output (rsu-vehicle) has a row after each NDT pose and after each correction: score the
+  // ones at the NDT poses' times, so that fused and NDT are compared frame for frame.
+  const auto source_it = std::find(t.header.begin(), t.header.end(), "source");
+  const auto source_col = static_cast<std::size_t>(source_it - t.header.begin());
   std::vector<ScoredEstimate> out;
   for (const auto& row : t.rows) {
     if (row.size() <= std::max({ct, cx, cy, cyaw})) continue;
+    if (source_it != t.header.end() && (row.size() <= source_col || row[source_col] != "ndt")) continue;
     ScoredEstimate e;
     e.time_ns = std::stoll(row[ct]) - epoch_ns;
     const Pose2 truth = sim::pose_at(vehicle.trajectory, e.time_ns);

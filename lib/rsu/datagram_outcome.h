@@ -30,7 +30,7 @@ struct DatagramOutcome {
   v2i::DecodeStatus decode = v2i::DecodeStatus::kOk;
   v2i::AnnouncementReason validation = v2i::AnnouncementReason::kValid;
   v2i::UpsertOutcome upsert = v2i::UpsertOutcome::kCount;  // kCount: the registry was not reached
-  std::uint64_t vehicle_id = 0;                             // when decoded as an announcement
+  std::uint64_t vehicle_id = 0;                            // when decoded as an announcement
 
   bool accepted() const { return stage == DatagramStage::kAccepted; }
   // "stage" or "stage:detail", e.g. "decode:parse_error", "validation:length_out_of_range": a stable

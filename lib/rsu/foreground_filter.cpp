@@ -5,7 +5,8 @@ namespace rsu::core {
 using perception::BackgroundMethod;
 using perception::PointClass;
 
-ForegroundFilter::ForegroundFilter(const perception::PerceptionConfig& config, const Eigen::Vector2d& lidar_xy)
+ForegroundFilter::ForegroundFilter(const perception::PerceptionConfig& config,
+                                   const Eigen::Vector2d& lidar_xy)
     : config_(config), ground_(config.ground), range_image_(lidar_xy, config.range_image) {}
 
 void ForegroundFilter::add_background_frame(std::span<const LidarPoint> points) {

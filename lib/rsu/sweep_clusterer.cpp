@@ -33,9 +33,11 @@ SweepClusterer::SweepClusterer(const SweepConfig& config, const perception::Clus
   if (!(rotation_hz > 0.0) || !std::isfinite(rotation_hz)) {
     throw std::invalid_argument("SweepClusterer: rotation rate must be finite and > 0");
   }
-  if (!std::isfinite(azimuth_spread_rad) || azimuth_spread_rad < 0.0 || !std::isfinite(config.release_margin_deg) ||
-      config.release_margin_deg < 0.0 || !(config.max_gap_rotations > 0.0) || !lidar_xy.allFinite()) {
-    throw std::invalid_argument("SweepClusterer: spread, margin, gap and LiDAR position must be finite, >= 0");
+  if (!std::isfinite(azimuth_spread_rad) || azimuth_spread_rad < 0.0 ||
+      !std::isfinite(config.release_margin_deg) || config.release_margin_deg < 0.0 ||
+      !(config.max_gap_rotations > 0.0) || !lidar_xy.allFinite()) {
+    throw std::invalid_argument(
+        "SweepClusterer: spread, margin, gap and LiDAR position must be finite, >= 0");
   }
   clustering_.min_points = 1;  // every component is returned so that noise can be released (and dropped)
   clustering_.max_points = std::numeric_limits<std::size_t>::max();
@@ -87,7 +89,8 @@ void SweepClusterer::add(const LidarPoint& p, bool foreground) {
   }
   points_.push_back(p);
   azimuth_.push_back(u);
-  range_.push_back(std::hypot(static_cast<double>(p.x) - lidar_xy_.x(), static_cast<double>(p.y) - lidar_xy_.y()));
+  range_.push_back(
+      std::hypot(static_cast<double>(p.x) - lidar_xy_.x(), static_cast<double>(p.y) - lidar_xy_.y()));
 }
 
 void SweepClusterer::drop_stale() {
@@ -108,9 +111,13 @@ void SweepClusterer::drop_stale() {
   range_.resize(keep);
 }
 
-std::vector<SweptCluster> SweepClusterer::release_closed() { return release(false); }
+std::vector<SweptCluster> SweepClusterer::release_closed() {
+  return release(false);
+}
 
-std::vector<SweptCluster> SweepClusterer::release_all() { return release(true); }
+std::vector<SweptCluster> SweepClusterer::release_all() {
+  return release(true);
+}
 
 std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   std::vector<SweptCluster> out;
@@ -144,7 +151,9 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
       s.max_u = std::max(s.max_u, azimuth_[i]);
       if (s.closed && !everything) {
         const double behind = a_future - azimuth_[i];
-        const double distance = behind <= 0.0 ? 0.0 : behind >= kPi / 2.0 ? range_[i] : range_[i] * std::sin(behind);
+        const double distance = behind <= 0.0         ? 0.0
+                                : behind >= kPi / 2.0 ? range_[i]
+                                                      : range_[i] * std::sin(behind);
         s.closed = distance > tolerance;
       }
     }
@@ -157,7 +166,8 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     }
     bool overlaps_open = false;
     for (std::size_t o = 0; o < components.clusters.size() && !overlaps_open; ++o) {
-      overlaps_open = !state[o].closed && state[o].min_u <= state[c].max_u && state[o].max_u >= state[c].min_u;
+      overlaps_open =
+          !state[o].closed && state[o].min_u <= state[c].max_u && state[o].max_u >= state[c].min_u;
     }
     if (overlaps_open) {
       continue;

@@ -48,12 +48,12 @@ struct SweepClustererStats {
   std::uint64_t points_seen = 0;
   std::uint64_t foreground_points = 0;
   std::uint64_t clusters_released = 0;
-  std::uint64_t clusters_dropped_small = 0;  // fewer than ClusteringConfig::min_points (noise)
-  std::uint64_t clusters_dropped_large = 0;  // more than max_points (e.g. a wall, no background yet)
-  std::uint64_t points_dropped_stale = 0;    // pending for half a rotation (see file comment)
-  std::uint64_t points_dropped_overflow = 0; // over SweepConfig::max_pending_points
-  std::uint64_t points_dropped_restart = 0;  // pending when the stream restarted
-  std::uint64_t invalid_points = 0;          // non-finite coordinates, azimuth or time
+  std::uint64_t clusters_dropped_small = 0;   // fewer than ClusteringConfig::min_points (noise)
+  std::uint64_t clusters_dropped_large = 0;   // more than max_points (e.g. a wall, no background yet)
+  std::uint64_t points_dropped_stale = 0;     // pending for half a rotation (see file comment)
+  std::uint64_t points_dropped_overflow = 0;  // over SweepConfig::max_pending_points
+  std::uint64_t points_dropped_restart = 0;   // pending when the stream restarted
+  std::uint64_t invalid_points = 0;           // non-finite coordinates, azimuth or time
   std::uint64_t restarts = 0;
 };
 

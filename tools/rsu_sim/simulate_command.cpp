@@ -16,6 +16,7 @@
 #include "sim/scenario.h"
 #include "sim/trajectory.h"
 #include "tools/rsu_sim/commands.h"
+#include "tools/rsu_sim/scenario_options.h"
 
 namespace rsu::tools {
 namespace po = boost::program_options;
@@ -73,7 +74,8 @@ int run_simulate(const std::vector<std::string>& args) {
   options.add_options()("help,h", "show this help")(
       "out,o", po::value<std::string>()->default_value("out/sim"), "output folder")(
       "frames,n", po::value<int>(), "number of frames (default: the scenario's simulation.frames)")(
-      "no-pcd", "do not write PCD frames")("scenario", po::value<std::string>(), "scenario YAML file");
+      "no-pcd", "do not write PCD frames");
+  add_scenario_options(options);
   po::positional_options_description positional;
   positional.add("scenario", 1);
   po::variables_map vm;
@@ -87,9 +89,8 @@ int run_simulate(const std::vector<std::string>& args) {
               << "  topdown_*.csv      data of the top-down picture of the middle frame (eval/plots/topdown.py)\n";
     return 0;
   }
-  if (!vm.count("scenario")) throw std::runtime_error("simulate: a scenario file is required (see --help)");
 
-  const sim::Scenario scenario = sim::load_scenario_file(vm["scenario"].as<std::string>());
+  const sim::Scenario scenario = load_scenario(vm);
   const int frames = vm.count("frames") ? vm["frames"].as<int>() : scenario.frames;
   if (frames < 1 || frames > 100000) throw std::runtime_error("simulate: --frames must be within [1, 100000]");
   const std::filesystem::path out_dir = vm["out"].as<std::string>();

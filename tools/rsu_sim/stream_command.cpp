@@ -16,6 +16,7 @@
 #include "sim/lidar_simulator.h"
 #include "sim/scenario.h"
 #include "tools/rsu_sim/commands.h"
+#include "tools/rsu_sim/scenario_options.h"
 
 namespace rsu::tools {
 namespace po = boost::program_options;
@@ -52,8 +53,8 @@ int run_stream(const std::vector<std::string>& args) {
       "packet time base: sim (scenario time) or wall (shifted to the host clock at start)")(
       "epoch-ns", po::value<long long>(),
       "host-clock time (ns since the Unix epoch) of scenario time 0: packets carry scenario time + epoch and "
-      "are paced against the host clock, so that other processes given the same epoch share the clock")(
-      "scenario", po::value<std::string>(), "scenario YAML file");
+      "are paced against the host clock, so that other processes given the same epoch share the clock");
+  add_scenario_options(options);
   po::positional_options_description positional;
   positional.add("scenario", 1);
   po::variables_map vm;
@@ -63,14 +64,13 @@ int run_stream(const std::vector<std::string>& args) {
     std::cout << options;
     return 0;
   }
-  if (!vm.count("scenario")) throw std::runtime_error("stream: a scenario file is required (see --help)");
   if (!vm.count("to")) throw std::runtime_error("stream: --to HOST:PORT is required");
   const std::string clock = vm["clock"].as<std::string>();
   if (clock != "sim" && clock != "wall") throw std::runtime_error("stream: --clock must be sim or wall");
   const double seconds = vm["seconds"].as<double>();
   if (!(seconds > 0 && seconds <= 86400)) throw std::runtime_error("stream: --seconds must be within (0, 86400]");
 
-  const sim::Scenario scenario = sim::load_scenario_file(vm["scenario"].as<std::string>());
+  const sim::Scenario scenario = load_scenario(vm);
   if (!scenario.lidar.model.has_packet_format())
     throw std::runtime_error("stream: LiDAR model " + scenario.lidar.model_name + " has no Velodyne packet format");
   const TimeNs sim_start = vm.count("start") ? from_seconds(vm["start"].as<double>()) : scenario.start_ns;

@@ -1,0 +1,327 @@
+#include "daemon/config.h"
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "common/angles.h"
+#include "io/yaml_field.h"
+#include "lidar/sensor_model.h"
+
+namespace rsu::daemon {
+
+namespace {
+
+using io::YamlField;
+
+std::uint16_t port_of(const YamlField& f) {
+  const double v = f.number();
+  if (v < 1 || v > 65535 || v != std::floor(v))
+    f.fail("must be a port number within [1, 65535]");
+  return static_cast<std::uint16_t>(v);
+}
+
+std::uint64_t unsigned_of(const YamlField& f, double max) {
+  const double v = f.number();
+  if (v < 0 || v > max || v != std::floor(v))
+    f.fail("must be a whole number within [0, " + std::to_string(max) + "]");
+  return static_cast<std::uint64_t>(v);
+}
+
+std::string address_of(const YamlField& f) {
+  const std::string text = f.text();
+  if (text.empty())
+    f.fail("expected an IP address");
+  return text;  // checked when the socket is made (Asio's parser) and by --check-config
+}
+
+std::string path_of(const YamlField& f, const std::filesystem::path& base) {
+  const std::filesystem::path p = f.text();
+  if (p.empty())
+    f.fail("expected a file path");
+  return (p.is_absolute() ? p : base / p).lexically_normal().string();
+}
+
+Pose3 read_mount(const YamlField& f) {
+  f.expect_map({"x", "y", "z", "roll_deg", "pitch_deg", "yaw_deg"});
+  Pose3 p;
+  p.x = f.required("x").number();
+  p.y = f.required("y").number();
+  p.z = f.required("z").number();
+  p.roll = f.angle_deg_or("roll_deg", 0.0);
+  p.pitch = f.angle_deg_or("pitch_deg", 0.0);
+  p.yaw = f.angle_deg_or("yaw_deg", 0.0);
+  return p;
+}
+
+LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
+  f.expect_map({"velodyne_udp", "pcd", "simulator"});
+  const int kinds = int{f.has("velodyne_udp")} + int{f.has("pcd")} + int{f.has("simulator")};
+  if (kinds != 1)
+    f.fail("exactly one of velodyne_udp, pcd, simulator is required");
+  if (f.has("velodyne_udp")) {
+    const YamlField u = f.child("velodyne_udp");
+    u.expect_map({"bind_address", "port"});
+    VelodyneUdpInput in;
+    if (u.has("bind_address"))
+      in.bind_address = address_of(u.child("bind_address"));
+    if (u.has("port"))
+      in.port = port_of(u.child("port"));
+    return in;
+  }
+  if (f.has("pcd")) {
+    const YamlField p = f.child("pcd");
+    p.expect_map({"files", "rate_hz"});
+    PcdInput in;
+    for (const YamlField& file : p.required("files").items())
+      in.files.push_back(path_of(file, base));
+    if (in.files.empty())
+      p.child("files").fail("needs at least one file");
+    in.rate_hz = p.positive_or("rate_hz", in.rate_hz);
+    if (in.rate_hz > 100)
+      p.child("rate_hz").fail("must be <= 100 Hz");
+    return in;
+  }
+  const YamlField s = f.child("simulator");
+  s.expect_map({"scenario"});
+  return SimulatorInput{path_of(s.required("scenario"), base)};
+}
+
+void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
+  f.expect_map({"model", "mount", "input"});
+  const YamlField model = f.required("model");
+  c.core.sensor_model = model.text();
+  const auto resolved = sensor_model_by_name(c.core.sensor_model);
+  if (!resolved || !resolved->has_packet_format())
+    model.fail("unknown LiDAR model \"" + c.core.sensor_model + "\" (expected vlp16 or vlp32c)");
+  c.core.mount = read_mount(f.required("mount"));
+  c.input = read_input(f.required("input"), base);
+}
+
+void read_background(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
+  f.expect_map({"learning_frames", "pcd_files"});
+  if (f.has("learning_frames"))
+    c.core.background.learning_frames = static_cast<int>(unsigned_of(f.child("learning_frames"), 10000));
+  if (f.has("pcd_files")) {
+    for (const YamlField& file : f.child("pcd_files").items())
+      c.background_pcd_files.push_back(path_of(file, base));
+  }
+}
+
+void read_perception(const YamlField& f, DaemonConfig& c) {
+  f.expect_map({"background_method", "ground_z", "ground_min_height_m", "range_image_margin_m",
+                "reference_match_radius_m", "cluster_tolerance_m", "cluster_min_points", "cluster_max_points",
+                "correction", "coverage_radius_m", "release_margin_deg"});
+  auto& p = c.core.perception;
+  if (f.has("background_method")) {
+    const YamlField m = f.child("background_method");
+    const std::string v = m.text();
+    if (v == "range_image")
+      p.background = perception::BackgroundMethod::range_image;
+    else if (v == "reference_frame")
+      p.background = perception::BackgroundMethod::reference_frame;
+    else if (v == "ground_height")
+      p.background = perception::BackgroundMethod::ground_height;
+    else
+      m.fail("expected range_image, reference_frame or ground_height, got \"" + v + "\"");
+  }
+  p.ground.ground_z = f.number_or("ground_z", p.ground.ground_z);
+  p.ground.min_height = f.non_negative_or("ground_min_height_m", p.ground.min_height);
+  p.range_image.margin_m = f.non_negative_or("range_image_margin_m", p.range_image.margin_m);
+  p.reference_frame.match_radius_m =
+      f.positive_or("reference_match_radius_m", p.reference_frame.match_radius_m);
+  p.clustering.tolerance_m = f.positive_or("cluster_tolerance_m", p.clustering.tolerance_m);
+  if (p.clustering.tolerance_m > 5)
+    f.child("cluster_tolerance_m").fail("must be <= 5 m");
+  if (f.has("cluster_min_points"))
+    p.clustering.min_points = unsigned_of(f.child("cluster_min_points"), 1e6);
+  if (f.has("cluster_max_points"))
+    p.clustering.max_points = unsigned_of(f.child("cluster_max_points"), 1e7);
+  if (p.clustering.min_points < 3)
+    f.child("cluster_min_points").fail("must be >= 3 (a rectangle needs 3 points)");
+  if (p.clustering.max_points < p.clustering.min_points)
+    f.child("cluster_max_points").fail("must be >= cluster_min_points");
+  if (f.has("correction")) {
+    const YamlField m = f.child("correction");
+    const std::string v = m.text();
+    if (v == "improved")
+      p.correction_method = perception::CorrectionMethod::improved;
+    else if (v == "algorithm1")
+      p.correction_method = perception::CorrectionMethod::algorithm1;
+    else
+      m.fail("expected improved or algorithm1, got \"" + v + "\"");
+  }
+  c.core.coverage_radius_m = f.positive_or("coverage_radius_m", c.core.coverage_radius_m);
+  c.core.sweep.release_margin_deg = f.non_negative_or("release_margin_deg", c.core.sweep.release_margin_deg);
+  if (c.core.sweep.release_margin_deg > 30)
+    f.child("release_margin_deg").fail("must be <= 30 deg");
+}
+
+void read_v2i(const YamlField& f, DaemonConfig& c) {
+  f.expect_map({"listen_address", "port", "require_reply_to_source_address", "advertisement"});
+  if (f.has("listen_address"))
+    c.v2i_listen_address = address_of(f.child("listen_address"));
+  if (f.has("port"))
+    c.v2i_port = port_of(f.child("port"));
+  if (f.has("require_reply_to_source_address")) {
+    const YamlField b = f.child("require_reply_to_source_address");
+    const std::string v = b.text();
+    if (v != "true" && v != "false")
+      b.fail("expected true or false");
+    c.core.require_reply_to_source_address = v == "true";
+  }
+  if (f.has("advertisement")) {
+    const YamlField a = f.child("advertisement");
+    a.expect_map({"enabled", "address", "port", "interval_s"});
+    if (a.has("enabled")) {
+      const std::string v = a.child("enabled").text();
+      if (v != "true" && v != "false")
+        a.child("enabled").fail("expected true or false");
+      c.advertisement.enabled = v == "true";
+    }
+    if (a.has("address"))
+      c.advertisement.address = address_of(a.child("address"));
+    if (a.has("port"))
+      c.advertisement.port = port_of(a.child("port"));
+    c.advertisement.interval_s = a.positive_or("interval_s", c.advertisement.interval_s);
+  }
+  c.core.announcement_port = c.v2i_port;
+  c.core.correction_port = c.v2i_port;  // corrections leave from the announcement socket
+}
+
+void read_registry(const YamlField& f, DaemonConfig& c) {
+  f.expect_map({"capacity", "silence_timeout_s", "rate_per_s", "burst", "max_sources"});
+  auto& r = c.core.registry;
+  if (f.has("capacity"))
+    r.capacity = unsigned_of(f.child("capacity"), 1e6);
+  if (r.capacity == 0)
+    f.child("capacity").fail("must be >= 1");
+  r.silence_timeout = from_seconds(f.positive_or("silence_timeout_s", to_seconds(r.silence_timeout)));
+  r.rate_limit.bucket.rate_per_s = f.positive_or("rate_per_s", r.rate_limit.bucket.rate_per_s);
+  r.rate_limit.bucket.burst = f.positive_or("burst", r.rate_limit.bucket.burst);
+  if (r.rate_limit.bucket.burst < 1)
+    f.child("burst").fail("must be >= 1");
+  if (f.has("max_sources"))
+    r.rate_limit.max_sources = unsigned_of(f.child("max_sources"), 1e7);
+}
+
+void read_flood(const YamlField& f, DaemonConfig& c) {
+  f.expect_map({"rate_per_s", "burst", "max_sources"});
+  auto& l = c.core.datagram_flood;
+  l.bucket.rate_per_s = f.positive_or("rate_per_s", l.bucket.rate_per_s);
+  l.bucket.burst = f.positive_or("burst", l.bucket.burst);
+  if (l.bucket.burst < 1)
+    f.child("burst").fail("must be >= 1");
+  if (f.has("max_sources"))
+    l.max_sources = unsigned_of(f.child("max_sources"), 1e7);
+}
+
+void read_association(const YamlField& f, DaemonConfig& c) {
+  f.expect_map({"gate_chi2", "fit_sigma_floor_m", "size_relative_tolerance", "size_absolute_tolerance_m"});
+  auto& a = c.core.association;
+  a.gate_chi2 = f.positive_or("gate_chi2", a.gate_chi2);
+  a.fit_sigma_floor_m = f.positive_or("fit_sigma_floor_m", a.fit_sigma_floor_m);
+  a.size_relative_tolerance = f.non_negative_or("size_relative_tolerance", a.size_relative_tolerance);
+  a.size_absolute_tolerance_m = f.non_negative_or("size_absolute_tolerance_m", a.size_absolute_tolerance_m);
+}
+
+void read_logging(const YamlField& f, DaemonConfig& c) {
+  f.expect_map({"level", "bad_input_log_first", "summary_interval_s", "stats_interval_s", "stats_file"});
+  if (f.has("level")) {
+    const YamlField l = f.child("level");
+    const std::string v = l.text();
+    if (v != "trace" && v != "debug" && v != "info" && v != "warn" && v != "error") {
+      l.fail("expected trace, debug, info, warn or error, got \"" + v + "\"");
+    }
+    c.logging.level = v;
+  }
+  if (f.has("bad_input_log_first"))
+    c.logging.bad_input_log_first = static_cast<int>(unsigned_of(f.child("bad_input_log_first"), 1000));
+  c.logging.summary_interval_s = f.positive_or("summary_interval_s", c.logging.summary_interval_s);
+  c.logging.stats_interval_s = f.non_negative_or("stats_interval_s", c.logging.stats_interval_s);
+  if (f.has("stats_file"))
+    c.stats_file = f.child("stats_file").text();
+}
+
+}  // namespace
+
+DaemonConfig parse_config(const std::string& yaml_text, const std::string& source_name) {
+  DaemonConfig c;
+  c.source = source_name;
+  const std::filesystem::path base = std::filesystem::path(source_name).parent_path();
+  try {
+    const YAML::Node root = io::parse_yaml(yaml_text, source_name);
+    const YamlField f(root, "", c.source, 1);
+    f.expect_map({"rsu_id", "lidar", "background", "perception", "v2i", "registry", "flood_limit",
+                  "association", "logging"});
+    c.core.rsu_id = unsigned_of(f.required("rsu_id"), 9.007e15);
+    if (c.core.rsu_id == 0)
+      f.child("rsu_id").fail("must be non-zero");
+    read_lidar(f.required("lidar"), c, base);
+    if (f.has("background"))
+      read_background(f.child("background"), c, base);
+    if (f.has("perception"))
+      read_perception(f.child("perception"), c);
+    if (f.has("v2i"))
+      read_v2i(f.child("v2i"), c);
+    else
+      c.core.announcement_port = c.core.correction_port = c.v2i_port;
+    if (f.has("registry"))
+      read_registry(f.child("registry"), c);
+    if (f.has("flood_limit"))
+      read_flood(f.child("flood_limit"), c);
+    if (f.has("association"))
+      read_association(f.child("association"), c);
+    if (f.has("logging"))
+      read_logging(f.child("logging"), c);
+  } catch (const io::YamlError& e) {
+    throw ConfigError(e.what());
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source_name + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  return c;
+}
+
+DaemonConfig load_config(const std::string& path) {
+  std::string text;
+  try {
+    text = io::read_text_file(path);
+  } catch (const io::YamlError& e) {
+    throw ConfigError(e.what());
+  }
+  return parse_config(text, path);
+}
+
+std::string summarize(const DaemonConfig& c) {
+  std::ostringstream out;
+  const Pose3& m = c.core.mount;
+  out << "rsu_id " << c.core.rsu_id << "\n";
+  out << "lidar " << c.core.sensor_model << " at (" << m.x << ", " << m.y << ", " << m.z << ") m, yaw "
+      << rad_to_deg(m.yaw) << " deg, pitch " << rad_to_deg(m.pitch) << " deg, roll " << rad_to_deg(m.roll)
+      << " deg\n";
+  if (const auto* u = std::get_if<VelodyneUdpInput>(&c.input)) {
+    out << "input velodyne_udp " << u->bind_address << ":" << u->port << "\n";
+  } else if (const auto* p = std::get_if<PcdInput>(&c.input)) {
+    out << "input pcd " << p->files.size() << " file(s) at " << p->rate_hz << " Hz\n";
+  } else if (const auto* s = std::get_if<SimulatorInput>(&c.input)) {
+    out << "input simulator " << s->scenario << "\n";
+  }
+  if (c.background_pcd_files.empty()) {
+    out << "background learned from the first " << c.core.background.learning_frames << " rotations\n";
+  } else {
+    out << "background from " << c.background_pcd_files.size() << " PCD file(s)\n";
+  }
+  out << "v2i announcements on " << c.v2i_listen_address << ":" << c.v2i_port << ", corrections within "
+      << c.core.coverage_radius_m << " m\n";
+  out << "registry capacity " << c.core.registry.capacity << ", expiry "
+      << to_seconds(c.core.registry.silence_timeout) << " s, " << c.core.registry.rate_limit.bucket.rate_per_s
+      << " announcements/s per source\n";
+  if (c.advertisement.enabled) {
+    out << "advertisement to " << c.advertisement.address << ":" << c.advertisement.port << " every "
+        << c.advertisement.interval_s << " s\n";
+  }
+  out << "log level " << c.logging.level << "\n";
+  return out.str();
+}
+
+}  // namespace rsu::daemon

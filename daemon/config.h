@@ -1,0 +1,80 @@
+// rsud's configuration file (YAML; deploy/rsud.yaml is the annotated example). Read through
+// io::YamlField, so every error names the file, the line and the field, e.g.
+//   /etc/rsud/rsud.yaml:14: lidar.mount.z: expected a number, got "two"
+// Unknown keys are errors: a misspelt key silently falling back to a default is the worst kind of bug
+// in a daemon's configuration.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "rsu/rsu_core_config.h"
+
+namespace rsu::daemon {
+
+struct VelodyneUdpInput {
+  std::string bind_address = "0.0.0.0";
+  std::uint16_t port = 2368;  // DESIGN.md §2: the Velodyne data port
+};
+
+// Whole frames read from PCD files (sensor frame, as `rsu-sim simulate` writes them), replayed in a
+// loop at rate_hz with their point times moved to the host clock.
+struct PcdInput {
+  std::vector<std::string> files;
+  double rate_hz = 10.0;
+};
+
+// The scenario's simulated LiDAR (sim/), packet by packet at real time, on the host clock.
+struct SimulatorInput {
+  std::string scenario;
+};
+
+using LidarInput = std::variant<VelodyneUdpInput, PcdInput, SimulatorInput>;
+
+struct AdvertisementConfig {
+  bool enabled = false;
+  std::string address = "255.255.255.255";  // where RsuAdvertisement datagrams go (broadcast allowed)
+  std::uint16_t port = 4501;
+  double interval_s = 1.0;
+};
+
+struct LoggingConfig {
+  std::string level = "info";  // trace, debug, info, warn, error
+  // Bad input: the first `bad_input_log_first` of each reason are logged one by one, then a summary of
+  // the counts every `summary_interval_s` while more arrive.
+  int bad_input_log_first = 5;
+  double summary_interval_s = 10.0;
+  double stats_interval_s = 60.0;  // all counters at info level; 0 disables
+};
+
+struct DaemonConfig {
+  std::string source;  // the file it was read from
+  core::RsuCoreConfig core;
+  LidarInput input;
+  std::vector<std::string> background_pcd_files;  // when set: the background, instead of learning
+  std::string v2i_listen_address = "0.0.0.0";
+  std::uint16_t v2i_port = 4500;
+  AdvertisementConfig advertisement;
+  LoggingConfig logging;
+  // Where --stats-file style snapshots go: empty disables. Written on every stats interval and on exit.
+  std::string stats_file;
+};
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Throws ConfigError "<source>:<line>: <field>: <what is wrong>" (or the core's complaint about an
+// unusable combination, e.g. an unknown LiDAR model). Relative paths in the file (PCD files, scenario)
+// are taken relative to the file's folder.
+DaemonConfig parse_config(const std::string& yaml_text, const std::string& source_name);
+DaemonConfig load_config(const std::string& path);
+
+// A few lines describing the configuration (for --check-config and the start-up log).
+std::string summarize(const DaemonConfig& config);
+
+}  // namespace rsu::daemon

@@ -1,0 +1,122 @@
+// rsud: the roadside-unit daemon. Localizes announced connected vehicles with the roadside LiDAR and
+// sends them corrections (DESIGN.md §1, issue #4). See --help; deploy/ holds the systemd unit and an
+// example configuration.
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
+
+#include <spdlog/spdlog.h>
+#include <boost/asio.hpp>
+#include <boost/program_options.hpp>
+
+#include <exception>
+#include <filesystem>
+#include <iostream>
+#include <variant>
+
+#include "daemon/config.h"
+#include "daemon/logging.h"
+#include "daemon/rsu_daemon.h"
+#include "rsu/rsu_core.h"
+#include "sim/scenario.h"
+
+#ifndef RSUD_VERSION
+#define RSUD_VERSION "unknown"
+#endif
+
+namespace {
+
+namespace po = boost::program_options;
+
+// Everything --check-config can verify without binding sockets: the file, the combination (RsuCore
+// accepts it), the addresses and that the files it names exist.
+void check_config(const rsu::daemon::DaemonConfig& config) {
+  const rsu::core::RsuCore core(config.core);  // throws std::invalid_argument when unusable
+  boost::system::error_code ec;
+  auto check_address = [&](const std::string& text, const std::string& field) {
+    boost::asio::ip::make_address(text, ec);
+    if (ec)
+      throw std::runtime_error(config.source + ": " + field + ": \"" + text + "\" is not an IP address");
+  };
+  check_address(config.v2i_listen_address, "v2i.listen_address");
+  if (config.advertisement.enabled)
+    check_address(config.advertisement.address, "v2i.advertisement.address");
+  auto check_file = [&](const std::string& path, const std::string& field) {
+    if (!std::filesystem::is_regular_file(path)) {
+      throw std::runtime_error(config.source + ": " + field + ": no such file: " + path);
+    }
+  };
+  for (const auto& f : config.background_pcd_files)
+    check_file(f, "background.pcd_files");
+  if (const auto* u = std::get_if<rsu::daemon::VelodyneUdpInput>(&config.input)) {
+    check_address(u->bind_address, "lidar.input.velodyne_udp.bind_address");
+  } else if (const auto* p = std::get_if<rsu::daemon::PcdInput>(&config.input)) {
+    for (const auto& f : p->files)
+      check_file(f, "lidar.input.pcd.files");
+  } else if (const auto* s = std::get_if<rsu::daemon::SimulatorInput>(&config.input)) {
+    check_file(s->scenario, "lidar.input.simulator.scenario");
+    rsu::sim::load_scenario_file(s->scenario);  // throws a located error
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  po::options_description options(
+      "rsud [options]\n\nRoadside-unit daemon: corrects announced vehicles' poses "
+      "with the roadside LiDAR.\n\nOptions");
+  options.add_options()("help,h", "show this help and exit")("version", "print the version and exit")(
+      "config,c", po::value<std::string>()->default_value("/etc/rsud/rsud.yaml"),
+      "configuration file (YAML)")(
+      "check-config", "parse and validate the configuration, print a summary, exit 0 (valid) or 1");
+  po::variables_map vm;
+  try {
+    po::store(po::parse_command_line(argc, argv, options), vm);
+    po::notify(vm);
+  } catch (const std::exception& e) {
+    std::cerr << "rsud: " << e.what() << "\n" << options;
+    return 2;
+  }
+  if (vm.count("help")) {
+    std::cout << options;
+    return 0;
+  }
+  if (vm.count("version")) {
+    std::cout << "rsud " << RSUD_VERSION << "\n";
+    return 0;
+  }
+  const std::string path = vm["config"].as<std::string>();
+
+  rsu::daemon::DaemonConfig config;
+  try {
+    config = rsu::daemon::load_config(path);
+    if (vm.count("check-config")) {
+      check_config(config);
+      std::cout << path << ": OK\n" << rsu::daemon::summarize(config);
+      return 0;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "rsud: configuration error: " << e.what() << "\n";
+    return 1;
+  }
+
+  rsu::daemon::setup_logging(config.logging.level);
+  spdlog::info("rsud {} starting with {}", RSUD_VERSION, path);
+  {
+    const std::string summary = rsu::daemon::summarize(config);
+    std::size_t start = 0;
+    while (start < summary.size()) {
+      const std::size_t end = summary.find('\n', start);
+      spdlog::info("  {}", summary.substr(start, end - start));
+      start = end == std::string::npos ? summary.size() : end + 1;
+    }
+  }
+  try {
+    boost::asio::io_context io;
+    rsu::daemon::RsuDaemon daemon(io, std::move(config), path);
+    daemon.start();
+    io.run();
+    return daemon.exit_code();
+  } catch (const std::exception& e) {
+    spdlog::critical("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,470 @@
+#include "daemon/rsu_daemon.h"
+
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "daemon/systemd_notify.h"
+#include "io/pcd_io.h"
+#include "lidar/velodyne_packet.h"
+#include "sim/lidar_simulator.h"
+#include "sim/scenario.h"
+
+namespace rsu::daemon {
+
+namespace asio = boost::asio;
+
+namespace {
+
+// The common clock (DESIGN.md §3): the host's real-time clock, GNSS/PTP-disciplined on a real RSU.
+TimeNs now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+asio::ip::address parse_address(const std::string& text, const char* what) {
+  boost::system::error_code ec;
+  const auto address = asio::ip::make_address(text, ec);
+  if (ec)
+    throw std::runtime_error(std::string(what) + ": \"" + text + "\" is not an IP address");
+  return address;
+}
+
+void bind_udp(asio::ip::udp::socket& socket, const asio::ip::udp::endpoint& endpoint, const char* what) {
+  boost::system::error_code ec;
+  socket.open(endpoint.protocol(), ec);
+  if (!ec)
+    socket.bind(endpoint, ec);
+  if (ec) {
+    throw std::runtime_error(std::string("cannot bind the ") + what + " socket to " +
+                             endpoint.address().to_string() + ":" + std::to_string(endpoint.port()) + ": " +
+                             ec.message());
+  }
+}
+
+std::chrono::steady_clock::duration seconds(double s) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+}
+
+}  // namespace
+
+RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, std::string config_path)
+    : io_(io),
+      config_(std::move(config)),
+      config_path_(std::move(config_path)),
+      core_(config_.core),
+      bad_input_(config_.logging.bad_input_log_first, seconds(config_.logging.summary_interval_s)),
+      v2i_socket_(io),
+      lidar_socket_(io),
+      signals_(io, SIGHUP, SIGTERM, SIGINT),
+      housekeeping_timer_(io),
+      watchdog_timer_(io),
+      advertise_timer_(io),
+      stats_timer_(io),
+      input_timer_(io) {}
+
+RsuDaemon::~RsuDaemon() = default;
+
+void RsuDaemon::start() {
+  const udp::endpoint v2i(parse_address(config_.v2i_listen_address, "v2i.listen_address"), config_.v2i_port);
+  bind_udp(v2i_socket_, v2i, "V2I");
+  // Room for bursts of announcements and packets while a cluster is being corrected.
+  boost::system::error_code ignored;
+  v2i_socket_.set_option(asio::socket_base::receive_buffer_size(1 << 20), ignored);
+  if (config_.advertisement.enabled)
+    v2i_socket_.set_option(asio::socket_base::broadcast(true), ignored);
+  spdlog::info("listening for V2I announcements on {}:{}", v2i.address().to_string(), v2i.port());
+
+  if (!config_.background_pcd_files.empty())
+    load_background_pcd();
+  start_input();
+
+  signals_.async_wait([this](const boost::system::error_code& ec, int signal_number) {
+    if (!ec)
+      on_signal(signal_number);
+  });
+  every(housekeeping_timer_, std::chrono::milliseconds(500), &RsuDaemon::on_housekeeping);
+  if (const auto interval = watchdog_ping_interval()) {
+    spdlog::info("systemd watchdog enabled: pinging every {} ms", interval->count() / 1000);
+    every(watchdog_timer_, *interval, &RsuDaemon::on_watchdog);
+  }
+  if (config_.advertisement.enabled) {
+    every(advertise_timer_, seconds(config_.advertisement.interval_s), &RsuDaemon::on_advertise);
+  }
+  if (config_.logging.stats_interval_s > 0) {
+    every(stats_timer_, seconds(config_.logging.stats_interval_s), &RsuDaemon::on_stats);
+  }
+  receive_v2i();
+  become_ready_if_possible();
+  if (!ready_) {
+    spdlog::info(
+        "learning the background from the first {} whole LiDAR rotations (no vehicles should be in view)",
+        config_.core.background.learning_frames);
+    notify_status("learning the background");
+  }
+}
+
+void RsuDaemon::become_ready_if_possible() {
+  if (ready_ || !core_.background_ready())
+    return;
+  ready_ = true;
+  notify_ready();
+  spdlog::info("ready: serving corrections (rsu_id {})", config_.core.rsu_id);
+}
+
+void RsuDaemon::every(asio::steady_timer& timer, steady::duration period, void (RsuDaemon::*tick)()) {
+  timer.expires_after(period);
+  timer.async_wait([this, &timer, period, tick](const boost::system::error_code& ec) {
+    if (ec || stopping_)
+      return;
+    (this->*tick)();
+    every(timer, period, tick);
+  });
+}
+
+// ---- LiDAR input ----------------------------------------------------------------------------------
+
+void RsuDaemon::start_input() {
+  if (const auto* u = std::get_if<VelodyneUdpInput>(&config_.input)) {
+    const udp::endpoint endpoint(parse_address(u->bind_address, "lidar.input.velodyne_udp.bind_address"),
+                                 u->port);
+    bind_udp(lidar_socket_, endpoint, "Velodyne");
+    boost::system::error_code ignored;
+    // ~1500 packets/s (VLP-32C): 4 MB holds over 2 s of them should the loop ever stall.
+    lidar_socket_.set_option(asio::socket_base::receive_buffer_size(4 << 20), ignored);
+    spdlog::info("receiving Velodyne {} packets on {}:{}", config_.core.sensor_model,
+                 endpoint.address().to_string(), endpoint.port());
+    receive_lidar();
+  } else if (const auto* p = std::get_if<PcdInput>(&config_.input)) {
+    for (const std::string& file : p->files) {
+      try {
+        pcd_frames_.push_back(io::read_pcd(file));
+      } catch (const std::exception& e) {
+        throw std::runtime_error(std::string("lidar.input.pcd: ") + e.what());
+      }
+    }
+    spdlog::info("replaying {} PCD frame(s) at {} Hz", pcd_frames_.size(), p->rate_hz);
+    every(input_timer_, seconds(1.0 / p->rate_hz), &RsuDaemon::on_pcd_frame);
+  } else {
+    start_simulator();
+  }
+}
+
+void RsuDaemon::receive_lidar() {
+  lidar_socket_.async_receive_from(
+      asio::buffer(lidar_buffer_), lidar_sender_,
+      [this](const boost::system::error_code& ec, std::size_t bytes) {
+        if (ec == asio::error::operation_aborted || stopping_)
+          return;
+        if (!ec) {
+          const std::uint64_t accepted_before = core_.packet_stats().accepted;
+          const auto result =
+              core_.on_lidar_packet(std::span<const std::uint8_t>(lidar_buffer_.data(), bytes), now_ns());
+          if (core_.packet_stats().accepted == accepted_before) {
+            ++lidar_packets_rejected_;
+            bad_input_.report("lidar_packet",
+                              std::to_string(bytes) + " bytes from " + lidar_sender_.address().to_string());
+          }
+          handle_lidar_result(result);
+        } else {
+          spdlog::debug("Velodyne socket: {}", ec.message());
+        }
+        receive_lidar();
+      });
+}
+
+void RsuDaemon::on_pcd_frame() {
+  if (pcd_frames_.empty())
+    return;
+  // Each replayed frame is given the host clock: its last point is "now", the rest keep their spacing.
+  std::vector<LidarPoint> frame = pcd_frames_[next_pcd_frame_ % pcd_frames_.size()];
+  ++next_pcd_frame_;
+  if (frame.empty())
+    return;
+  TimeNs last = frame.front().time_ns;
+  for (const LidarPoint& p : frame)
+    last = std::max(last, p.time_ns);
+  const TimeNs shift = now_ns() - last;
+  for (LidarPoint& p : frame)
+    p.time_ns += shift;
+  handle_lidar_result(core_.on_lidar_frame(frame, now_ns()));
+}
+
+void RsuDaemon::start_simulator() {
+  const auto& input = std::get<SimulatorInput>(config_.input);
+  try {
+    scenario_ = std::make_unique<sim::Scenario>(sim::load_scenario_file(input.scenario));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string("lidar.input.simulator: ") + e.what());
+  }
+  const auto& lidar = scenario_->lidar;
+  if (lidar.model_name != config_.core.sensor_model) {
+    throw std::runtime_error("lidar.input.simulator: the scenario's LiDAR is " + lidar.model_name +
+                             " but lidar.model is " + config_.core.sensor_model);
+  }
+  simulator_ = std::make_unique<sim::LidarSimulator>(lidar.model, lidar.mount, lidar.noise, scenario_->scene,
+                                                     0, lidar.start_azimuth_deg);
+  if (!core_.background_ready()) {
+    // The simulator knows the scene without its vehicles: that is the background, exactly.
+    sim::Scene empty = scenario_->scene;
+    empty.vehicles.clear();
+    const sim::LidarSimulator background(lidar.model, lidar.mount, lidar.noise, empty, 0,
+                                         lidar.start_azimuth_deg);
+    std::vector<std::vector<LidarPoint>> frames;
+    const int n = std::max(1, config_.core.background.learning_frames);
+    for (int i = 0; i < n; ++i) {
+      frames.push_back(
+          background.simulate_frame(scenario_->start_ns + i * background.rotation_period_ns()).frame.points);
+    }
+    core_.load_background(frames);
+    spdlog::info("background: {} simulated rotations of the scenario's scene without vehicles", n);
+  }
+  next_sim_packet_ = simulator_->packet_index_at(scenario_->start_ns);
+  sim_clock_offset_ = now_ns() - scenario_->start_ns;
+  spdlog::info("simulating {} from {}", lidar.model_name, input.scenario);
+  every(input_timer_, std::chrono::milliseconds(2), &RsuDaemon::on_simulator_tick);
+}
+
+void RsuDaemon::on_simulator_tick() {
+  std::array<std::uint8_t, kPacketBytes> payload{};
+  const TimeNs now = now_ns();
+  // Packets whose firings are over by now; at most 100 per tick so a slow host degrades, not stalls.
+  for (int i = 0; i < 100; ++i) {
+    PacketReturns returns = simulator_->simulate_packet(next_sim_packet_);
+    if (returns.blocks.first_firing_ns + sim_clock_offset_ + 1'400'000 > now)
+      break;
+    returns.blocks.first_firing_ns += sim_clock_offset_;
+    encode_packet(scenario_->lidar.model, returns, payload);
+    ++next_sim_packet_;
+    handle_lidar_result(core_.on_lidar_packet(payload, now));
+  }
+}
+
+void RsuDaemon::load_background_pcd() {
+  std::vector<std::vector<LidarPoint>> frames;
+  for (const std::string& file : config_.background_pcd_files) {
+    try {
+      frames.push_back(io::read_pcd(file));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(std::string("background.pcd_files: ") + e.what());
+    }
+  }
+  core_.load_background(frames);
+  spdlog::info("background loaded from {} PCD file(s)", frames.size());
+}
+
+void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
+  if (result.background_became_ready) {
+    spdlog::info("background learned from {} whole rotations", core_.lidar_stats().background_frames);
+    become_ready_if_possible();
+  }
+  send_corrections(result.corrections);
+}
+
+void RsuDaemon::send_corrections(const std::vector<core::OutgoingCorrection>& corrections) {
+  for (const core::OutgoingCorrection& c : corrections) {
+    boost::system::error_code ec;
+    const auto address = asio::ip::make_address(c.destination.address, ec);
+    if (!ec) {
+      const udp::endpoint to(address, static_cast<unsigned short>(c.destination.port));
+      v2i_socket_.send_to(asio::buffer(c.bytes), to, 0, ec);
+    }
+    if (ec) {
+      ++correction_sends_failed_;
+      bad_input_.report("correction_send", "to " + c.destination.address + ":" +
+                                               std::to_string(c.destination.port) + ": " + ec.message());
+      continue;
+    }
+    ++corrections_sent_;
+    spdlog::debug(
+        "correction #{} to vehicle {} at {}:{}: ({:.3f}, {:.3f}) m, yaw {:.4f} rad, {} points, {} faces",
+        c.correction.sequence, c.correction.vehicle_id, c.destination.address, c.destination.port,
+        c.correction.pose.x, c.correction.pose.y, c.correction.pose.yaw, c.correction.quality.points_used,
+        c.correction.quality.faces_seen);
+  }
+}
+
+// ---- V2I ------------------------------------------------------------------------------------------
+
+void RsuDaemon::receive_v2i() {
+  v2i_socket_.async_receive_from(asio::buffer(v2i_buffer_), v2i_sender_,
+                                 [this](const boost::system::error_code& ec, std::size_t bytes) {
+                                   if (ec == asio::error::operation_aborted || stopping_)
+                                     return;
+                                   if (!ec) {
+                                     on_v2i_datagram(bytes);
+                                   } else {
+                                     // e.g. an ICMP error for an earlier correction: not fatal.
+                                     spdlog::debug("V2I socket: {}", ec.message());
+                                   }
+                                   receive_v2i();
+                                 });
+}
+
+void RsuDaemon::on_v2i_datagram(std::size_t bytes) {
+  asio::ip::address address = v2i_sender_.address();
+  if (address.is_v6() && address.to_v6().is_v4_mapped()) {
+    address = asio::ip::make_address_v4(asio::ip::v4_mapped, address.to_v6());
+  }
+  const core::SourceEndpoint source{address.to_string(), v2i_sender_.port()};
+  const core::DatagramOutcome outcome =
+      core_.on_datagram(std::span<const std::uint8_t>(v2i_buffer_.data(), bytes), source, now_ns());
+  if (outcome.accepted()) {
+    if (outcome.upsert == v2i::UpsertOutcome::kAdded) {
+      spdlog::info("vehicle {} registered from {}:{}", outcome.vehicle_id, source.address, source.port);
+    }
+    return;
+  }
+  // A repeated sequence number is what a retransmitting vehicle does: counted, not warned about.
+  if (outcome.stage == core::DatagramStage::kRegistry &&
+      outcome.upsert == v2i::UpsertOutcome::kDuplicateSequence) {
+    return;
+  }
+  std::string detail =
+      std::to_string(bytes) + " bytes from " + source.address + ":" + std::to_string(source.port);
+  if (outcome.vehicle_id != 0)
+    detail += ", vehicle " + std::to_string(outcome.vehicle_id);
+  bad_input_.report(outcome.reason(), detail);
+}
+
+// ---- timers ---------------------------------------------------------------------------------------
+
+void RsuDaemon::on_housekeeping() {
+  const std::size_t expired = core_.expire(now_ns());
+  if (expired > 0)
+    spdlog::info("{} silent vehicle(s) expired from the registry", expired);
+  bad_input_.maybe_summarize(steady::now());
+}
+
+void RsuDaemon::on_watchdog() {
+  notify_watchdog();
+}
+
+void RsuDaemon::on_advertise() {
+  const std::vector<std::uint8_t> bytes = core_.advertisement();
+  boost::system::error_code ec;
+  const auto address = asio::ip::make_address(config_.advertisement.address, ec);
+  if (!ec)
+    v2i_socket_.send_to(asio::buffer(bytes), udp::endpoint(address, config_.advertisement.port), 0, ec);
+  if (ec)
+    bad_input_.report("advertisement_send", ec.message());
+}
+
+void RsuDaemon::on_stats() {
+  log_counters(true);
+  write_stats_file();
+}
+
+void RsuDaemon::log_counters(bool only_nonzero) const {
+  std::string line;
+  for (const auto& [name, value] : core_.counters()) {
+    if (only_nonzero && value == 0)
+      continue;
+    line += (line.empty() ? "" : " ") + name + "=" + std::to_string(value);
+  }
+  spdlog::info("stats: corrections_sent={} correction_sends_failed={} {}", corrections_sent_,
+               correction_sends_failed_, line);
+}
+
+void RsuDaemon::write_stats_file() const {
+  if (config_.stats_file.empty())
+    return;
+  const std::string tmp = config_.stats_file + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    if (!out)
+      return;
+    out << "uptime_s " << std::chrono::duration<double>(steady::now() - started_).count() << "\n";
+    out << "ready " << (ready_ ? 1 : 0) << "\n";
+    out << "corrections_sent " << corrections_sent_ << "\n";
+    out << "correction_sends_failed " << correction_sends_failed_ << "\n";
+    out << "lidar_packets_rejected " << lidar_packets_rejected_ << "\n";
+    for (const auto& [name, value] : core_.counters())
+      out << name << " " << value << "\n";
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, config_.stats_file, ec);
+}
+
+// ---- signals --------------------------------------------------------------------------------------
+
+void RsuDaemon::on_signal(int signal_number) {
+  if (signal_number == SIGHUP) {
+    reload();
+    signals_.async_wait([this](const boost::system::error_code& ec, int n) {
+      if (!ec)
+        on_signal(n);
+    });
+    return;
+  }
+  spdlog::info("{} received: draining", signal_number == SIGTERM ? "SIGTERM" : "SIGINT");
+  drain_and_stop();
+}
+
+void RsuDaemon::reload() {
+  notify_reloading();
+  spdlog::info("SIGHUP: reloading {}", config_path_);
+  try {
+    DaemonConfig next = load_config(config_path_);
+    const core::ReloadSummary summary = core_.reload(next.core, now_ns());
+    spdlog::info("configuration reloaded: {} of {} registered vehicle(s) kept, background {}",
+                 summary.vehicles_after, summary.vehicles_before,
+                 summary.background_kept ? "kept" : "to be learned again");
+    const bool inputs_changed =
+        next.v2i_listen_address != config_.v2i_listen_address || next.v2i_port != config_.v2i_port ||
+        next.input.index() != config_.input.index() ||
+        (std::holds_alternative<VelodyneUdpInput>(next.input) &&
+         (std::get<VelodyneUdpInput>(next.input).port != std::get<VelodyneUdpInput>(config_.input).port ||
+          std::get<VelodyneUdpInput>(next.input).bind_address !=
+              std::get<VelodyneUdpInput>(config_.input).bind_address));
+    if (inputs_changed)
+      spdlog::warn("socket addresses or the LiDAR input changed: they take effect after a restart");
+    // Sockets and input stay as they are; everything else follows the new file.
+    next.input = config_.input;
+    next.v2i_listen_address = config_.v2i_listen_address;
+    next.v2i_port = config_.v2i_port;
+    config_ = std::move(next);
+    spdlog::set_level(spdlog::level::from_str(config_.logging.level));
+    bad_input_.set_limits(config_.logging.bad_input_log_first, seconds(config_.logging.summary_interval_s));
+    if (!summary.background_kept && !config_.background_pcd_files.empty())
+      load_background_pcd();
+    if (!core_.background_ready()) {
+      ready_ = false;
+      spdlog::info("learning the background again from {} whole rotations",
+                   config_.core.background.learning_frames);
+    }
+  } catch (const std::exception& e) {
+    spdlog::error("reload rejected, keeping the previous configuration: {}", e.what());
+  }
+  // Tell systemd the reload is over either way (it waits for READY=1 after RELOADING=1).
+  notify_ready();
+}
+
+void RsuDaemon::drain_and_stop() {
+  if (stopping_)
+    return;
+  stopping_ = true;
+  notify_stopping();
+  // Pending clusters (a vehicle the sweep was still on) are corrected and sent now, not lost.
+  const core::LidarStepResult last = core_.flush(now_ns());
+  send_corrections(last.corrections);
+  log_counters(true);
+  write_stats_file();
+  spdlog::info("stopped: {} corrections sent ({} drained at shutdown)", corrections_sent_,
+               last.corrections.size());
+  boost::system::error_code ignored;
+  signals_.cancel(ignored);
+  v2i_socket_.close(ignored);
+  lidar_socket_.close(ignored);
+  for (auto* t : {&housekeeping_timer_, &watchdog_timer_, &advertise_timer_, &stats_timer_, &input_timer_})
+    t->cancel();
+  exit_code_ = 0;
+  io_.stop();
+}
+
+}  // namespace rsu::daemon

@@ -1,0 +1,196 @@
+#!/usr/bin/env python3
+"""The paper's realistic experiment (Sec. 4), end to end through the real processes on loopback.
+
+  1. The vehicle's own NDT self-localization over the drive (rsu-corridor ndt -> ndt.csv).
+  2. For each RSU LiDAR model: the RSU's background recorded without vehicles (rsu-sim simulate); then the
+     real rsud, the real simulator streaming Velodyne packets over UDP (rsu-sim stream) and the real vehicle
+     client (rsu-vehicle, announcing its NDT poses, receiving corrections, fusing) run together on one clock:
+     the host clock, scenario time 0 mapped to a shared epoch.
+  3. Scoring against the truth (rsu-corridor report): the paper's table, summary.json, frames.csv, figures.
+
+Every wait is bounded; every child is killed on the way out.
+"""
+import argparse
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import yaml
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+
+def free_udp_port():
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Run:
+    def __init__(self, args):
+        self.args = args
+        self.children = []
+
+    def tool(self, name):
+        path = os.path.join(self.args.build, name)
+        if not os.path.exists(path):
+            sys.exit("run_experiment: %s not found (build first: cmake --build %s)" % (path, self.args.build_dir))
+        return path
+
+    def spawn(self, cmd, stdout_path, stdin_path=None):
+        stdin = open(stdin_path) if stdin_path else subprocess.DEVNULL
+        out = open(stdout_path, "w")
+        p = subprocess.Popen(cmd, stdin=stdin, stdout=out, stderr=subprocess.STDOUT if stdout_path.endswith(".log")
+                             else open(stdout_path + ".err", "w"))
+        self.children.append(p)
+        return p
+
+    def kill_all(self):
+        for p in self.children:
+            if p.poll() is None:
+                p.kill()
+                try:
+                    p.wait(timeout=5)
+                except subprocess.TimeoutExpired:
+                    pass
+
+
+def wait_for_line(path, text, seconds, proc):
+    deadline = time.time() + seconds
+    while time.time() < deadline:
+        if os.path.exists(path) and text in open(path).read():
+            return
+        if proc.poll() is not None:
+            sys.exit("run_experiment: rsud exited (%s) before it was ready:\n%s" % (proc.returncode, open(path).read()))
+        time.sleep(0.05)
+    sys.exit("run_experiment: rsud not ready after %d s:\n%s" % (seconds, open(path).read()))
+
+
+def live_run(run, exp, scenario_path, scenario, model, out):
+    """One RSU LiDAR model: rsud + rsu-sim stream + rsu-vehicle, on the host clock."""
+    mount = scenario["lidar"].get("mount", {})
+    vehicle = next(v for v in scenario["vehicles"] if v["id"] == exp.get("vehicle_id", 1))
+    shape = vehicle.get("shape", {})
+    duration = float(exp.get("duration_s", 10.8))
+
+    # The RSU's background: frames of the street without vehicles, recorded once (sensor frame).
+    bg_dir = os.path.join(out, "background_" + model)
+    subprocess.run([run.tool("tools/rsu-sim"), "simulate", scenario_path, "--model", model, "--without-vehicles",
+                    "--frames", "5", "--out", bg_dir], check=True, stdout=subprocess.DEVNULL, timeout=120)
+    pcds = sorted(os.path.join(bg_dir, f) for f in os.listdir(bg_dir) if f.endswith(".pcd"))
+
+    lidar_port, v2i_port = free_udp_port(), free_udp_port()
+    config = os.path.join(out, "rsud_%s.yaml" % model)
+    with open(config, "w") as f:
+        f.write("""rsu_id: 1
+lidar:
+  model: %s
+  mount: {x: %s, y: %s, z: %s, roll_deg: %s, pitch_deg: %s, yaw_deg: %s}
+  input:
+    velodyne_udp: {bind_address: 127.0.0.1, port: %d}
+background:
+  pcd_files: [%s]
+v2i:
+  listen_address: 127.0.0.1
+  port: %d
+logging:
+  level: info
+  stats_interval_s: 1.0
+  stats_file: %s
+""" % (model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
+            mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_port, ", ".join(pcds), v2i_port,
+            os.path.join(out, "rsud_%s.stats" % model)))
+    log = os.path.join(out, "rsud_%s.log" % model)
+    rsud = run.spawn([run.tool("daemon/rsud"), "--config", config], log)
+    wait_for_line(log, "ready: serving", 60, rsud)
+
+    # One clock: scenario time 0 is `epoch` on the host clock, for the packets and the announcements.
+    epoch = time.time_ns() + 1_500_000_000
+    with open(os.path.join(out, "epoch_%s.txt" % model), "w") as f:
+        f.write("%d\n" % epoch)
+    shifted = os.path.join(out, "ndt_host_clock_%s.csv" % model)
+    first_ndt_ns = None
+    with open(os.path.join(out, "ndt.csv")) as src, open(shifted, "w") as dst:
+        header = src.readline().strip().split(",")
+        idx = [header.index(c) for c in ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw")]
+        dst.write("time_ns,x,y,yaw,sxx,syy,syaw\n")
+        for line in src:
+            cells = line.strip().split(",")
+            t = int(cells[idx[0]])
+            first_ndt_ns = t if first_ndt_ns is None else first_ndt_ns
+            dst.write(",".join([str(t + epoch)] + [cells[i] for i in idx[1:]]) + "\n")
+
+    stream = run.spawn([run.tool("tools/rsu-sim"), "stream", scenario_path, "--model", model, "--to",
+                        "127.0.0.1:%d" % lidar_port, "--epoch-ns", str(epoch), "--start", "0",
+                        "--seconds", str(duration)], os.path.join(out, "stream_%s.log" % model))
+    # rsu-vehicle paces its rows from its own start: start it when the first NDT pose is due.
+    start_at = (epoch + first_ndt_ns) / 1e9
+    time.sleep(max(0.0, start_at - time.time()))
+    vehicle_proc = run.spawn([run.tool("vehicle_client/rsu-vehicle"), "--vehicle-id", str(vehicle["id"]),
+                              "--length", str(shape.get("length", 4.89)), "--width", str(shape.get("width", 1.92)),
+                              "--height", str(shape.get("height", 1.70)), "--rsu", "127.0.0.1:%d" % v2i_port,
+                              "--bind", "127.0.0.1:0", "--realtime", "--drain-ms", "500",
+                              "--corrections", os.path.join(out, "corrections_%s.csv" % model)],
+                             os.path.join(out, "fused_%s.csv" % model), stdin_path=shifted)
+    deadline = time.time() + duration + 30
+    for i, p in enumerate((stream, vehicle_proc)):
+        while p.poll() is None and time.time() < deadline:
+            elapsed = time.time() - epoch / 1e9
+            sys.stderr.write("\r  %-7s live run: %5.1f / %.1f s of the drive" % (model, min(max(elapsed, 0), duration),
+                                                                                    duration))
+            sys.stderr.flush()
+            time.sleep(0.2)
+        if p.poll() is None:
+            sys.exit("\nrun_experiment: %s did not finish in time" % ("rsu-sim stream", "rsu-vehicle")[i])
+        if p.returncode != 0:
+            sys.exit("\nrun_experiment: %s failed (%d); see %s" % (("rsu-sim stream", "rsu-vehicle")[i], p.returncode,
+                                                                   out))
+    sys.stderr.write("\n")
+    rsud.send_signal(signal.SIGTERM)
+    try:
+        rsud.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        sys.exit("run_experiment: rsud did not stop on SIGTERM")
+    if rsud.returncode != 0:
+        sys.exit("run_experiment: rsud exited with %d; see %s" % (rsud.returncode, log))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--experiment", default=os.path.join(ROOT, "scenarios", "corridor_experiment.yaml"))
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder with the tools")
+    ap.add_argument("--out", default=os.path.join(ROOT, "out", "corridor"))
+    args = ap.parse_args()
+    args.build_dir = args.build
+    os.makedirs(args.out, exist_ok=True)
+    with open(args.experiment) as f:
+        exp = yaml.safe_load(f)
+    scenario_path = os.path.join(os.path.dirname(args.experiment), exp["scenario"])
+    with open(scenario_path) as f:
+        scenario = yaml.safe_load(f)
+
+    run = Run(args)
+    try:
+        t0 = time.time()
+        subprocess.run([run.tool("eval/rsu-corridor"), "ndt", args.experiment, "--out", args.out], check=True,
+                       timeout=600)
+        for model in exp["rsu_models"]:
+            live_run(run, exp, scenario_path, scenario, model, args.out)
+        subprocess.run([run.tool("eval/rsu-corridor"), "report", args.experiment, "--out", args.out], check=True,
+                       timeout=120)
+        subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "eval", "plots", "corridor_figures.py"), args.out],
+                       check=True, timeout=120, stdout=subprocess.DEVNULL)
+        print("figures: %s/error_vs_position.png, %s/error_boxplot.png; every frame: %s/frames.csv; "
+              "summary: %s/summary.json (%.0f s)" % (args.out, args.out, args.out, args.out, time.time() - t0))
+    except subprocess.CalledProcessError as e:
+        sys.exit("run_experiment: %s failed with %d" % (" ".join(e.cmd[:2]), e.returncode))
+    finally:
+        run.kill_all()
+
+
+if __name__ == "__main__":
+    main()

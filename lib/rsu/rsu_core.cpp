@@ -1,0 +1,507 @@
+#include "rsu/rsu_core.h"
+
+#include <arpa/inet.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <variant>
+
+#include "common/angles.h"
+#include "perception/l_shape_fitting.h"
+#include "rsu/correction_builder.h"
+#include "v2i/association.h"
+#include "v2i/vehicle_hypothesis.h"
+#include "v2i/wire_codec.h"
+
+namespace rsu::core {
+
+namespace {
+
+SensorModel resolve_model(const RsuCoreConfig& config) {
+  const auto model = sensor_model_by_name(config.sensor_model);
+  if (!model) {
+    throw std::invalid_argument("unknown LiDAR model \"" + config.sensor_model +
+                                "\" (expected vlp16 or vlp32c)");
+  }
+  if (!model->has_packet_format()) {
+    throw std::invalid_argument("LiDAR model \"" + config.sensor_model + "\" has no Velodyne packet format");
+  }
+  const Pose3& m = config.mount;
+  for (const double v : {m.x, m.y, m.z, m.roll, m.pitch, m.yaw}) {
+    if (!std::isfinite(v))
+      throw std::invalid_argument("LiDAR mount pose must be finite");
+  }
+  if (!(config.coverage_radius_m > 0.0))
+    throw std::invalid_argument("coverage radius must be > 0");
+  if (config.background.learning_frames < 0)
+    throw std::invalid_argument("learning frames must be >= 0");
+  return *model;
+}
+
+double azimuth_spread_rad(const SensorModel& model) {
+  if (model.azimuth_offset_deg.empty())
+    return 0.0;
+  const auto [lo, hi] = std::minmax_element(model.azimuth_offset_deg.begin(), model.azimuth_offset_deg.end());
+  return deg_to_rad(*hi - *lo);
+}
+
+FrameAssemblerConfig assembler_config(const SensorModel& model) {
+  FrameAssemblerConfig c;
+  c.rotation_hz = model.rotation_hz();
+  return c;
+}
+
+// The 16 address bytes of an IPv4 (as IPv4-mapped IPv6) or IPv6 literal; false if neither.
+bool address_bytes(const std::string& text, std::array<unsigned char, 16>& out) {
+  out.fill(0);
+  if (text.empty() || text.size() > 64 || text.find('\0') != std::string::npos)
+    return false;
+  std::array<unsigned char, 4> v4{};
+  if (inet_pton(AF_INET, text.c_str(), v4.data()) == 1) {
+    out[10] = 0xff;
+    out[11] = 0xff;
+    std::memcpy(out.data() + 12, v4.data(), 4);
+    return true;
+  }
+  return inet_pton(AF_INET6, text.c_str(), out.data()) == 1;
+}
+
+// Same host, whatever the spelling ("127.0.0.1" and the dual-stack "::ffff:127.0.0.1" are one).
+bool same_address(const std::string& a, const std::string& b) {
+  std::array<unsigned char, 16> x{};
+  std::array<unsigned char, 16> y{};
+  return address_bytes(a, x) && address_bytes(b, y) && x == y;
+}
+
+bool same_pose(const Pose3& a, const Pose3& b) {
+  return a.x == b.x && a.y == b.y && a.z == b.z && a.roll == b.roll && a.pitch == b.pitch && a.yaw == b.yaw;
+}
+
+// Whether a learned background stays valid under `b`: it depends on the sensor, its pose and the
+// background model's parameters only.
+bool same_background_setup(const RsuCoreConfig& a, const RsuCoreConfig& b) {
+  const auto& p = a.perception;
+  const auto& q = b.perception;
+  return a.sensor_model == b.sensor_model && same_pose(a.mount, b.mount) && p.background == q.background &&
+         p.ground_prefilter == q.ground_prefilter && p.ground.ground_z == q.ground.ground_z &&
+         p.ground.min_height == q.ground.min_height &&
+         p.reference_frame.match_radius_m == q.reference_frame.match_radius_m &&
+         p.range_image.azimuth_bins == q.range_image.azimuth_bins &&
+         p.range_image.neighbour_bins == q.range_image.neighbour_bins &&
+         p.range_image.near_percentile == q.range_image.near_percentile &&
+         p.range_image.margin_m == q.range_image.margin_m &&
+         p.range_image.margin_per_m == q.range_image.margin_per_m &&
+         p.range_image.max_rings == q.range_image.max_rings;
+}
+
+bool same_registry_setup(const v2i::VehicleRegistryConfig& a, const v2i::VehicleRegistryConfig& b) {
+  return a.silence_timeout == b.silence_timeout && a.capacity == b.capacity &&
+         a.rate_limit.bucket.rate_per_s == b.rate_limit.bucket.rate_per_s &&
+         a.rate_limit.bucket.burst == b.rate_limit.bucket.burst &&
+         a.rate_limit.max_sources == b.rate_limit.max_sources &&
+         a.size_change_tolerance_m == b.size_change_tolerance_m;
+}
+
+TimeNs mean_time(const std::vector<LidarPoint>& points) {
+  const TimeNs t0 = points.front().time_ns;
+  TimeNs offset_sum = 0;  // relative to t0: a cluster spans well under a second, so no overflow
+  for (const LidarPoint& p : points)
+    offset_sum += p.time_ns - t0;
+  return t0 + offset_sum / static_cast<TimeNs>(points.size());
+}
+
+}  // namespace
+
+RsuCore::RsuCore(const RsuCoreConfig& config)
+    : config_(config),
+      model_(resolve_model(config)),
+      sensor_to_map_(config.mount.to_isometry()),
+      lidar_xy_(config.mount.x, config.mount.y),
+      rotation_period_ns_(static_cast<TimeNs>(1e9 / model_.rotation_hz())),
+      decoder_(model_),
+      assembler_(assembler_config(model_)),
+      foreground_(config.perception, lidar_xy_),
+      clusterer_(config.sweep, config.perception.clustering, lidar_xy_, model_.rotation_hz(),
+                 azimuth_spread_rad(model_)),
+      background_ready_(config.background.learning_frames == 0),
+      flood_limiter_(config.datagram_flood),
+      validator_(config.announcement_limits),
+      registry_(config.registry) {}
+
+DatagramOutcome RsuCore::finish(DatagramOutcome outcome) {
+  datagram_stages_.add(outcome.stage);
+  return outcome;
+}
+
+DatagramOutcome RsuCore::on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source,
+                                     TimeNs now) {
+  DatagramOutcome out;
+  if (flood_limiter_.admit(source.address, now) != v2i::RateDecision::kAllowed) {
+    out.stage = DatagramStage::kFloodLimited;
+    return finish(out);
+  }
+  const v2i::DecodedMessage decoded = v2i::decode_v2i_message(bytes);
+  decode_counts_.add(decoded.status);
+  if (decoded.status != v2i::DecodeStatus::kOk) {
+    out.stage = DatagramStage::kDecode;
+    out.decode = decoded.status;
+    return finish(out);
+  }
+  const auto* announcement = std::get_if<v2i::VehicleAnnouncement>(&decoded.body);
+  if (announcement == nullptr) {
+    out.stage = DatagramStage::kNotAnnouncement;
+    return finish(out);
+  }
+  out.vehicle_id = announcement->vehicle_id;
+  out.validation = validator_.check(*announcement, now);
+  if (out.validation != v2i::AnnouncementReason::kValid) {
+    out.stage = DatagramStage::kValidation;
+    return finish(out);
+  }
+  if (config_.require_reply_to_source_address &&
+      !same_address(announcement->reply_to.address, source.address)) {
+    out.stage = DatagramStage::kReplyToMismatch;
+    return finish(out);
+  }
+  out.upsert = registry_.upsert(*announcement, source.address, now);
+  out.stage = v2i::is_accepted(out.upsert) ? DatagramStage::kAccepted : DatagramStage::kRegistry;
+  return finish(out);
+}
+
+void RsuCore::to_map_frame(std::span<const LidarPoint> in, std::vector<LidarPoint>& out) const {
+  const Eigen::Matrix3f r = sensor_to_map_.linear().cast<float>();
+  const Eigen::Vector3f t = sensor_to_map_.translation().cast<float>();
+  out.resize(in.size());
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const Eigen::Vector3f q = r * Eigen::Vector3f(in[i].x, in[i].y, in[i].z) + t;
+    out[i] = in[i];  // ring, azimuth (the sensor's beam azimuth) and time are kept
+    out[i].x = q.x();
+    out[i].y = q.y();
+    out[i].z = q.z();
+  }
+}
+
+void RsuCore::add_background_frame(std::span<const LidarPoint> map_points) {
+  foreground_.add_background_frame(map_points);
+  ++lidar_stats_.background_frames;
+}
+
+LidarStepResult RsuCore::learn(std::span<const LidarPoint> map_points, bool whole_frame) {
+  LidarStepResult result;
+  if (whole_frame) {
+    add_background_frame(map_points);
+  } else {
+    for (const LidarFrame& frame : assembler_.add(map_points))
+      add_background_frame(frame.points);
+  }
+  if (static_cast<int>(lidar_stats_.background_frames) >= config_.background.learning_frames) {
+    background_ready_ = true;
+    result.background_became_ready = true;
+  }
+  return result;
+}
+
+LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now) {
+  sensor_scratch_.clear();
+  if (decoder_.decode(payload, now, sensor_scratch_) != DecodeResult::accepted) {
+    return {};  // counted by the decoder, by reason
+  }
+  return on_lidar_points(sensor_scratch_, now);
+}
+
+LidarStepResult RsuCore::on_lidar_points(std::span<const LidarPoint> points, TimeNs now) {
+  to_map_frame(points, map_scratch_);
+  if (!background_ready_) {
+    return learn(map_scratch_, false);
+  }
+  for (const LidarPoint& p : map_scratch_) {
+    clusterer_.add(p, foreground_.classify(p) == perception::PointClass::foreground);
+  }
+  LidarStepResult result;
+  correct_clusters(clusterer_.release_closed(), now, result);
+  return result;
+}
+
+LidarStepResult RsuCore::on_lidar_frame(std::span<const LidarPoint> points, TimeNs now) {
+  to_map_frame(points, map_scratch_);
+  if (!background_ready_) {
+    return learn(map_scratch_, true);
+  }
+  for (const LidarPoint& p : map_scratch_) {
+    clusterer_.add(p, foreground_.classify(p) == perception::PointClass::foreground);
+  }
+  LidarStepResult result;
+  correct_clusters(clusterer_.release_all(), now, result);
+  return result;
+}
+
+LidarStepResult RsuCore::flush(TimeNs now) {
+  LidarStepResult result;
+  if (background_ready_)
+    correct_clusters(clusterer_.release_all(), now, result);
+  return result;
+}
+
+void RsuCore::load_background(const std::vector<std::vector<LidarPoint>>& frames) {
+  for (const auto& frame : frames) {
+    to_map_frame(frame, map_scratch_);
+    add_background_frame(map_scratch_);
+  }
+  background_ready_ = true;
+}
+
+void RsuCore::correct_clusters(std::vector<SweptCluster>&& clusters, TimeNs now, LidarStepResult& result) {
+  if (clusters.empty())
+    return;
+
+  struct Candidate {
+    std::vector<Eigen::Vector2d> footprint;
+    perception::RectangleFit fit;
+    TimeNs sweep_time = 0;
+  };
+  std::vector<Candidate> candidates;
+  std::vector<v2i::FittedCluster> fitted;
+  for (const SweptCluster& cluster : clusters) {
+    Candidate c;
+    c.footprint.reserve(cluster.points.size());
+    for (const LidarPoint& p : cluster.points) {
+      c.footprint.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y));
+    }
+    c.fit = perception::fit_rectangle(c.footprint, lidar_xy_, config_.perception.fit);
+    ++lidar_stats_.clusters_fitted;
+    if (!c.fit.ok()) {
+      ++lidar_stats_.fits_failed;
+      continue;
+    }
+    if ((c.fit.center - lidar_xy_).norm() > config_.coverage_radius_m) {
+      ++lidar_stats_.clusters_out_of_coverage;
+      continue;
+    }
+    c.sweep_time = mean_time(cluster.points);
+    fitted.push_back({c.fit.center, c.fit.yaw, c.fit.length0, c.fit.length1, cluster.points.size()});
+    candidates.push_back(std::move(c));
+  }
+  if (candidates.empty())
+    return;
+
+  // One prediction time for the batch (its clusters were swept within a few degrees of each other).
+  std::vector<TimeNs> times;
+  for (const Candidate& c : candidates)
+    times.push_back(c.sweep_time);
+  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
+  const TimeNs batch_time = times[times.size() / 2];
+
+  // A vehicle is seen once per rotation: one already corrected from an earlier batch of this rotation
+  // is not offered again (a second, later cluster near it is something else, or a fragment).
+  std::vector<const v2i::RegisteredVehicle*> vehicles;
+  std::vector<v2i::VehicleHypothesis> hypotheses;
+  for (const v2i::RegisteredVehicle* v : registry_.active(now)) {
+    const auto it = channels_.find(v->announcement.vehicle_id);
+    if (it != channels_.end() && it->second.matched &&
+        std::abs(batch_time - it->second.last_matched_sweep) < rotation_period_ns_ / 2) {
+      continue;
+    }
+    vehicles.push_back(v);
+    hypotheses.push_back(v2i::predict_hypothesis(v->announcement, batch_time, config_.hypothesis));
+  }
+  lidar_stats_.vehicles_in_batches += vehicles.size();
+  const v2i::AssociationResult association = v2i::associate(fitted, hypotheses, config_.association);
+
+  // Fragments. One vehicle can give several clusters: a VLP-16's upper rings reach the far edge of
+  // the roof metres behind the visible faces, beyond the clustering tolerance, and a pole in front
+  // cuts a vehicle in two. The assignment gives each vehicle ONE cluster, possibly the small
+  // fragment; so every cluster left over goes to the matched vehicle whose gate it passes best, and
+  // the vehicle is fitted on the union (kept only if the union still fits the announced size).
+  std::vector<std::vector<std::size_t>> members(association.pairs.size());
+  std::vector<std::ptrdiff_t> pair_of_vehicle(vehicles.size(), -1);
+  for (std::size_t i = 0; i < association.pairs.size(); ++i) {
+    members[i].push_back(association.pairs[i].cluster);
+    pair_of_vehicle[association.pairs[i].vehicle] = static_cast<std::ptrdiff_t>(i);
+  }
+  for (const std::size_t u : association.unmatched_clusters) {
+    std::ptrdiff_t best = -1;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < vehicles.size(); ++j) {
+      const v2i::PairCheck check = v2i::check_pair(fitted[u], hypotheses[j], config_.association);
+      if (check.verdict == v2i::PairGate::kPass && check.distance_sq < best_distance) {
+        best_distance = check.distance_sq;
+        best = pair_of_vehicle[j];
+      }
+    }
+    if (best >= 0) {
+      members[static_cast<std::size_t>(best)].push_back(u);
+    } else {
+      ++lidar_stats_.clusters_unmatched;
+    }
+  }
+
+  for (std::size_t i = 0; i < association.pairs.size(); ++i) {
+    const v2i::AssociatedPair& pair = association.pairs[i];
+    Candidate merged;
+    const Candidate* chosen = &candidates[pair.cluster];
+    if (members[i].size() > 1) {
+      const TimeNs t0 = candidates[members[i].front()].sweep_time;
+      TimeNs weighted_offset = 0;  // sum of n_k (t_k - t0): clusters of one batch, ms apart
+      for (const std::size_t k : members[i]) {
+        const Candidate& part = candidates[k];
+        merged.footprint.insert(merged.footprint.end(), part.footprint.begin(), part.footprint.end());
+        weighted_offset += static_cast<TimeNs>(part.footprint.size()) * (part.sweep_time - t0);
+      }
+      merged.sweep_time = t0 + weighted_offset / static_cast<TimeNs>(merged.footprint.size());
+      merged.fit = perception::fit_rectangle(merged.footprint, lidar_xy_, config_.perception.fit);
+      const v2i::FittedCluster as_cluster{merged.fit.center, merged.fit.yaw, merged.fit.length0,
+                                          merged.fit.length1, merged.footprint.size()};
+      if (merged.fit.ok() &&
+          v2i::check_pair(as_cluster, hypotheses[pair.vehicle], config_.association).verdict ==
+              v2i::PairGate::kPass) {
+        chosen = &merged;
+        lidar_stats_.fragments_merged += members[i].size() - 1;
+      } else {
+        lidar_stats_.clusters_unmatched += members[i].size() - 1;
+      }
+    }
+    const Candidate& c = *chosen;
+    const v2i::VehicleAnnouncement& a = vehicles[pair.vehicle]->announcement;
+    // The yaw prior: the announced yaw carried to this cluster's own sweep time with the announced
+    // motion (the hypothesis model), with its grown uncertainty.
+    const v2i::VehicleHypothesis at_sweep = v2i::predict_hypothesis(a, c.sweep_time, config_.hypothesis);
+    const double yaw_var = at_sweep.covariance(2, 2);
+    std::optional<perception::YawPrior> prior;
+    if (std::isfinite(at_sweep.yaw) && std::isfinite(yaw_var) && yaw_var >= 0.0) {
+      prior = perception::YawPrior{at_sweep.yaw, std::max(std::sqrt(yaw_var), 1e-3)};
+    }
+    const perception::CorrectedPose fix =
+        perception::correct(c.fit, c.footprint, perception::VehicleSize{a.size.length_m, a.size.width_m},
+                            lidar_xy_, prior, config_.perception);
+    if (!fix.ok()) {
+      ++lidar_stats_.corrections_failed;
+      continue;
+    }
+    VehicleChannel& channel = channels_[a.vehicle_id];
+    CorrectionInputs inputs;
+    inputs.rsu_id = config_.rsu_id;
+    inputs.vehicle_id = a.vehicle_id;
+    inputs.sequence = channel.next_sequence;
+    inputs.announcement_sequence = a.sequence;
+    inputs.sweep_time = c.sweep_time;
+    inputs.points_used = c.footprint.size();
+    OutgoingCorrection out;
+    out.correction = make_correction(inputs, fix, c.fit, lidar_xy_);
+    out.bytes = v2i::encode_v2i_message(out.correction);
+    if (out.bytes.empty()) {
+      ++lidar_stats_.corrections_encode_failed;
+      continue;
+    }
+    out.destination = a.reply_to;
+    ++channel.next_sequence;  // wraps modulo 2^32, as the wire says
+    channel.matched = true;
+    channel.last_matched_sweep = c.sweep_time;
+    ++lidar_stats_.corrections;
+    result.corrections.push_back(std::move(out));
+  }
+}
+
+std::size_t RsuCore::expire(TimeNs now) {
+  const std::size_t n = registry_.expire(now);
+  flood_limiter_.prune(now);
+  for (auto it = channels_.begin(); it != channels_.end();) {
+    it = registry_.find(it->first, now) == nullptr ? channels_.erase(it) : std::next(it);
+  }
+  return n;
+}
+
+ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
+  RsuCore fresh(next);  // throws, leaving *this untouched, if `next` is unusable
+  ReloadSummary summary;
+  summary.vehicles_before = registry_.active(now).size();
+  if (same_registry_setup(config_.registry, next.registry)) {
+    fresh.registry_ = std::move(registry_);
+  } else {
+    // Re-enter the vehicles in the order they were last heard, at those times (a fresh rate limiter
+    // starts full, so only a source with more vehicles than its burst loses some).
+    auto active = registry_.active(now);
+    std::sort(active.begin(), active.end(),
+              [](const auto* a, const auto* b) { return a->last_heard < b->last_heard; });
+    for (const v2i::RegisteredVehicle* v : active)
+      fresh.registry_.upsert(v->announcement, v->source, v->last_heard);
+  }
+  summary.vehicles_after = fresh.registry_.active(now).size();
+  summary.background_kept = same_background_setup(config_, next);
+  if (summary.background_kept) {
+    fresh.foreground_ = std::move(foreground_);
+    fresh.background_ready_ = background_ready_;
+    fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
+  }
+  fresh.channels_ = std::move(channels_);
+  fresh.datagram_stages_ = datagram_stages_;
+  fresh.decode_counts_ = decode_counts_;
+  *this = std::move(fresh);
+  return summary;
+}
+
+std::vector<std::uint8_t> RsuCore::advertisement() const {
+  v2i::RsuAdvertisement ad;
+  ad.rsu_id = config_.rsu_id;
+  ad.lidar_pose = config_.mount;
+  ad.coverage_radius_m = config_.coverage_radius_m;
+  ad.correction_port = config_.correction_port;
+  ad.announcement_port = config_.announcement_port;
+  return v2i::encode_v2i_message(ad);
+}
+
+std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
+  std::vector<std::pair<std::string, std::uint64_t>> out;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(DatagramStage::kCount); ++i) {
+    const auto s = static_cast<DatagramStage>(i);
+    out.emplace_back(std::string("datagram.") + to_string(s), datagram_stages_.count(s));
+  }
+  for (std::size_t i = 1; i < static_cast<std::size_t>(v2i::DecodeStatus::kCount); ++i) {
+    const auto s = static_cast<v2i::DecodeStatus>(i);
+    out.emplace_back(std::string("decode.") + v2i::to_string(s), decode_counts_.count(s));
+  }
+  for (std::size_t i = 1; i < static_cast<std::size_t>(v2i::AnnouncementReason::kCount); ++i) {
+    const auto r = static_cast<v2i::AnnouncementReason>(i);
+    out.emplace_back(std::string("validation.") + v2i::to_string(r), validator_.counts().count(r));
+  }
+  for (std::size_t i = 0; i < static_cast<std::size_t>(v2i::UpsertOutcome::kCount); ++i) {
+    const auto o = static_cast<v2i::UpsertOutcome>(i);
+    out.emplace_back(std::string("registry.") + v2i::to_string(o), registry_.stats().outcomes.count(o));
+  }
+  out.emplace_back("registry.expired", registry_.stats().expired);
+  out.emplace_back("registry.vehicles", registry_.size());
+  const DecodeStats& p = decoder_.stats();
+  out.emplace_back("packet.accepted", p.accepted);
+  out.emplace_back("packet.wrong_size", p.wrong_size);
+  out.emplace_back("packet.unknown_product", p.unknown_product);
+  out.emplace_back("packet.product_mismatch", p.product_mismatch);
+  out.emplace_back("packet.unsupported_return_mode", p.unsupported_return_mode);
+  out.emplace_back("packet.bad_block_flag", p.bad_block_flag);
+  out.emplace_back("packet.azimuth_out_of_range", p.azimuth_out_of_range);
+  out.emplace_back("packet.timestamp_out_of_range", p.timestamp_out_of_range);
+  const SweepClustererStats& s = clusterer_.stats();
+  out.emplace_back("sweep.foreground_points", s.foreground_points);
+  out.emplace_back("sweep.clusters_released", s.clusters_released);
+  out.emplace_back("sweep.clusters_dropped_small", s.clusters_dropped_small);
+  out.emplace_back("sweep.clusters_dropped_large", s.clusters_dropped_large);
+  out.emplace_back("sweep.points_dropped_stale", s.points_dropped_stale);
+  out.emplace_back("sweep.points_dropped_overflow", s.points_dropped_overflow);
+  out.emplace_back("sweep.points_dropped_restart", s.points_dropped_restart);
+  out.emplace_back("sweep.invalid_points", s.invalid_points);
+  out.emplace_back("sweep.restarts", s.restarts);
+  const LidarStats& l = lidar_stats_;
+  out.emplace_back("lidar.background_frames", l.background_frames);
+  out.emplace_back("lidar.fits_failed", l.fits_failed);
+  out.emplace_back("lidar.clusters_out_of_coverage", l.clusters_out_of_coverage);
+  out.emplace_back("lidar.clusters_unmatched", l.clusters_unmatched);
+  out.emplace_back("lidar.fragments_merged", l.fragments_merged);
+  out.emplace_back("lidar.corrections_failed", l.corrections_failed);
+  out.emplace_back("lidar.corrections_encode_failed", l.corrections_encode_failed);
+  out.emplace_back("lidar.corrections", l.corrections);
+  return out;
+}
+
+}  // namespace rsu::core

@@ -1,0 +1,162 @@
+// The RSU's whole decision logic, pure (no sockets, threads, clocks or files; DESIGN.md §4): the daemon
+// hands it datagrams and LiDAR data with the time they arrived and sends what it returns. Tests drive
+// it with hand-stepped time (as Vanetza's router is driven), so everything the daemon decides is
+// tested here in microseconds.
+//
+//   announcements -> decode -> validate -> registry (expiry, capacity, per-source rate)
+//   LiDAR packets -> decode (sensor frame) -> mount pose -> map frame
+//       while learning: whole rotations train the background model (or load_background())
+//       then: per point background removal -> SweepClusterer releases each cluster as soon as the
+//       sweep has passed it -> rectangle fit -> association of the released batch with the registered
+//       vehicles (gating + one global assignment) -> size correction with the vehicle's announced size
+//       and predicted yaw as prior -> Correction datagram to the vehicle's reply_to address.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "common/time.h"
+#include "lidar/frame_assembler.h"
+#include "lidar/point.h"
+#include "lidar/velodyne_packet.h"
+#include "rsu/datagram_outcome.h"
+#include "rsu/foreground_filter.h"
+#include "rsu/rsu_core_config.h"
+#include "rsu/sweep_clusterer.h"
+#include "v2i/announcement_validation.h"
+#include "v2i/enum_counter.h"
+#include "v2i/messages.h"
+#include "v2i/source_rate_limiter.h"
+#include "v2i/vehicle_registry.h"
+
+namespace rsu::core {
+
+// Who sent a datagram. `address` is the numeric IP literal; the rate limits are per address (host),
+// so a sender cannot earn fresh tokens by changing ports.
+struct SourceEndpoint {
+  std::string address;
+  std::uint16_t port = 0;
+};
+
+struct OutgoingCorrection {
+  v2i::UdpEndpoint destination;     // the vehicle's announced reply_to
+  std::vector<std::uint8_t> bytes;  // the encoded V2iMessage
+  v2i::Correction correction;       // what the bytes say (vehicle id, sweep time, pose, quality)
+};
+
+struct LidarStepResult {
+  std::vector<OutgoingCorrection> corrections;
+  bool background_became_ready = false;  // learning finished during this step (log it)
+};
+
+struct LidarStats {
+  std::uint64_t background_frames = 0;
+  std::uint64_t clusters_fitted = 0;
+  std::uint64_t fits_failed = 0;
+  std::uint64_t clusters_out_of_coverage = 0;
+  std::uint64_t clusters_unmatched = 0;   // no registered vehicle within the gates: unregistered
+  std::uint64_t fragments_merged = 0;     // extra clusters of one vehicle fitted with its main one
+  std::uint64_t vehicles_in_batches = 0;  // registered vehicles offered to association
+  std::uint64_t corrections_failed = 0;   // size correction refused the matched cluster
+  std::uint64_t corrections_encode_failed = 0;
+  std::uint64_t corrections = 0;
+};
+
+struct ReloadSummary {
+  bool background_kept = false;  // false: the LiDAR or background setup changed, learning restarts
+  std::size_t vehicles_before = 0;
+  std::size_t vehicles_after = 0;
+};
+
+class RsuCore {
+ public:
+  // Throws std::invalid_argument for an unusable configuration (unknown sensor model, a model without
+  // a packet format, non-finite mount, ...), with a message naming what is wrong.
+  explicit RsuCore(const RsuCoreConfig& config);
+
+  // One datagram from the announcement port, received at `now`. Never throws on content.
+  DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now);
+
+  // One Velodyne data packet (UDP payload). `now` is its receive time: it resolves the packet's hour.
+  LidarStepResult on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now);
+  // Points in the SENSOR frame, in firing order, from a streaming source (a part of a rotation).
+  LidarStepResult on_lidar_points(std::span<const LidarPoint> points_in_sensor_frame, TimeNs now);
+  // One whole rotation (PCD replay, simulator frame): its clusters are released at its end.
+  LidarStepResult on_lidar_frame(std::span<const LidarPoint> points_in_sensor_frame, TimeNs now);
+  // Releases every pending cluster (drain at shutdown).
+  LidarStepResult flush(TimeNs now);
+
+  // Background frames recorded elsewhere (PCD files, sensor frame): the model is ready afterwards.
+  void load_background(const std::vector<std::vector<LidarPoint>>& frames_in_sensor_frame);
+  bool background_ready() const { return background_ready_; }
+
+  // Forgets silent vehicles (call about once a second); returns how many.
+  std::size_t expire(TimeNs now);
+
+  // Applies a new configuration, keeping the registered vehicles and, when the LiDAR and background
+  // setup are unchanged, the learned background. Throws std::invalid_argument (and changes nothing)
+  // if `next` is unusable.
+  ReloadSummary reload(const RsuCoreConfig& next, TimeNs now);
+
+  // The encoded RsuAdvertisement (empty if encoding failed).
+  std::vector<std::uint8_t> advertisement() const;
+
+  // Every counter as ("area.reason", value), zeros included, in a stable order: for logs and stats.
+  std::vector<std::pair<std::string, std::uint64_t>> counters() const;
+
+  const RsuCoreConfig& config() const { return config_; }
+  const v2i::VehicleRegistry& registry() const { return registry_; }
+  const v2i::EnumCounter<DatagramStage>& datagram_stages() const { return datagram_stages_; }
+  const v2i::EnumCounter<v2i::DecodeStatus>& decode_counts() const { return decode_counts_; }
+  const v2i::EnumCounter<v2i::AnnouncementReason>& validation_counts() const { return validator_.counts(); }
+  const DecodeStats& packet_stats() const { return decoder_.stats(); }
+  const SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
+  const LidarStats& lidar_stats() const { return lidar_stats_; }
+  const Eigen::Vector2d& lidar_xy() const { return lidar_xy_; }
+
+ private:
+  struct VehicleChannel {
+    std::uint32_t next_sequence = 0;
+    TimeNs last_matched_sweep = 0;
+    bool matched = false;
+  };
+
+  void to_map_frame(std::span<const LidarPoint> in, std::vector<LidarPoint>& out) const;
+  LidarStepResult learn(std::span<const LidarPoint> map_points, bool whole_frame);
+  void add_background_frame(std::span<const LidarPoint> map_points);
+  void correct_clusters(std::vector<SweptCluster>&& clusters, TimeNs now, LidarStepResult& result);
+  DatagramOutcome finish(DatagramOutcome outcome);
+
+  RsuCoreConfig config_;
+  SensorModel model_;
+  Eigen::Isometry3d sensor_to_map_;
+  Eigen::Vector2d lidar_xy_;
+  TimeNs rotation_period_ns_;
+
+  PacketDecoder decoder_;
+  FrameAssembler assembler_;  // whole rotations for background learning
+  ForegroundFilter foreground_;
+  SweepClusterer clusterer_;
+  bool background_ready_ = false;
+
+  v2i::SourceRateLimiter flood_limiter_;
+  v2i::AnnouncementValidator validator_;
+  v2i::VehicleRegistry registry_;
+  std::unordered_map<std::uint64_t, VehicleChannel> channels_;
+
+  v2i::EnumCounter<DatagramStage> datagram_stages_;
+  v2i::EnumCounter<v2i::DecodeStatus> decode_counts_;
+  LidarStats lidar_stats_;
+
+  std::vector<LidarPoint> sensor_scratch_;  // reused packet after packet
+  std::vector<LidarPoint> map_scratch_;
+};
+
+}  // namespace rsu::core

@@ -1,0 +1,121 @@
+// Test helper for the integration tests: a minimal connected vehicle. Announces a fixed pose at 10 Hz
+// to rsud (wire_codec) from a UDP socket on --bind, and prints every correction it receives on that
+// socket, one line each, flushed:
+//   correction <receive time ns> <vehicle id> <sequence> <sweep time ns> <x> <y> <yaw> <points> <faces> <rsu
+//   id>
+// Runs for --seconds and exits 0. Plain POSIX sockets: no dependence on the vehicle client.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "v2i/messages.h"
+#include "v2i/wire_codec.h"
+
+namespace {
+
+rsu::TimeNs wall_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+[[noreturn]] void usage(const char* why) {
+  std::fprintf(
+      stderr, "announcer: %s\nusage: announcer --rsu IP:PORT --bind IP --id N --pose X,Y,YAW [--seconds S]\n",
+      why);
+  std::exit(2);
+}
+
+sockaddr_in ipv4(const std::string& ip, int port) {
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  if (inet_pton(AF_INET, ip.c_str(), &a.sin_addr) != 1)
+    usage("not an IPv4 address");
+  return a;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string rsu, bind_ip = "127.0.0.1";
+  std::uint64_t id = 1;
+  double x = 0, y = 0, yaw = 0, seconds = 10;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i], v = argv[i + 1];
+    if (k == "--rsu")
+      rsu = v;
+    else if (k == "--bind")
+      bind_ip = v;
+    else if (k == "--id")
+      id = std::strtoull(v.c_str(), nullptr, 10);
+    else if (k == "--seconds")
+      seconds = std::strtod(v.c_str(), nullptr);
+    else if (k == "--pose") {
+      if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &x, &y, &yaw) != 3)
+        usage("--pose X,Y,YAW");
+    } else
+      usage("unknown option");
+  }
+  const auto colon = rsu.rfind(':');
+  if (colon == std::string::npos)
+    usage("--rsu IP:PORT is required");
+  const sockaddr_in to = ipv4(rsu.substr(0, colon), std::atoi(rsu.substr(colon + 1).c_str()));
+
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in local = ipv4(bind_ip, 0);
+  if (fd < 0 || bind(fd, reinterpret_cast<sockaddr*>(&local), sizeof local) != 0)
+    usage("cannot bind");
+  socklen_t len = sizeof local;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&local), &len);
+
+  rsu::v2i::VehicleAnnouncement a;
+  a.vehicle_id = id;
+  a.size = {4.89, 1.92, 1.70};  // DESIGN.md §2: the Lexus RX450h the scenarios drive
+  a.pose = {x, y, yaw};
+  a.pose_covariance = Eigen::Vector3d(0.25, 0.25, 0.01).asDiagonal();
+  a.speed_mps = 0.0;
+  a.yaw_rate_rps = 0.0;
+  a.reply_to = {bind_ip, ntohs(local.sin_port)};
+
+  const rsu::TimeNs end = wall_ns() + static_cast<rsu::TimeNs>(seconds * 1e9);
+  rsu::TimeNs next_announce = wall_ns();
+  std::vector<std::uint8_t> buffer(65536);
+  for (rsu::TimeNs now = wall_ns(); now < end; now = wall_ns()) {
+    if (now >= next_announce) {
+      a.sequence += 1;
+      a.generation_time = now;
+      const auto bytes = rsu::v2i::encode_v2i_message(a);
+      sendto(fd, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
+      next_announce += 100'000'000;
+    }
+    pollfd p{fd, POLLIN, 0};
+    const auto wait_ms = static_cast<int>(std::max<rsu::TimeNs>(1, (next_announce - now) / 1'000'000));
+    if (poll(&p, 1, wait_ms) <= 0)
+      continue;
+    const ssize_t n = recv(fd, buffer.data(), buffer.size(), 0);
+    if (n <= 0)
+      continue;
+    const auto decoded = rsu::v2i::decode_v2i_message(std::span(buffer.data(), static_cast<std::size_t>(n)));
+    const auto* c = std::get_if<rsu::v2i::Correction>(&decoded.body);
+    if (c == nullptr)
+      continue;
+    std::printf("correction %lld %llu %u %lld %.4f %.4f %.5f %u %u %llu\n", static_cast<long long>(wall_ns()),
+                static_cast<unsigned long long>(c->vehicle_id), c->sequence,
+                static_cast<long long>(c->sweep_time), c->pose.x, c->pose.y, c->pose.yaw,
+                c->quality.points_used, c->quality.faces_seen, static_cast<unsigned long long>(c->rsu_id));
+    std::fflush(stdout);
+  }
+  close(fd);
+  return 0;
+}

@@ -1,0 +1,351 @@
+#!/usr/bin/env python3
+"""Integration tests of rsud over loopback (issue #4): the real rsud, the real `rsu-sim stream` sending
+Velodyne VLP-16 packets of a scenario, and a minimal announcing vehicle (rsud_test_announcer).
+
+  corrections         the vehicle 15.5 m from the LiDAR gets corrections within 0.10 m of the truth
+  bad_input           garbage / truncated / oversized / unknown version / NaN, 0 m, 100 m sizes / a flood
+                      from one source: each counted (stats file), logged at a bounded rate, no crash,
+                      and the vehicle keeps being served
+  restart_and_reload  SIGTERM drains and exits 0; restarted, corrections resume within 1 s without
+                      restarting the vehicle; SIGHUP reloads keeping the registry, a broken file is refused
+
+Every wait is bounded in time; every child is killed on the way out, whatever happens.
+"""
+import argparse
+import math
+import os
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import time
+
+TRUTH = (15.0, 4.0, math.radians(20.0))  # the vehicle's footprint centre and yaw (static)
+
+
+def free_udp_port(ip="127.0.0.1"):
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind((ip, 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+# ---- a hand-written protobuf encoder for V2iMessage{announcement} (proto/v2i.proto) ------------------
+def varint(n):
+    n &= (1 << 64) - 1
+    out = bytearray()
+    while True:
+        b = n & 0x7F
+        n >>= 7
+        out.append(b | (0x80 if n else 0))
+        if not n:
+            return bytes(out)
+
+
+def field_varint(number, value):
+    return varint(number << 3) + varint(value)
+
+
+def field_double(number, value):
+    return varint((number << 3) | 1) + struct.pack("<d", value)
+
+
+def field_bytes(number, payload):
+    return varint((number << 3) | 2) + varint(len(payload)) + payload
+
+
+def announcement(vehicle_id, seq, length=4.89, width=1.92, height=1.70, version=1, reply=("127.0.0.2", 9)):
+    pose = field_double(1, 30.0) + field_double(2, -20.0) + field_double(3, 0.1)
+    cov = field_bytes(1, b"".join(struct.pack("<d", v) for v in (0.25, 0, 0, 0, 0.25, 0, 0, 0, 0.01)))
+    reply_to = field_bytes(1, reply[0].encode()) + field_varint(2, reply[1])
+    body = (field_varint(1, vehicle_id) + field_varint(2, seq) + field_varint(3, time.time_ns()) +
+            field_double(4, length) + field_double(5, width) + field_double(6, height) +
+            field_bytes(9, pose) + field_bytes(10, cov) + field_bytes(13, reply_to))
+    return field_varint(1, version) + field_bytes(2, body)
+
+
+# ---- the harness ------------------------------------------------------------------------------------
+class Harness:
+    def __init__(self, args):
+        self.args = args
+        self.work = args.work
+        shutil.rmtree(self.work, ignore_errors=True)
+        os.makedirs(self.work)
+        self.children = []
+        self.lidar_port = free_udp_port()
+        self.v2i_port = free_udp_port()
+        self.rsud = None
+        self.rsud_runs = 0
+        self.log_path = None
+
+    def path(self, name):
+        return os.path.join(self.work, name)
+
+    def spawn(self, cmd, out_name):
+        out = open(self.path(out_name), "w")
+        p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT)
+        self.children.append(p)
+        return p
+
+    def kill_all(self):
+        for p in self.children:
+            if p.poll() is None:
+                p.kill()
+                try:
+                    p.wait(timeout=5)
+                except subprocess.TimeoutExpired:
+                    pass
+
+    def write_scenarios(self):
+        scene = """lidar:
+  model: vlp16
+  mount: {x: 0, y: 0, z: 2.0}
+  noise: {range_sigma_m: 0.02, angle_sigma_rad: 0.001, seed: 3}
+scene:
+  ground: {half_extent_m: 60}
+  buildings:
+    - {x: 0, y: 30, length: 40, width: 10, height: 10}
+  poles:
+    - {x: -5, y: 3, radius: 0.15, height: 6}
+simulation: {start_s: 0.0, frames: 3}
+"""
+        vehicle = """vehicles:
+  - id: 1
+    shape: {length: 4.89, width: 1.92, height: 1.70}
+    trajectory:
+      static: {x: %.3f, y: %.3f, yaw_deg: %.3f}
+""" % (TRUTH[0], TRUTH[1], math.degrees(TRUTH[2]))
+        with open(self.path("empty.yaml"), "w") as f:
+            f.write("name: empty\n" + scene)
+        with open(self.path("street.yaml"), "w") as f:
+            f.write("name: street\n" + scene + vehicle)
+        # The background, recorded once without the vehicle (as an operator would), in the sensor frame.
+        r = subprocess.run([self.args.rsu_sim, "simulate", self.path("empty.yaml"), "-o", self.path("bg"),
+                            "--frames", "3"], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, r.stdout + r.stderr
+        self.bg = sorted(os.path.join(self.path("bg"), f) for f in os.listdir(self.path("bg")) if f.endswith(".pcd"))
+        assert len(self.bg) == 3, self.bg
+
+    def write_config(self, rsu_id=1, broken=False):
+        text = """rsu_id: %d
+lidar:
+  model: vlp16
+  mount: {x: 0, y: 0, z: 2.0}
+  input:
+    velodyne_udp: {bind_address: 127.0.0.1, port: %d}
+background:
+  pcd_files: [%s]
+v2i:
+  listen_address: 127.0.0.1
+  port: %d
+logging:
+  level: info
+  bad_input_log_first: 3
+  summary_interval_s: 1.0
+  stats_interval_s: 0.5
+  stats_file: %s
+""" % (rsu_id, self.lidar_port, ", ".join(self.bg), self.v2i_port, self.path("stats"))
+        if broken:
+            text = text.replace("model: vlp16", "model: vlp16\n  bogus_key: 1")
+        with open(self.path("rsud.yaml"), "w") as f:
+            f.write(text)
+
+    def start_rsud(self):
+        self.rsud_runs += 1
+        self.log_path = self.path("rsud_%d.log" % self.rsud_runs)
+        self.rsud = self.spawn([self.args.rsud, "--config", self.path("rsud.yaml")], os.path.basename(self.log_path))
+        self.wait_for(lambda: "ready: serving" in self.log(), 10, "rsud to become ready")
+
+    def log(self):
+        with open(self.log_path) as f:
+            return f.read()
+
+    def start_stream(self, seconds):
+        return self.spawn([self.args.rsu_sim, "stream", self.path("street.yaml"), "--to",
+                           "127.0.0.1:%d" % self.lidar_port, "--clock", "wall", "--seconds", str(seconds)], "stream.log")
+
+    def start_vehicle(self, seconds):
+        pose = "%f,%f,%f" % (TRUTH[0] + 0.4, TRUTH[1] - 0.3, TRUTH[2] + 0.05)  # its own estimate is off
+        return self.spawn([self.args.announcer, "--rsu", "127.0.0.1:%d" % self.v2i_port, "--bind", "127.0.0.1",
+                           "--id", "1", "--pose", pose, "--seconds", str(seconds)], "vehicle.out")
+
+    def corrections(self):
+        out = []
+        with open(self.path("vehicle.out")) as f:
+            for line in f:
+                w = line.split()
+                if len(w) == 11 and w[0] == "correction":
+                    out.append({"recv_ns": int(w[1]), "vehicle": int(w[2]), "seq": int(w[3]), "sweep_ns": int(w[4]),
+                                "x": float(w[5]), "y": float(w[6]), "yaw": float(w[7]), "points": int(w[8]),
+                                "rsu": int(w[10])})
+        return out
+
+    def stats(self):
+        values = {}
+        with open(self.path("stats")) as f:
+            for line in f:
+                k, v = line.split()
+                values[k] = float(v)
+        return values
+
+    def wait_for(self, condition, seconds, what):
+        deadline = time.time() + seconds
+        while time.time() < deadline:
+            if condition():
+                return
+            if self.rsud is not None and self.rsud.poll() is not None:
+                raise AssertionError("rsud exited (code %s) while waiting for %s:\n%s" % (
+                    self.rsud.returncode, what, self.log()))
+            time.sleep(0.02)
+        raise AssertionError("timed out after %.1f s waiting for %s" % (seconds, what))
+
+    def stop_rsud(self):
+        self.rsud.send_signal(signal.SIGTERM)
+        rc = self.rsud.wait(timeout=10)
+        assert rc == 0, "rsud exited with %d on SIGTERM:\n%s" % (rc, self.log())
+        assert "SIGTERM received: draining" in self.log() and "stopped:" in self.log(), self.log()
+
+
+def check_accuracy(corrections):
+    assert corrections, "no corrections"
+    for c in corrections:
+        err = math.hypot(c["x"] - TRUTH[0], c["y"] - TRUTH[1])
+        assert err < 0.10, "correction %s is %.3f m from the truth" % (c, err)
+        dyaw = abs((c["yaw"] - TRUTH[2] + math.pi / 2) % math.pi - math.pi / 2)  # modulo pi
+        assert dyaw < math.radians(3.0), "yaw %f vs %f" % (c["yaw"], TRUTH[2])
+        assert c["vehicle"] == 1
+
+
+def case_corrections(h):
+    h.start_rsud()
+    h.start_stream(4.0)
+    vehicle = h.start_vehicle(3.5)
+    h.wait_for(lambda: len(h.corrections()) >= 15, 8, "15 corrections")
+    cs = h.corrections()
+    check_accuracy(cs)
+    # One per rotation (10 Hz), consecutive sequence numbers, sweep times in the recent past.
+    for a, b in zip(cs, cs[1:]):
+        assert b["seq"] == a["seq"] + 1, (a, b)
+        assert 50e6 < b["sweep_ns"] - a["sweep_ns"] < 150e6, (a, b)
+    for c in cs:
+        assert 0 < c["recv_ns"] - c["sweep_ns"] < 50e6, c  # swept at most 50 ms before it arrived
+    vehicle.wait(timeout=10)
+    h.stop_rsud()
+    print("ok: %d corrections, worst error %.3f m" % (
+        len(cs), max(math.hypot(c["x"] - TRUTH[0], c["y"] - TRUTH[1]) for c in cs)))
+
+
+def case_bad_input(h):
+    h.start_rsud()
+    h.start_stream(7.0)
+    h.start_vehicle(6.5)
+    h.wait_for(lambda: len(h.corrections()) >= 3, 5, "first corrections")
+    rsu = ("127.0.0.1", h.v2i_port)
+    bad = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    bad.bind(("127.0.0.2", 0))
+    good = announcement(7, 1)
+    cases = {
+        "garbage": b"\xde\xad\xbe\xef\xff\xff\xff\xff\xff\x01",
+        "truncated": good[: len(good) // 2],
+        "oversized": b"\x08" * 2000,
+        "version": announcement(7, 2, version=9),
+        "nan": announcement(7, 3, length=float("nan")),
+        "zero": announcement(7, 4, length=0.0),
+        "huge": announcement(7, 5, length=100.0),
+    }
+    for _ in range(3):
+        for payload in cases.values():
+            bad.sendto(payload, rsu)
+        time.sleep(0.01)
+    # A flood from one more source.
+    flood = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    flood.bind(("127.0.0.3", 0))
+    for i in range(5000):
+        flood.sendto(b"\xff" * 40, rsu)
+    flood_end_ns = time.time_ns()
+    time.sleep(1.6)  # a summary interval, and a stats file written after the flood
+    assert h.rsud.poll() is None, "rsud died:\n" + h.log()
+    served_after = [c for c in h.corrections() if c["recv_ns"] > flood_end_ns]
+    assert len(served_after) >= 5, "the vehicle was not served after the flood: %d" % len(served_after)
+    check_accuracy(served_after)
+    h.stop_rsud()
+    s = h.stats()
+    expect = {"decode.too_large": 3, "validation.unsupported_version": 3, "validation.non_finite": 3,
+              "validation.length_out_of_range": 6}
+    for k, v in expect.items():
+        assert s.get(k) == v, "%s = %s, expected %d" % (k, s.get(k), v)
+    # 3 garbage + 3 truncated, and the flood's first ~100 (the burst) before the limit cut in.
+    assert 6 + 100 <= s["decode.parse_error"] <= 6 + 1000, s["decode.parse_error"]
+    assert s["datagram.flood_limited"] >= 3000, s["datagram.flood_limited"]
+    log = h.log()
+    for reason in ("decode:parse_error", "decode:too_large", "validation:non_finite"):
+        n = log.count("bad input (%s)" % reason)
+        assert 1 <= n <= 3, "%d log lines for %s (at most 3 one by one)" % (n, reason)
+    assert "not logged one by one since the last summary" in log, log[-3000:]
+    assert log.count("\n") < 200, "the bad input flooded the log (%d lines)" % log.count("\n")
+    print("ok: bad input counted %s" % {k: s[k] for k in sorted(s) if k.startswith(("decode.", "validation.", "datagram."))
+                                         and s[k] > 0})
+
+
+def case_restart_and_reload(h):
+    h.start_rsud()
+    h.start_stream(9.0)
+    h.start_vehicle(8.5)
+    h.wait_for(lambda: len(h.corrections()) >= 3, 5, "first corrections")
+    h.stop_rsud()
+    time.sleep(0.3)
+    # Restart: the vehicle keeps announcing; corrections must resume within 1 s of rsud's return.
+    t_restart = time.time_ns()
+    h.start_rsud()
+    h.wait_for(lambda: any(c["recv_ns"] > t_restart for c in h.corrections()), 3, "corrections after the restart")
+    first = min(c["recv_ns"] for c in h.corrections() if c["recv_ns"] > t_restart)
+    resume_s = (first - t_restart) * 1e-9
+    assert resume_s <= 1.0, "corrections resumed %.3f s after the restart" % resume_s
+    check_accuracy([c for c in h.corrections() if c["recv_ns"] > t_restart])
+
+    # SIGHUP with a new rsu_id: the registry is kept (no announcement is needed to resume).
+    h.write_config(rsu_id=2)
+    h.rsud.send_signal(signal.SIGHUP)
+    h.wait_for(lambda: "configuration reloaded: 1 of 1 registered vehicle(s) kept, background kept" in h.log(), 3,
+               "the reload")
+    h.wait_for(lambda: any(c["rsu"] == 2 for c in h.corrections()), 2, "corrections from the reloaded config")
+    # A broken file is refused; the old configuration goes on.
+    h.write_config(rsu_id=3, broken=True)
+    h.rsud.send_signal(signal.SIGHUP)
+    h.wait_for(lambda: "reload rejected, keeping the previous configuration" in h.log(), 3, "the refusal")
+    assert "lidar.bogus_key: unknown field" in h.log(), h.log()
+    t = time.time_ns()
+    h.wait_for(lambda: any(c["recv_ns"] > t and c["rsu"] == 2 for c in h.corrections()), 2, "service to go on")
+    h.stop_rsud()
+    print("ok: resumed %.3f s after the restart; reload kept the registry; broken reload refused" % resume_s)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("case", choices=["corrections", "bad_input", "restart_and_reload"])
+    ap.add_argument("--rsud", required=True)
+    ap.add_argument("--rsu-sim", required=True)
+    ap.add_argument("--announcer", required=True)
+    ap.add_argument("--work", required=True)
+    args = ap.parse_args()
+    h = Harness(args)
+    try:
+        h.write_scenarios()
+        h.write_config()
+        {"corrections": case_corrections, "bad_input": case_bad_input,
+         "restart_and_reload": case_restart_and_reload}[args.case](h)
+    except AssertionError as e:
+        print("FAIL: %s" % e)
+        if h.log_path and os.path.exists(h.log_path):
+            print("---- rsud log (tail) ----\n" + h.log()[-4000:])
+        return 1
+    finally:
+        h.kill_all()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,72 @@
+// The rsu-vehicle CLI's NDT pose CSV: what parses, and that every error names its line.
+#include "vehicle_client/ndt_csv.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace rsu::vehicle_client {
+namespace {
+
+// The line number an error names, or 0 when the line parsed.
+std::size_t error_line(NdtCsvParser& parser, const std::string& line) {
+  try {
+    parser.parse_line(line);
+  } catch (const NdtCsvError& e) {
+    EXPECT_NE(std::string(e.what()).find("line " + std::to_string(e.line())), std::string::npos) << e.what();
+    return e.line();
+  }
+  return 0;
+}
+
+TEST(NdtCsv, ShortRowsParseAfterTheHeader) {
+  NdtCsvParser parser;
+  EXPECT_FALSE(parser.parse_line("# recorded on route 7").has_value());
+  EXPECT_FALSE(parser.parse_line("time_ns,x,y,yaw").has_value());
+  EXPECT_TRUE(parser.has_header());
+  EXPECT_FALSE(parser.has_variances());
+  EXPECT_FALSE(parser.parse_line("").has_value());
+  const auto row = parser.parse_line("1700000000123456789, 12.5,-3.25 ,1.5e-1\r");
+  ASSERT_TRUE(row.has_value());
+  EXPECT_EQ(row->time, 1700000000123456789LL);
+  EXPECT_DOUBLE_EQ(row->pose.x, 12.5);
+  EXPECT_DOUBLE_EQ(row->pose.y, -3.25);
+  EXPECT_DOUBLE_EQ(row->pose.yaw, 0.15);
+  EXPECT_FALSE(row->variances.has_value());
+  EXPECT_EQ(parser.line_number(), 4U);
+}
+
+TEST(NdtCsv, LongRowsCarryVariances) {
+  NdtCsvParser parser;
+  parser.parse_line("time_ns,x,y,yaw,sxx,syy,syaw");
+  EXPECT_TRUE(parser.has_variances());
+  const auto row = parser.parse_line("5,1,2,3,0.04,0.09,0.0004");
+  ASSERT_TRUE(row && row->variances);
+  EXPECT_DOUBLE_EQ(row->variances->x(), 0.04);
+  EXPECT_DOUBLE_EQ(row->variances->y(), 0.09);
+  EXPECT_DOUBLE_EQ(row->variances->z(), 0.0004);
+}
+
+TEST(NdtCsv, ErrorsNameTheLine) {
+  {
+    NdtCsvParser parser;
+    EXPECT_EQ(error_line(parser, "1,2,3,4"), 1U);  // no header
+  }
+  NdtCsvParser parser;
+  ASSERT_EQ(error_line(parser, "time_ns,x,y,yaw,sxx,syy,syaw"), 0U);
+  ASSERT_EQ(error_line(parser, "1,2,3,4,1,1,1"), 0U);
+  EXPECT_EQ(error_line(parser, "1,2,3,4"), 3U);                            // too few fields
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,1,1,9"), 4U);                    // too many
+  EXPECT_EQ(error_line(parser, "1.5,2,3,4,1,1,1"), 5U);                    // time not an integer
+  EXPECT_EQ(error_line(parser, "1,abc,3,4,1,1,1"), 6U);                    // not a number
+  EXPECT_EQ(error_line(parser, "1,2,nan,4,1,1,1"), 7U);                    // not finite
+  EXPECT_EQ(error_line(parser, "1,2,3,4,0,1,1"), 8U);                      // zero variance
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,-1,1"), 9U);                     // negative variance
+  EXPECT_EQ(error_line(parser, "1,2,3,4e,1,1,1"), 10U);                    // trailing junk
+  EXPECT_EQ(error_line(parser, "99999999999999999999,2,3,4,1,1,1"), 11U);  // time overflows int64
+  EXPECT_EQ(error_line(parser, "1,2,,4,1,1,1"), 12U);                      // empty field
+  EXPECT_EQ(error_line(parser, "2,2,3,4,1,1,1"), 0U);                      // and the parser goes on
+}
+
+}  // namespace
+}  // namespace rsu::vehicle_client

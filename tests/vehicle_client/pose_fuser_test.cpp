@@ -1,0 +1,208 @@
+// PoseFuser on a simulated straight drive: noisy NDT plus RSU corrections (box centre, yaw modulo pi,
+// delivered late) against the test's own ground truth.
+#include "vehicle_client/pose_fuser.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/angles.h"
+#include "common/random.h"
+
+namespace rsu::vehicle_client {
+namespace {
+
+constexpr double kSpeed = 12.0;  // m/s
+constexpr double kHeading = deg_to_rad(30.0);
+constexpr double kRearAxleBehindCentre = 1.3;  // m: the reference point is the rear axle
+constexpr TimeNs kStart = 50 * kNsPerSecond;
+constexpr TimeNs kStep = 100 * kNsPerMs;  // 10 Hz NDT and RSU, as in the paper
+constexpr double kNdtSigma = 0.25;        // m, about the paper's NDT error between tall buildings
+constexpr double kNdtYawSigma = 0.02;     // rad
+constexpr double kRsuSigma = 0.06;        // m, a VLP-32C RSU fix (paper Table: 0.12 m MAE)
+constexpr double kRsuYawSigma = 0.02;     // rad
+
+// Truth: the rear axle moves along kHeading at kSpeed.
+Eigen::Vector2d truth_reference(TimeNs t) {
+  const double s = kSpeed * to_seconds(t - kStart);
+  return {10.0 + s * std::cos(kHeading), -5.0 + s * std::sin(kHeading)};
+}
+Eigen::Vector2d truth_box_centre(TimeNs t) {
+  return truth_reference(t) + kRearAxleBehindCentre * Eigen::Vector2d(std::cos(kHeading), std::sin(kHeading));
+}
+
+PoseFuserConfig fuser_config() {
+  PoseFuserConfig config;
+  config.ekf.reference_offset = {-kRearAxleBehindCentre, 0.0};  // reference minus centre, vehicle frame
+  return config;
+}
+
+Eigen::Matrix3d diagonal(double sxy, double syaw) {
+  return Eigen::Vector3d(sxy * sxy, sxy * sxy, syaw * syaw).asDiagonal();
+}
+
+v2i::Correction rsu_fix(TimeNs sweep, int k) {
+  const NormalPair n = standard_normal_pair(2, 2, static_cast<std::uint64_t>(k));
+  const NormalPair m = standard_normal_pair(2, 3, static_cast<std::uint64_t>(k));
+  v2i::Correction c;
+  c.vehicle_id = 1;
+  c.sweep_time = sweep;
+  const Eigen::Vector2d centre = truth_box_centre(sweep);
+  // A box has no front: every other fix reports the heading backwards.
+  c.pose = {centre.x() + kRsuSigma * n.a, centre.y() + kRsuSigma * n.b,
+            wrap_angle(kHeading + kRsuYawSigma * m.a + (k % 2 ? kPi : 0.0))};
+  c.pose_covariance = diagonal(kRsuSigma, kRsuYawSigma);
+  return c;
+}
+
+struct DriveResult {
+  double ndt_rmse = 0.0;
+  double fused_rmse = 0.0;
+  PoseFuserStats stats;
+};
+
+// 8 s of driving. Each RSU fix is swept 30 ms after an NDT pose but delivered only after the next NDT
+// pose (a late correction). Errors are taken over the last half, after the filter has settled.
+DriveResult drive(PoseFuser& fuser) {
+  constexpr int kSteps = 80;
+  double ndt_sq = 0.0;
+  double fused_sq = 0.0;
+  int counted = 0;
+  std::optional<v2i::Correction> in_flight;
+  for (int k = 0; k < kSteps; ++k) {
+    const TimeNs t = kStart + k * kStep;
+    const NormalPair n = standard_normal_pair(1, 0, static_cast<std::uint64_t>(k));
+    const NormalPair m = standard_normal_pair(1, 1, static_cast<std::uint64_t>(k));
+    const Eigen::Vector2d truth = truth_reference(t);
+    const Pose2 ndt{truth.x() + kNdtSigma * n.a, truth.y() + kNdtSigma * n.b, kHeading + kNdtYawSigma * m.a};
+    fuser.add_ndt(ndt, diagonal(kNdtSigma, kNdtYawSigma), t);
+    if (in_flight) {
+      fuser.add_rsu(*in_flight);
+    }
+    in_flight = rsu_fix(t + 30 * kNsPerMs, k);
+    const auto fused = fuser.pose_at(t);
+    EXPECT_TRUE(fused.has_value());
+    if (k >= kSteps / 2 && fused) {
+      ndt_sq += (Eigen::Vector2d(ndt.x, ndt.y) - truth).squaredNorm();
+      fused_sq += (Eigen::Vector2d(fused->state(fusion::kX), fused->state(fusion::kY)) - truth).squaredNorm();
+      ++counted;
+    }
+  }
+  return {std::sqrt(ndt_sq / counted), std::sqrt(fused_sq / counted), fuser.stats()};
+}
+
+TEST(PoseFuser, BeatsNoisyNdtOnAStraightDrive) {
+  PoseFuser fuser(fuser_config());
+  const DriveResult r = drive(fuser);
+  RecordProperty("ndt_rmse_m", std::to_string(r.ndt_rmse));
+  RecordProperty("fused_rmse_m", std::to_string(r.fused_rmse));
+  EXPECT_GT(r.ndt_rmse, 0.2);  // the NDT really is as noisy as simulated
+  EXPECT_LT(r.fused_rmse, 0.5 * r.ndt_rmse) << "fused " << r.fused_rmse << " m, NDT " << r.ndt_rmse << " m";
+  EXPECT_EQ(r.stats.ndt_accepted + r.stats.ndt_rejected, 80U);
+  EXPECT_GE(r.stats.rsu_accepted, 75U);  // backwards yaws included: yaw is used modulo pi
+  // Every fix came after a newer NDT pose: inserted late, and the NDT update after it redone.
+  EXPECT_EQ(r.stats.late, r.stats.rsu_accepted + r.stats.rsu_rejected_gate + r.stats.rsu_rejected_yaw_branch);
+  EXPECT_GE(r.stats.reapplied, r.stats.late);
+  const auto latest = fuser.latest();
+  ASSERT_TRUE(latest.has_value());
+  EXPECT_NEAR(latest->state(fusion::kSpeed), kSpeed, 0.5);
+  EXPECT_LT(angle_distance(latest->state(fusion::kYaw), kHeading), 0.02);
+}
+
+TEST(PoseFuser, AnOffBy90DegreeFixNeverMovesThePose) {
+  PoseFuser fuser(fuser_config());
+  drive(fuser);
+  const TimeNs t = kStart + 80 * kStep;
+  const Eigen::Vector2d truth = truth_reference(t);
+  fuser.add_ndt({truth.x(), truth.y(), kHeading}, diagonal(kNdtSigma, kNdtYawSigma), t);
+  const auto before = fuser.pose_at(t + 50 * kNsPerMs);
+  ASSERT_TRUE(before.has_value());
+
+  // The L-shape failure: the long edge fitted to the short face, so the yaw is 90 deg off, and the
+  // centre rebuilt from the alignment corner lands beside the vehicle. The RSU claims to be sure.
+  v2i::Correction wrong = rsu_fix(t + 50 * kNsPerMs, 0);
+  wrong.pose.yaw = wrap_angle(kHeading + kPi / 2.0);
+  const Eigen::Vector2d side(-std::sin(kHeading), std::cos(kHeading));
+  wrong.pose.x += 1.5 * side.x();
+  wrong.pose.y += 1.5 * side.y();
+  wrong.pose_covariance = diagonal(0.02, 0.01);
+  const PoseFuserStats stats_before = fuser.stats();
+  const fusion::MeasurementOutcome outcome = fuser.add_rsu(wrong);
+  EXPECT_TRUE(outcome == fusion::MeasurementOutcome::kRejectedYawBranch ||
+              outcome == fusion::MeasurementOutcome::kRejectedGate)
+      << fusion::to_string(outcome);
+  EXPECT_EQ(fuser.stats().rsu_rejected_by_gate(), stats_before.rsu_rejected_by_gate() + 1);
+  const auto after = fuser.pose_at(t + 50 * kNsPerMs);
+  ASSERT_TRUE(after.has_value());
+  EXPECT_EQ(after->state, before->state);
+
+  // A fix displaced 3 m along the road with the right yaw is the gate's to refuse.
+  v2i::Correction displaced = rsu_fix(t + 60 * kNsPerMs, 0);
+  displaced.pose.x += 3.0 * std::cos(kHeading);
+  displaced.pose.y += 3.0 * std::sin(kHeading);
+  EXPECT_EQ(fuser.add_rsu(displaced), fusion::MeasurementOutcome::kRejectedGate);
+  EXPECT_EQ(fuser.stats().rsu_rejected_gate, stats_before.rsu_rejected_gate + 1);
+}
+
+// NDT has drifted 2 m across the road while claiming 0.1 m, and the filter believes it; then the vehicle
+// comes into the RSU's view and its fixes are right. The gate first refuses them, but a run of fixes that
+// agree with each other re-anchors the filter, and from then on the fused pose follows the RSU.
+TEST(PoseFuser, ReanchorsAtAgreeingRsuFixesWhenNdtHasDrifted) {
+  PoseFuser fuser(fuser_config());
+  const Eigen::Vector2d across(-std::sin(kHeading), std::cos(kHeading));
+  const Eigen::Matrix3d ndt_cov = diagonal(0.1, 0.01);
+  int k = 0;
+  double last_fused_error = 0.0, last_ndt_error = 0.0;
+  for (TimeNs t = kStart; t < kStart + 5 * kNsPerSecond; t += kStep, ++k) {
+    const double drift = std::min(2.0, 2.0 * to_seconds(t - kStart));  // m, grows for 1 s then stays
+    const Eigen::Vector2d ndt = truth_reference(t) + drift * across;
+    fuser.add_ndt({ndt.x(), ndt.y(), kHeading}, ndt_cov, t);
+    if (t >= kStart + 3 * kNsPerSecond) fuser.add_rsu(rsu_fix(t + 40 * kNsPerMs, k));
+    const auto fused = fuser.pose_at(t + 40 * kNsPerMs);
+    ASSERT_TRUE(fused.has_value());
+    last_fused_error = (Eigen::Vector2d(fused->state(fusion::kX), fused->state(fusion::kY)) -
+                        truth_reference(t + 40 * kNsPerMs)).norm();
+    last_ndt_error = drift;
+  }
+  const PoseFuserStats stats = fuser.stats();
+  EXPECT_GE(stats.rsu_reanchors, 1u) << "accepted " << stats.rsu_accepted << " gate " << stats.rsu_rejected_gate
+                                     << " yaw " << stats.rsu_rejected_yaw_branch << " other " << stats.rsu_rejected_other;
+  EXPECT_GT(last_ndt_error, 1.9);
+  EXPECT_LT(last_fused_error, 0.5);
+}
+
+// A lone outlier, or fixes that disagree with each other, never re-anchor.
+TEST(PoseFuser, ScatteredOutliersDoNotReanchor) {
+  PoseFuser fuser(fuser_config());
+  int k = 0;
+  for (TimeNs t = kStart; t < kStart + 3 * kNsPerSecond; t += kStep, ++k) {
+    const Eigen::Vector2d ref = truth_reference(t);
+    fuser.add_ndt({ref.x(), ref.y(), kHeading}, diagonal(0.1, 0.01), t);
+    v2i::Correction bad = rsu_fix(t + 40 * kNsPerMs, k);
+    bad.pose.x += (k % 2 ? 3.0 : -3.0);  // jumps 6 m from fix to fix: no run
+    fuser.add_rsu(bad);
+  }
+  EXPECT_EQ(fuser.stats().rsu_reanchors, 0u);
+  EXPECT_GT(fuser.stats().rsu_rejected_gate, 20u);
+}
+
+TEST(PoseFuser, NothingBeforeTheFirstNdtPoseAndNoRsuStart) {
+  PoseFuser fuser(fuser_config());
+  EXPECT_FALSE(fuser.pose_at(kStart).has_value());
+  // A box yaw cannot start the filter (which way does the vehicle face?).
+  EXPECT_EQ(fuser.add_rsu(rsu_fix(kStart, 0)), fusion::MeasurementOutcome::kRejectedNotInitialized);
+  EXPECT_EQ(fuser.stats().rsu_rejected_other, 1U);
+  EXPECT_FALSE(fuser.pose_at(kStart).has_value());
+  v2i::Correction nan = rsu_fix(kStart, 0);
+  nan.pose.x = std::nan("");
+  EXPECT_EQ(fuser.add_ndt({1.0, 2.0, 0.3}, diagonal(0.2, 0.02), kStart),
+            fusion::MeasurementOutcome::kInitialized);
+  EXPECT_EQ(fuser.add_rsu(nan), fusion::MeasurementOutcome::kRejectedInvalid);
+  const auto p = fuser.pose_at(kStart);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_DOUBLE_EQ(p->state(fusion::kX), 1.0);
+  EXPECT_DOUBLE_EQ(p->state(fusion::kY), 2.0);
+}
+
+}  // namespace
+}  // namespace rsu::vehicle_client

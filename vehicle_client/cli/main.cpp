@@ -1,0 +1,323 @@
+// rsu-vehicle: the vehicle side of RSU-assisted localization on the command line. Reads the vehicle's
+// NDT poses as CSV on stdin, announces the vehicle to the RSU(s), receives their corrections, fuses
+// both (PoseFuser), and prints the fused poses as CSV on stdout (issue 4, item 3).
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
+
+#include <boost/program_options.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "vehicle_client/cli/csv_writers.h"
+#include "vehicle_client/ndt_csv.h"
+#include "vehicle_client/pose_fuser.h"
+#include "vehicle_client/udp_endpoint_text.h"
+#include "vehicle_client/vehicle_client.h"
+
+namespace rsu::vehicle_client::cli {
+namespace {
+
+namespace po = boost::program_options;
+using Steady = std::chrono::steady_clock;
+
+constexpr const char* kAbout =
+    "rsu-vehicle: announce a vehicle to roadside LiDAR units, receive their corrections and fuse them\n"
+    "with the vehicle's own NDT poses.\n"
+    "\n"
+    "usage: rsu-vehicle --vehicle-id ID --rsu HOST:PORT [options] < ndt.csv > fused.csv\n"
+    "\n"
+    "stdin: NDT poses, CSV with a header line, one of\n"
+    "  time_ns,x,y,yaw\n"
+    "  time_ns,x,y,yaw,sxx,syy,syaw\n"
+    "  time_ns on the common clock (ns; GNSS/PTP time, or host time since the Unix epoch in tests);\n"
+    "  x, y in the map frame (ENU, m) of the vehicle's reference point; yaw rad CCW from east;\n"
+    "  sxx, syy, syaw: variances (m^2, m^2, rad^2); without them --ndt-sigma-xy/--ndt-sigma-yaw apply.\n"
+    "  Bad input stops the program with the line number.\n"
+    "\n"
+    "stdout: fused poses, CSV with the header\n"
+    "  time_ns,x,y,yaw,source,sxx,syy,syaw,speed_mps,yaw_rate_rps\n"
+    "  source ndt: the estimate at an NDT pose's time after fusing it; source rsu: at a correction's sweep\n"
+    "  time after fusing it (rows need not be in time order: corrections arrive late). sxx, syy, syaw:\n"
+    "  variances; speed_mps, yaw_rate_rps: the filter's motion estimate.\n"
+    "\n"
+    "--corrections FILE: every correction received, CSV with the header\n"
+    "  time_ns,x,y,yaw,cxx,cxy,cxyaw,cyy,cyyaw,cyawyaw,points_used,faces_seen,range_m,yaw_resolution,\n"
+    "  confidence,rsu_id,sequence,announcement_sequence,received_ns,fusion\n"
+    "  time_ns is the LiDAR sweep time; x, y the box centre; c*: covariance; fusion: the fuser's decision.\n"
+    "\n"
+    "On EOF it waits --drain-ms for late corrections, prints statistics on stderr and exits 0.\n"
+    "\n"
+    "options";
+
+struct Options {
+  VehicleClientConfig client;
+  bool announce_only = false;
+  bool realtime = false;
+  std::string corrections_path;
+  TimeNs drain = 300 * kNsPerMs;
+  double ndt_sigma_xy = 0.2;
+  double ndt_sigma_yaw = 0.02;
+};
+
+// Empty when --help was given (and printed).
+std::optional<Options> parse_options(int argc, char** argv) {
+  Options o;
+  std::string bind = "0.0.0.0:0";
+  double drain_ms = 300.0;
+  double announce_period_ms = 100.0;
+  std::uint64_t vehicle_id = 0;
+  po::options_description d(kAbout);
+  d.add_options()("help,h", "show this help")("vehicle-id", po::value<std::uint64_t>(&vehicle_id)->required(),
+                                              "non-zero vehicle id (stable for the trip)")(
+      "length", po::value<double>(&o.client.size.length_m)->default_value(4.89, "4.89"),
+      "footprint box length, m")("width",
+                                 po::value<double>(&o.client.size.width_m)->default_value(1.92, "1.92"),
+                                 "footprint box width, m")(
+      "height", po::value<double>(&o.client.size.height_m)->default_value(1.70, "1.70"), "box height, m")(
+      "ref-offset-x", po::value<double>()->default_value(0.0),
+      "reference point minus box centre along vehicle x (forward), m; e.g. -1.3 for a rear axle")(
+      "ref-offset-y", po::value<double>()->default_value(0.0), "the same along vehicle y (left), m")(
+      "rsu", po::value<std::vector<std::string>>(&o.client.rsu_endpoints)->required(),
+      "RSU announcement endpoint HOST:PORT ([ADDR]:PORT for IPv6); repeat for several RSUs")(
+      "bind", po::value<std::string>(&bind)->default_value(bind),
+      "local ADDR:PORT receiving corrections (port 0: any free port; it is announced)")(
+      "reply-address", po::value<std::string>(&o.client.reply_address),
+      "address announced for corrections (default: the bound one, or the one routed to the RSU)")(
+      "announce-period-ms", po::value<double>(&announce_period_ms)->default_value(announce_period_ms, "100"),
+      "repeat the latest pose when no new one came for this long (0: never)")(
+      "announce-only",
+      "announce and record corrections (--corrections) but do not fuse them: the output "
+      "is then the NDT-only filter, a baseline")(
+      "realtime",
+      "pace the input by its time_ns column (as a live vehicle would) instead of as fast as "
+      "lines come")("corrections", po::value<std::string>(&o.corrections_path),
+                    "write the corrections received to FILE (CSV)")(
+      "drain-ms", po::value<double>(&drain_ms)->default_value(drain_ms, "300"),
+      "wait this long for corrections after EOF")(
+      "ndt-sigma-xy", po::value<double>(&o.ndt_sigma_xy)->default_value(o.ndt_sigma_xy, "0.2"),
+      "NDT position standard deviation, m, for rows without variances")(
+      "ndt-sigma-yaw", po::value<double>(&o.ndt_sigma_yaw)->default_value(o.ndt_sigma_yaw, "0.02"),
+      "NDT yaw standard deviation, rad, for rows without variances");
+  po::variables_map vm;
+  po::store(po::parse_command_line(argc, argv, d), vm);
+  if (vm.count("help")) {
+    std::cout << d << "\n";
+    return std::nullopt;
+  }
+  po::notify(vm);
+  o.client.vehicle_id = vehicle_id;
+  if (vehicle_id == 0) {
+    throw std::invalid_argument("--vehicle-id must be non-zero");
+  }
+  for (const std::string& rsu : o.client.rsu_endpoints) {
+    parse_udp_endpoint(rsu);  // throws naming the bad one
+  }
+  o.client.reference_offset = {vm["ref-offset-x"].as<double>(), vm["ref-offset-y"].as<double>()};
+  const auto bind_endpoint = parse_udp_endpoint(bind, true);
+  o.client.bind_address = bind_endpoint.address().is_unspecified() ? "" : bind_endpoint.address().to_string();
+  o.client.bind_port = bind_endpoint.port();
+  o.announce_only = vm.count("announce-only") > 0;
+  o.realtime = vm.count("realtime") > 0;
+  if (!(drain_ms >= 0.0 && drain_ms <= 60'000.0)) {
+    throw std::invalid_argument("--drain-ms must be within [0, 60000]");
+  }
+  if (!(announce_period_ms >= 0.0 && announce_period_ms <= 60'000.0)) {
+    throw std::invalid_argument("--announce-period-ms must be within [0, 60000]");
+  }
+  if (!(o.ndt_sigma_xy > 0.0 && o.ndt_sigma_yaw > 0.0)) {
+    throw std::invalid_argument("--ndt-sigma-xy and --ndt-sigma-yaw must be positive");
+  }
+  o.drain = from_seconds(drain_ms * 1e-3);
+  o.client.announce_period = from_seconds(announce_period_ms * 1e-3);
+  return o;
+}
+
+class Session {
+ public:
+  explicit Session(const Options& options)
+      : options_(options), threaded_(options.client), fuser_(fuser_config()) {
+    if (!options_.corrections_path.empty()) {
+      corrections_.reset(std::fopen(options_.corrections_path.c_str(), "w"));
+      if (!corrections_) {
+        throw std::runtime_error("cannot write --corrections file \"" + options_.corrections_path + "\"");
+      }
+      std::fprintf(corrections_.get(), "%s\n", kCorrectionHeader);
+    }
+    std::printf("%s\n", kFusedHeader);
+    std::fflush(stdout);
+  }
+
+  void on_ndt(const NdtPoseRow& row) {
+    const Eigen::Matrix3d covariance =
+        row.variances ? Eigen::Matrix3d(row.variances->asDiagonal())
+                      : Eigen::Matrix3d(Eigen::Vector3d(options_.ndt_sigma_xy * options_.ndt_sigma_xy,
+                                                        options_.ndt_sigma_xy * options_.ndt_sigma_xy,
+                                                        options_.ndt_sigma_yaw * options_.ndt_sigma_yaw)
+                                            .asDiagonal());
+    handle_corrections();  // first, so that the row below includes every correction received so far
+    fuser_.add_ndt(row.pose, covariance, row.time);
+    const auto fused = fuser_.pose_at(row.time);
+    announce(row, covariance, fused);
+    if (fused) {
+      write_fused_row(stdout, *fused, "ndt");
+    }
+    std::fflush(stdout);
+  }
+
+  // Fuses and records whatever corrections arrived.
+  void handle_corrections() {
+    for (const ReceivedCorrection& r : threaded_.client().poll()) {
+      std::string decision = "not_fused";
+      if (!options_.announce_only) {
+        const fusion::MeasurementOutcome outcome = fuser_.add_rsu(r.correction);
+        decision = fusion::to_string(outcome);
+        const auto fused = fuser_.pose_at(r.correction.sweep_time);
+        if (outcome == fusion::MeasurementOutcome::kAccepted && fused) {
+          write_fused_row(stdout, *fused, "rsu");
+        }
+      }
+      if (corrections_) {
+        write_correction_row(corrections_.get(), r, decision);
+      }
+    }
+  }
+
+  void print_stats() const {
+    const VehicleClientStats c = threaded_.client().stats();
+    const PoseFuserStats f = fuser_.stats();
+    std::fprintf(stderr,
+                 "rsu-vehicle: announcements sent %llu (keep-alive %llu, send errors %llu, refused %llu); "
+                 "datagrams received %llu; corrections accepted %llu, rejected %llu",
+                 ull(c.announcements_sent), ull(c.keepalive_announcements), ull(c.send_errors),
+                 ull(c.announcements_refused), ull(c.datagrams_received), ull(c.accepted()),
+                 ull(c.rejected()));
+    for (std::size_t i = 1; i < static_cast<std::size_t>(CorrectionVerdict::kCount); ++i) {
+      const auto v = static_cast<CorrectionVerdict>(i);
+      if (c.corrections.count(v) > 0) {
+        std::fprintf(stderr, " %s=%llu", to_string(v), ull(c.corrections.count(v)));
+      }
+    }
+    std::fprintf(
+        stderr,
+        "; fuser: NDT accepted %llu rejected %llu, RSU accepted %llu rejected gate %llu yaw-branch %llu "
+        "other %llu, late %llu, re-applied %llu, re-anchored at RSU fixes %llu\n",
+        ull(f.ndt_accepted), ull(f.ndt_rejected), ull(f.rsu_accepted), ull(f.rsu_rejected_gate),
+        ull(f.rsu_rejected_yaw_branch), ull(f.rsu_rejected_other), ull(f.late), ull(f.reapplied),
+        ull(f.rsu_reanchors));
+  }
+
+ private:
+  static unsigned long long ull(std::uint64_t v) { return static_cast<unsigned long long>(v); }
+
+  PoseFuserConfig fuser_config() const {
+    PoseFuserConfig config;
+    config.ekf.reference_offset = options_.client.reference_offset;
+    return config;
+  }
+
+  // Announces the vehicle's best estimate: the fused one (with speed and yaw rate once the filter knows
+  // them), else the NDT pose itself.
+  void announce(const NdtPoseRow& row, const Eigen::Matrix3d& ndt_covariance,
+                const std::optional<fusion::StateEstimate>& fused) {
+    VehicleState state{row.time, row.pose, ndt_covariance, std::nullopt, std::nullopt};
+    if (fused) {
+      state.pose = fused->pose();
+      state.covariance = fused->covariance.topLeftCorner<3, 3>();
+      // "Known" means the filter has settled: 1 m/s and 0.2 rad/s (1 sigma) are loose but honest.
+      if (fused->covariance(fusion::kSpeed, fusion::kSpeed) < 1.0) {
+        state.speed_mps = fused->state(fusion::kSpeed);
+      }
+      if (fused->covariance(fusion::kYawRate, fusion::kYawRate) < 0.04) {
+        state.yaw_rate_rps = fused->state(fusion::kYawRate);
+      }
+    }
+    const v2i::AnnouncementReason reason = threaded_.client().announce(state);
+    if (reason != v2i::AnnouncementReason::kValid && refusals_logged_ < 10) {
+      ++refusals_logged_;
+      std::fprintf(stderr, "rsu-vehicle: announcement at %lld not sent: %s\n",
+                   static_cast<long long>(row.time), v2i::to_string(reason));
+    }
+  }
+
+  struct FileCloser {
+    void operator()(std::FILE* f) const { std::fclose(f); }
+  };
+
+  const Options& options_;
+  ThreadedVehicleClient threaded_;
+  PoseFuser fuser_;
+  std::unique_ptr<std::FILE, FileCloser> corrections_;
+  int refusals_logged_ = 0;
+};
+
+// Waits until `until`, fusing corrections as they come (10 ms slices).
+void wait_handling_corrections(Session& session, Steady::time_point until) {
+  while (Steady::now() < until) {
+    std::this_thread::sleep_for(
+        std::min<Steady::duration>(std::chrono::milliseconds(10), until - Steady::now()));
+    session.handle_corrections();
+    std::fflush(stdout);
+  }
+}
+
+int run(const Options& options) {
+  Session session(options);
+  NdtCsvParser parser;
+  std::optional<TimeNs> first_time;
+  const Steady::time_point wall_start = Steady::now();
+  std::string line;
+  while (std::getline(std::cin, line)) {
+    std::optional<NdtPoseRow> row;
+    try {
+      row = parser.parse_line(line);
+    } catch (const NdtCsvError& e) {
+      std::fprintf(stderr, "rsu-vehicle: stdin %s\n", e.what());
+      session.print_stats();
+      return 1;
+    }
+    if (!row) {
+      continue;
+    }
+    if (options.realtime) {
+      if (!first_time) {
+        first_time = row->time;
+      }
+      wait_handling_corrections(session, wall_start + std::chrono::nanoseconds(row->time - *first_time));
+    }
+    session.on_ndt(*row);
+  }
+  if (!parser.has_header()) {
+    std::fprintf(stderr, "rsu-vehicle: stdin ended before the header line\n");
+  }
+  wait_handling_corrections(session, Steady::now() + std::chrono::nanoseconds(options.drain));
+  session.print_stats();
+  return 0;
+}
+
+}  // namespace
+}  // namespace rsu::vehicle_client::cli
+
+int main(int argc, char** argv) {
+  std::optional<rsu::vehicle_client::cli::Options> options;
+  try {
+    options = rsu::vehicle_client::cli::parse_options(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rsu-vehicle: %s (see --help)\n", e.what());
+    return 2;
+  }
+  if (!options) {
+    return 0;
+  }
+  try {
+    return rsu::vehicle_client::cli::run(*options);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rsu-vehicle: %s\n", e.what());
+    return 1;
+  }
+}
