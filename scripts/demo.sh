@@ -1,27 +1,35 @@
 #!/usr/bin/env bash
 # The main job: installs what is missing, builds, and runs the end-to-end demo.
-#   1. simulates the corridor street (VLP-32C roadside LiDAR, a car driving through) and writes its
-#      frames (PCD), the Velodyne packets (pcap) and a top-down picture;
-#   2. reproduces the paper's pilot experiment (Sec. 3.1) for the VLP-16 and VLP-32C and draws the
-#      heat maps.
+#   1. the paper's realistic experiment (Sec. 4) in the corridor street, through the real processes on
+#      loopback: the vehicle's NDT self-localization, then for the VLP-16 and the VLP-32C the real rsud
+#      fed with Velodyne packets by the simulator, and the real vehicle client announcing, receiving
+#      corrections and fusing them; prints the paper's table and writes the figures;
+#   2. the paper's pilot experiment (Sec. 3.1): heat maps over distance x yaw, both LiDAR models;
+#   3. one simulated frame of the street as PCD, pcap and a top-down picture.
 # Everything goes to out/ (override with OUT=...).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${OUT:-out}
-PY=/usr/bin/python3  # Debian's python3, which has python3-matplotlib
+PY=/usr/bin/python3  # Debian's python3, which has python3-matplotlib and python3-yaml
 
 scripts/install-deps.sh
 echo "== building (Release) =="
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot
+cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle
 
-echo "== 1. corridor street: simulate 10 frames =="
-build/tools/rsu-sim simulate scenarios/corridor.yaml --out "$OUT/sim"
-$PY eval/plots/topdown.py "$OUT/sim"
+echo "== 1. realistic experiment: corridor street, NDT vs RSU vs fused (paper Sec. 4) =="
+$PY eval/corridor/run_experiment.py --build build --out "$OUT/corridor"
 
-echo "== 2. the paper's pilot experiment (75 distances x 180 yaw angles, two LiDAR models) =="
+echo "== 2. pilot experiment: 75 distances x 180 yaw angles, VLP-16 and VLP-32C (paper Sec. 3.1) =="
 build/eval/rsu-pilot --out "$OUT/pilot"
 $PY eval/plots/pilot_heatmaps.py "$OUT/pilot" >/dev/null
 echo "heat maps: $OUT/pilot/<model>_<metric>.png; every cell: $OUT/pilot/cells.csv; $OUT/pilot/summary.json"
+
+echo "== 3. one frame of the street: PCD, Velodyne pcap, top-down picture =="
+build/tools/rsu-sim simulate scenarios/corridor.yaml --out "$OUT/sim" | tail -3
+$PY eval/plots/topdown.py "$OUT/sim"
+
 echo
-echo "done. Picture of one frame: $OUT/sim/topdown.png"
+echo "== the realistic experiment's table (also $OUT/corridor/table.txt) =="
+cat "$OUT/corridor/table.txt"
+echo "figures: $OUT/corridor/error_vs_position.png, $OUT/corridor/error_boxplot.png"
