@@ -10,7 +10,9 @@ using fusion::MeasurementOutcome;
 
 namespace {
 
-double heading_of(const fusion::StateEstimate& e) { return e.state(fusion::kYaw); }
+double heading_of(const fusion::StateEstimate& e) {
+  return e.state(fusion::kYaw);
+}
 
 bool is_accepted(MeasurementOutcome outcome) {
   return outcome == MeasurementOutcome::kAccepted || outcome == MeasurementOutcome::kInitialized;
@@ -52,7 +54,8 @@ MeasurementOutcome PoseFuser::add_rsu(const v2i::Correction& correction) {
 
 void PoseFuser::track_rejected_fix(const v2i::Correction& correction) {
   const auto estimate = ekf_.estimate_at(correction.sweep_time);
-  if (!estimate) return;
+  if (!estimate)
+    return;
   bool continues_run = false;
   if (last_rejected_) {
     const TimeNs gap = correction.sweep_time - last_rejected_->sweep_time;
@@ -69,13 +72,15 @@ void PoseFuser::track_rejected_fix(const v2i::Correction& correction) {
   }
   rejected_run_ = continues_run ? rejected_run_ + 1 : 1;
   last_rejected_ = correction;
-  if (rejected_run_ < config_.reanchor_after) return;
+  if (rejected_run_ < config_.reanchor_after)
+    return;
 
   // Re-initialise at the fix: its box centre back to the reference point, its box yaw on the branch
   // nearest the filter's heading (a box has no front), speed and yaw rate kept.
   fusion::StateEstimate anchored = *estimate;
   double yaw = correction.pose.yaw;
-  if (std::abs(wrap_angle(yaw - heading_of(*estimate))) > kPi / 2) yaw = wrap_angle(yaw + kPi);
+  if (std::abs(wrap_angle(yaw - heading_of(*estimate))) > kPi / 2)
+    yaw = wrap_angle(yaw + kPi);
   const Eigen::Vector2d offset = Eigen::Rotation2Dd(yaw) * config_.ekf.reference_offset;
   anchored.time = correction.sweep_time;
   // The inverse of fusion::box_centre_from_reference: reference = centre + R(yaw) * offset.

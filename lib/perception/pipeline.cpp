@@ -4,63 +4,21 @@
 
 namespace rsu::perception {
 
-PerceptionPipeline::PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector2d& lidar_xy)
-    : config_(config),
-      lidar_xy_(lidar_xy),
-      ground_(config.ground),
-      range_image_(lidar_xy, config.range_image) {}
-
-void PerceptionPipeline::add_background_frame(std::span<const LidarPoint> points) {
-  switch (config_.background) {
-    case BackgroundMethod::ground_height:
-      return;
-    case BackgroundMethod::reference_frame:
-      for (const auto& p : points) {
-        // Reference points the prefilter would drop anyway only slow the look-ups down.
-        if (!config_.ground_prefilter || ground_.classify(p) == PointClass::foreground) {
-          reference_points_.push_back(p);
-        }
-      }
-      reference_.emplace(reference_points_, config_.reference_frame);
-      return;
-    case BackgroundMethod::range_image:
-      range_image_.add_training_frame(points);
-      return;
-  }
+BackgroundModelConfig background_model_config(const PerceptionConfig& config) {
+  return {config.background, config.ground_prefilter, config.ground, config.reference_frame,
+          config.range_image};
 }
 
-ForegroundSelection PerceptionPipeline::remove_background(std::span<const LidarPoint> points) const {
-  const bool prefilter = config_.ground_prefilter;
-  auto with_prefilter = [&](auto&& model) {
-    return select_foreground(points, [&](const LidarPoint& p) {
-      if (prefilter) {
-        const PointClass c = ground_.classify(p);
-        if (c != PointClass::foreground) {
-          return c;
-        }
-      }
-      return model(p);
-    });
-  };
-  switch (config_.background) {
-    case BackgroundMethod::ground_height:
-      return ground_.select_foreground(points);
-    case BackgroundMethod::reference_frame:
-      if (!reference_) {
-        return with_prefilter([](const LidarPoint& p) {
-          return is_finite_point(p) ? PointClass::foreground : PointClass::invalid;
-        });
-      }
-      return with_prefilter([&](const LidarPoint& p) { return reference_->classify(p); });
-    case BackgroundMethod::range_image:
-      return with_prefilter([&](const LidarPoint& p) { return range_image_.classify(p); });
-  }
-  return {};
+PerceptionPipeline::PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector2d& lidar_xy)
+    : config_(config), lidar_xy_(lidar_xy), background_(background_model_config(config), lidar_xy) {}
+
+void PerceptionPipeline::add_background_frame(std::span<const LidarPoint> points) {
+  background_.add_background_frame(points);
 }
 
 PerceptionResult PerceptionPipeline::process(std::span<const LidarPoint> points) const {
   PerceptionResult result;
-  const ForegroundSelection fg = remove_background(points);
+  const ForegroundSelection fg = background_.select_foreground(points);
   result.stats.input_points = points.size();
   result.stats.foreground_points = fg.indices.size();
   result.stats.background_points = fg.background;

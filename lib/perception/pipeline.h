@@ -15,6 +15,7 @@
 
 #include "common/time.h"
 #include "lidar/point.h"
+#include "perception/background_model.h"
 #include "perception/euclidean_clustering.h"
 #include "perception/ground_height_filter.h"
 #include "perception/l_shape_fitting.h"
@@ -24,9 +25,12 @@
 
 namespace rsu::perception {
 
-enum class BackgroundMethod { ground_height, reference_frame, range_image };
 enum class ClusteringMethod { reference, grid };
 enum class CorrectionMethod { algorithm1, improved };
+
+struct PerceptionConfig;
+// The background part of a perception configuration.
+BackgroundModelConfig background_model_config(const PerceptionConfig& config);
 
 struct PerceptionConfig {
   BackgroundMethod background = BackgroundMethod::range_image;
@@ -90,14 +94,9 @@ class PerceptionPipeline {
   const Eigen::Vector2d& lidar_xy() const { return lidar_xy_; }
 
  private:
-  ForegroundSelection remove_background(std::span<const LidarPoint> points) const;
-
   PerceptionConfig config_;
   Eigen::Vector2d lidar_xy_;
-  GroundHeightFilter ground_;
-  std::vector<LidarPoint> reference_points_;
-  std::optional<ReferenceFrameBackground> reference_;
-  RangeImageBackground range_image_;
+  BackgroundModel background_;
 };
 
 // The same correction as PerceptionPipeline::correct, for callers holding a fit and its points.

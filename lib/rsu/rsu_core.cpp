@@ -124,7 +124,7 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       rotation_period_ns_(static_cast<TimeNs>(1e9 / model_.rotation_hz())),
       decoder_(model_),
       assembler_(assembler_config(model_)),
-      foreground_(config.perception, lidar_xy_),
+      background_(perception::background_model_config(config.perception), lidar_xy_),
       clusterer_(config.sweep, config.perception.clustering, lidar_xy_, model_.rotation_hz(),
                  azimuth_spread_rad(model_)),
       background_ready_(config.background.learning_frames == 0),
@@ -186,7 +186,7 @@ void RsuCore::to_map_frame(std::span<const LidarPoint> in, std::vector<LidarPoin
 }
 
 void RsuCore::add_background_frame(std::span<const LidarPoint> map_points) {
-  foreground_.add_background_frame(map_points);
+  background_.add_background_frame(map_points);
   ++lidar_stats_.background_frames;
 }
 
@@ -219,7 +219,7 @@ LidarStepResult RsuCore::on_lidar_points(std::span<const LidarPoint> points, Tim
     return learn(map_scratch_, false);
   }
   for (const LidarPoint& p : map_scratch_) {
-    clusterer_.add(p, foreground_.classify(p) == perception::PointClass::foreground);
+    clusterer_.add(p, background_.classify(p) == perception::PointClass::foreground);
   }
   LidarStepResult result;
   correct_clusters(clusterer_.release_closed(), now, result);
@@ -232,7 +232,7 @@ LidarStepResult RsuCore::on_lidar_frame(std::span<const LidarPoint> points, Time
     return learn(map_scratch_, true);
   }
   for (const LidarPoint& p : map_scratch_) {
-    clusterer_.add(p, foreground_.classify(p) == perception::PointClass::foreground);
+    clusterer_.add(p, background_.classify(p) == perception::PointClass::foreground);
   }
   LidarStepResult result;
   correct_clusters(clusterer_.release_all(), now, result);
@@ -432,7 +432,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
   summary.vehicles_after = fresh.registry_.active(now).size();
   summary.background_kept = same_background_setup(config_, next);
   if (summary.background_kept) {
-    fresh.foreground_ = std::move(foreground_);
+    fresh.background_ = std::move(background_);
     fresh.background_ready_ = background_ready_;
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }

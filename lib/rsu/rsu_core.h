@@ -26,8 +26,8 @@
 #include "lidar/frame_assembler.h"
 #include "lidar/point.h"
 #include "lidar/velodyne_packet.h"
+#include "perception/background_model.h"
 #include "rsu/datagram_outcome.h"
-#include "rsu/foreground_filter.h"
 #include "rsu/rsu_core_config.h"
 #include "rsu/sweep_clusterer.h"
 #include "v2i/announcement_validation.h"
@@ -142,7 +142,7 @@ class RsuCore {
 
   PacketDecoder decoder_;
   FrameAssembler assembler_;  // whole rotations for background learning
-  ForegroundFilter foreground_;
+  perception::BackgroundModel background_;
   SweepClusterer clusterer_;
   bool background_ready_ = false;
 

@@ -1,22 +1,18 @@
-#include "rsu/foreground_filter.h"
+#include "perception/background_model.h"
 
-namespace rsu::core {
+namespace rsu::perception {
 
-using perception::BackgroundMethod;
-using perception::PointClass;
-
-ForegroundFilter::ForegroundFilter(const perception::PerceptionConfig& config,
-                                   const Eigen::Vector2d& lidar_xy)
+BackgroundModel::BackgroundModel(const BackgroundModelConfig& config, const Eigen::Vector2d& lidar_xy)
     : config_(config), ground_(config.ground), range_image_(lidar_xy, config.range_image) {}
 
-void ForegroundFilter::add_background_frame(std::span<const LidarPoint> points) {
+void BackgroundModel::add_background_frame(std::span<const LidarPoint> points) {
   ++frames_;
-  switch (config_.background) {
+  switch (config_.method) {
     case BackgroundMethod::ground_height:
       return;
     case BackgroundMethod::reference_frame:
       for (const LidarPoint& p : points) {
-        // Points the ground prefilter drops anyway would only slow the look-ups (as the pipeline does).
+        // Reference points the prefilter would drop anyway only slow the look-ups down.
         if (!config_.ground_prefilter || ground_.classify(p) == PointClass::foreground) {
           reference_points_.push_back(p);
         }
@@ -29,19 +25,19 @@ void ForegroundFilter::add_background_frame(std::span<const LidarPoint> points) 
   }
 }
 
-PointClass ForegroundFilter::classify(const LidarPoint& p) const {
-  if (config_.background == BackgroundMethod::ground_height || config_.ground_prefilter) {
+PointClass BackgroundModel::classify(const LidarPoint& p) const {
+  if (config_.method == BackgroundMethod::ground_height || config_.ground_prefilter) {
     const PointClass c = ground_.classify(p);
-    if (c != PointClass::foreground || config_.background == BackgroundMethod::ground_height) {
+    if (c != PointClass::foreground || config_.method == BackgroundMethod::ground_height) {
       return c;
     }
   }
-  switch (config_.background) {
+  switch (config_.method) {
     case BackgroundMethod::ground_height:
       break;
     case BackgroundMethod::reference_frame:
       if (!reference_) {
-        return perception::is_finite_point(p) ? PointClass::foreground : PointClass::invalid;
+        return is_finite_point(p) ? PointClass::foreground : PointClass::invalid;
       }
       return reference_->classify(p);
     case BackgroundMethod::range_image:
@@ -50,4 +46,4 @@ PointClass ForegroundFilter::classify(const LidarPoint& p) const {
   return PointClass::invalid;
 }
 
-}  // namespace rsu::core
+}  // namespace rsu::perception
