@@ -25,7 +25,11 @@ NdtLocalizer::NdtLocalizer(const NdtConfig& config, const std::vector<Eigen::Vec
   for (const auto& p : map_points) map->emplace_back(p.x(), p.y(), p.z());
   impl_->ndt.setResolution(static_cast<float>(config.resolution_m));
   impl_->ndt.setStepSize(config.step_size_m);
-  impl_->ndt.setTransformationEpsilon(config.transformation_epsilon);
+  // Autoware's ndt_scan_matcher stops when a Newton step is shorter than trans_epsilon (a length, m).
+  // PCL 1.13 compares the SQUARED translation of the step with its epsilon, and its steps are capped at
+  // the step size (0.1 m): given 0.01 directly, every first step would count as converged. The same
+  // criterion in PCL's terms is epsilon^2.
+  impl_->ndt.setTransformationEpsilon(config.transformation_epsilon * config.transformation_epsilon);
   impl_->ndt.setMaximumIterations(config.max_iterations);
   impl_->ndt.setInputTarget(map);
 }

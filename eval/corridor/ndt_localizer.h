@@ -19,7 +19,7 @@ struct NdtConfig {
   // ndt_scan_matcher (Autoware): voxel resolution, Newton step size, transformation epsilon, iterations.
   double resolution_m = 2.0;
   double step_size_m = 0.1;
-  double transformation_epsilon = 0.01;
+  double transformation_epsilon = 0.01;  // m: Autoware's trans_epsilon, a step length (see the .cpp)
   int max_iterations = 30;
   // Input preprocessing (Autoware's localization pointcloud preprocessor): crop to a measurement range,
   // 3 m voxel grid, then a random subset of 1500 points.

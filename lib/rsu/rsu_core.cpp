@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <variant>
 
@@ -221,6 +222,10 @@ LidarStepResult RsuCore::on_lidar_points(std::span<const LidarPoint> points, Tim
   for (const LidarPoint& p : map_scratch_) {
     clusterer_.add(p, background_.classify(p) == perception::PointClass::foreground);
   }
+  if (!map_scratch_.empty() && std::isfinite(map_scratch_.back().azimuth_rad)) {
+    sweep_point_ = map_scratch_.back();
+    sweep_known_ = true;
+  }
   LidarStepResult result;
   correct_clusters(clusterer_.release_closed(), now, result);
   return result;
@@ -235,14 +240,17 @@ LidarStepResult RsuCore::on_lidar_frame(std::span<const LidarPoint> points, Time
     clusterer_.add(p, background_.classify(p) == perception::PointClass::foreground);
   }
   LidarStepResult result;
-  correct_clusters(clusterer_.release_all(), now, result);
+  gather(clusterer_.release_all(), now);
+  release_held(true, now, result);  // a whole rotation: every vehicle in it has been swept
   return result;
 }
 
 LidarStepResult RsuCore::flush(TimeNs now) {
   LidarStepResult result;
-  if (background_ready_)
-    correct_clusters(clusterer_.release_all(), now, result);
+  if (background_ready_) {
+    gather(clusterer_.release_all(), now);
+    release_held(true, now, result);
+  }
   return result;
 }
 
@@ -255,6 +263,41 @@ void RsuCore::load_background(const std::vector<std::vector<LidarPoint>>& frames
 }
 
 void RsuCore::correct_clusters(std::vector<SweptCluster>&& clusters, TimeNs now, LidarStepResult& result) {
+  gather(std::move(clusters), now);
+  release_held(false, now, result);
+}
+
+TimeNs RsuCore::passed_time(const std::vector<Eigen::Vector2d>& outline) const {
+  if (!sweep_known_ || outline.empty())
+    return 0;
+  // Beam azimuths clockwise from the sensor's +x (LidarPoint::azimuth_rad), relative to the first
+  // outline point so that an outline across the 0/360 deg cut needs no unwrapping.
+  const Eigen::Isometry3d map_to_sensor = sensor_to_map_.inverse();
+  const auto azimuth_of = [&](const Eigen::Vector2d& q) {
+    const Eigen::Vector3d s = map_to_sensor * Eigen::Vector3d(q.x(), q.y(), config_.mount.z);
+    return -std::atan2(s.y(), s.x());
+  };
+  const double reference = azimuth_of(outline.front());
+  double ahead = 0.0;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector2d& q : outline) {
+    ahead = std::max(ahead, wrap_angle(azimuth_of(q) - reference));
+    nearest = std::min(nearest, (q - lidar_xy_).norm());
+  }
+  // The clusterer's rule: a point at range r is closed once the earliest future firing is asin(d / r)
+  // past it, and future firings lag the sweep by the offset spread plus the margin.
+  const double d = config_.perception.clustering.tolerance_m;
+  const double closing = nearest > d ? std::asin(d / nearest) : std::numbers::pi / 2.0;
+  const double lag = azimuth_spread_rad(model_) + deg_to_rad(config_.sweep.release_margin_deg);
+  const double target = reference + ahead + closing + lag;
+  const double forward = wrap_angle_positive(target - static_cast<double>(sweep_point_.azimuth_rad));
+  if (forward > std::numbers::pi)
+    return sweep_point_.time_ns;  // already behind the sweep
+  const double radians_per_ns = 2.0 * std::numbers::pi / static_cast<double>(rotation_period_ns_);
+  return sweep_point_.time_ns + static_cast<TimeNs>(forward / radians_per_ns);
+}
+
+void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
   if (clusters.empty())
     return;
 
@@ -262,27 +305,33 @@ void RsuCore::correct_clusters(std::vector<SweptCluster>&& clusters, TimeNs now,
     std::vector<Eigen::Vector2d> footprint;
     perception::RectangleFit fit;
     TimeNs sweep_time = 0;
+    bool fitted = false;  // fit ok and inside the coverage radius: offered to association
   };
   std::vector<Candidate> candidates;
   std::vector<v2i::FittedCluster> fitted;
+  std::vector<std::size_t> fitted_candidate;  // fitted[i] is candidates[fitted_candidate[i]]
   for (const SweptCluster& cluster : clusters) {
+    if (cluster.points.empty())
+      continue;
     Candidate c;
     c.footprint.reserve(cluster.points.size());
     for (const LidarPoint& p : cluster.points) {
       c.footprint.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y));
     }
+    c.sweep_time = mean_time(cluster.points);
     c.fit = perception::fit_rectangle(c.footprint, lidar_xy_, config_.perception.fit);
     ++lidar_stats_.clusters_fitted;
     if (!c.fit.ok()) {
+      // Too small or thin to fit alone, but it may still be a fragment of a vehicle (gathered below).
       ++lidar_stats_.fits_failed;
-      continue;
-    }
-    if ((c.fit.center - lidar_xy_).norm() > config_.coverage_radius_m) {
+    } else if ((c.fit.center - lidar_xy_).norm() > config_.coverage_radius_m) {
       ++lidar_stats_.clusters_out_of_coverage;
       continue;
+    } else {
+      c.fitted = true;
+      fitted.push_back({c.fit.center, c.fit.yaw, c.fit.length0, c.fit.length1, cluster.points.size()});
+      fitted_candidate.push_back(candidates.size());
     }
-    c.sweep_time = mean_time(cluster.points);
-    fitted.push_back({c.fit.center, c.fit.yaw, c.fit.length0, c.fit.length1, cluster.points.size()});
     candidates.push_back(std::move(c));
   }
   if (candidates.empty())
@@ -295,8 +344,8 @@ void RsuCore::correct_clusters(std::vector<SweptCluster>&& clusters, TimeNs now,
   std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
   const TimeNs batch_time = times[times.size() / 2];
 
-  // A vehicle is seen once per rotation: one already corrected from an earlier batch of this rotation
-  // is not offered again (a second, later cluster near it is something else, or a fragment).
+  // A vehicle is fixed once per rotation: one already fixed in this rotation is not offered again (a
+  // later cluster near it is something else). One still held (gathering) is offered again.
   std::vector<const v2i::RegisteredVehicle*> vehicles;
   std::vector<v2i::VehicleHypothesis> hypotheses;
   for (const v2i::RegisteredVehicle* v : registry_.active(now)) {
@@ -309,100 +358,206 @@ void RsuCore::correct_clusters(std::vector<SweptCluster>&& clusters, TimeNs now,
     hypotheses.push_back(v2i::predict_hypothesis(v->announcement, batch_time, config_.hypothesis));
   }
   lidar_stats_.vehicles_in_batches += vehicles.size();
+  if (vehicles.empty()) {
+    lidar_stats_.clusters_unmatched += candidates.size();
+    return;
+  }
   const v2i::AssociationResult association = v2i::associate(fitted, hypotheses, config_.association);
 
-  // Fragments. One vehicle can give several clusters: a VLP-16's upper rings reach the far edge of
-  // the roof metres behind the visible faces, beyond the clustering tolerance, and a pole in front
-  // cuts a vehicle in two. The assignment gives each vehicle ONE cluster, possibly the small
-  // fragment; so every cluster left over goes to the matched vehicle whose gate it passes best, and
-  // the vehicle is fitted on the union (kept only if the union still fits the announced size).
-  std::vector<std::vector<std::size_t>> members(association.pairs.size());
-  std::vector<std::ptrdiff_t> pair_of_vehicle(vehicles.size(), -1);
-  for (std::size_t i = 0; i < association.pairs.size(); ++i) {
-    members[i].push_back(association.pairs[i].cluster);
-    pair_of_vehicle[association.pairs[i].vehicle] = static_cast<std::ptrdiff_t>(i);
+  // Each vehicle's predicted footprint grown by its uncertainty: every corner moved out by the margin.
+  const GatheringConfig& g = config_.gathering;
+  std::vector<std::array<Eigen::Vector2d, 4>> grown(vehicles.size());
+  std::vector<Eigen::Vector2d> grown_half(vehicles.size());
+  for (std::size_t j = 0; j < vehicles.size(); ++j) {
+    const v2i::VehicleHypothesis& h = hypotheses[j];
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(h.covariance.topLeftCorner<2, 2>());
+    const double centre_sigma = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+    const double yaw_sigma = std::sqrt(std::max(0.0, h.covariance(2, 2)));
+    const double half_diagonal = 0.5 * std::hypot(h.size.length_m, h.size.width_m);
+    double margin = g.footprint_sigmas * (centre_sigma + std::min(yaw_sigma, 1.0) * half_diagonal);
+    margin = std::isfinite(margin) ? std::clamp(margin, g.min_margin_m, g.max_margin_m) : g.max_margin_m;
+    grown_half[j] = {0.5 * h.size.length_m + margin, 0.5 * h.size.width_m + margin};
+    const Eigen::Rotation2Dd r(h.yaw);
+    int k = 0;
+    for (const double sx : {-1.0, 1.0}) {
+      for (const double sy : {-1.0, 1.0}) {
+        grown[j][static_cast<std::size_t>(k++)] =
+            h.centre + r * Eigen::Vector2d(sx * grown_half[j].x(), sy * grown_half[j].y());
+      }
+    }
   }
-  for (const std::size_t u : association.unmatched_clusters) {
+  const auto inside_fraction = [&](const Candidate& c, std::size_t j) {
+    const Eigen::Rotation2Dd to_box(-hypotheses[j].yaw);
+    std::size_t inside = 0;
+    for (const Eigen::Vector2d& p : c.footprint) {
+      const Eigen::Vector2d q = (to_box * (p - hypotheses[j].centre)).cwiseAbs();
+      if (q.x() <= grown_half[j].x() && q.y() <= grown_half[j].y())
+        ++inside;
+    }
+    return static_cast<double>(inside) / static_cast<double>(c.footprint.size());
+  };
+
+  // Members: the cluster the assignment gave each vehicle, and every other cluster mostly inside its
+  // grown footprint (or, the rule before footprints, passing its gate while the vehicle got a cluster).
+  std::vector<std::vector<std::size_t>> members(vehicles.size());
+  std::vector<bool> taken(candidates.size(), false);
+  for (const v2i::AssociatedPair& pair : association.pairs) {
+    const std::size_t c = fitted_candidate[pair.cluster];
+    members[pair.vehicle].push_back(c);
+    taken[c] = true;
+  }
+  std::vector<std::size_t> fitted_index(candidates.size(), std::numeric_limits<std::size_t>::max());
+  for (std::size_t i = 0; i < fitted_candidate.size(); ++i)
+    fitted_index[fitted_candidate[i]] = i;
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    if (taken[c])
+      continue;
     std::ptrdiff_t best = -1;
-    double best_distance = std::numeric_limits<double>::infinity();
+    double best_fraction = g.min_inside_fraction;
     for (std::size_t j = 0; j < vehicles.size(); ++j) {
-      const v2i::PairCheck check = v2i::check_pair(fitted[u], hypotheses[j], config_.association);
-      if (check.verdict == v2i::PairGate::kPass && check.distance_sq < best_distance) {
-        best_distance = check.distance_sq;
-        best = pair_of_vehicle[j];
+      const double f = inside_fraction(candidates[c], j);
+      if (f >= best_fraction) {
+        best_fraction = f;
+        best = static_cast<std::ptrdiff_t>(j);
+      }
+    }
+    if (best < 0 && candidates[c].fitted) {
+      double best_distance = std::numeric_limits<double>::infinity();
+      for (std::size_t j = 0; j < vehicles.size(); ++j) {
+        if (members[j].empty())
+          continue;
+        const v2i::PairCheck check = v2i::check_pair(fitted[fitted_index[c]], hypotheses[j], config_.association);
+        if (check.verdict == v2i::PairGate::kPass && check.distance_sq < best_distance) {
+          best_distance = check.distance_sq;
+          best = static_cast<std::ptrdiff_t>(j);
+        }
       }
     }
     if (best >= 0) {
-      members[static_cast<std::size_t>(best)].push_back(u);
+      members[static_cast<std::size_t>(best)].push_back(c);
     } else {
       ++lidar_stats_.clusters_unmatched;
     }
   }
 
-  for (std::size_t i = 0; i < association.pairs.size(); ++i) {
-    const v2i::AssociatedPair& pair = association.pairs[i];
-    Candidate merged;
-    const Candidate* chosen = &candidates[pair.cluster];
-    if (members[i].size() > 1) {
-      const TimeNs t0 = candidates[members[i].front()].sweep_time;
-      TimeNs weighted_offset = 0;  // sum of n_k (t_k - t0): clusters of one batch, ms apart
-      for (const std::size_t k : members[i]) {
-        const Candidate& part = candidates[k];
-        merged.footprint.insert(merged.footprint.end(), part.footprint.begin(), part.footprint.end());
-        weighted_offset += static_cast<TimeNs>(part.footprint.size()) * (part.sweep_time - t0);
-      }
-      merged.sweep_time = t0 + weighted_offset / static_cast<TimeNs>(merged.footprint.size());
-      merged.fit = perception::fit_rectangle(merged.footprint, lidar_xy_, config_.perception.fit);
-      const v2i::FittedCluster as_cluster{merged.fit.center, merged.fit.yaw, merged.fit.length0,
-                                          merged.fit.length1, merged.footprint.size()};
-      if (merged.fit.ok() &&
-          v2i::check_pair(as_cluster, hypotheses[pair.vehicle], config_.association).verdict ==
-              v2i::PairGate::kPass) {
-        chosen = &merged;
-        lidar_stats_.fragments_merged += members[i].size() - 1;
-      } else {
-        lidar_stats_.clusters_unmatched += members[i].size() - 1;
-      }
-    }
-    const Candidate& c = *chosen;
-    const v2i::VehicleAnnouncement& a = vehicles[pair.vehicle]->announcement;
-    // The yaw prior: the announced yaw carried to this cluster's own sweep time with the announced
-    // motion (the hypothesis model), with its grown uncertainty.
-    const v2i::VehicleHypothesis at_sweep = v2i::predict_hypothesis(a, c.sweep_time, config_.hypothesis);
-    const double yaw_var = at_sweep.covariance(2, 2);
-    std::optional<perception::YawPrior> prior;
-    if (std::isfinite(at_sweep.yaw) && std::isfinite(yaw_var) && yaw_var >= 0.0) {
-      prior = perception::YawPrior{at_sweep.yaw, std::max(std::sqrt(yaw_var), 1e-3)};
-    }
-    const perception::CorrectedPose fix =
-        perception::correct(c.fit, c.footprint, perception::VehicleSize{a.size.length_m, a.size.width_m},
-                            lidar_xy_, prior, config_.perception);
-    if (!fix.ok()) {
-      ++lidar_stats_.corrections_failed;
+  for (std::size_t j = 0; j < vehicles.size(); ++j) {
+    if (members[j].empty())
       continue;
+    const std::uint64_t id = vehicles[j]->announcement.vehicle_id;
+    auto it = std::find_if(held_.begin(), held_.end(), [id](const HeldVehicle& h) { return h.vehicle_id == id; });
+    if (it == held_.end()) {
+      HeldVehicle fresh;
+      fresh.vehicle_id = id;
+      fresh.first_time = candidates[members[j].front()].sweep_time;
+      held_.push_back(std::move(fresh));
+      it = std::prev(held_.end());
     }
-    VehicleChannel& channel = channels_[a.vehicle_id];
-    CorrectionInputs inputs;
-    inputs.rsu_id = config_.rsu_id;
-    inputs.vehicle_id = a.vehicle_id;
-    inputs.sequence = channel.next_sequence;
-    inputs.announcement_sequence = a.sequence;
-    inputs.sweep_time = c.sweep_time;
-    inputs.points_used = c.footprint.size();
-    OutgoingCorrection out;
-    out.correction = make_correction(inputs, fix, c.fit, lidar_xy_);
-    out.bytes = v2i::encode_v2i_message(out.correction);
-    if (out.bytes.empty()) {
-      ++lidar_stats_.corrections_encode_failed;
-      continue;
+    HeldVehicle& held = *it;
+    std::vector<Eigen::Vector2d> outline(grown[j].begin(), grown[j].end());
+    for (const std::size_t c : members[j]) {
+      const Candidate& part = candidates[c];
+      if (part.footprint.size() > held.largest_part_size) {
+        held.largest_part_begin = held.footprint.size();
+        held.largest_part_size = part.footprint.size();
+        held.largest_part_time = part.sweep_time;
+      }
+      held.footprint.insert(held.footprint.end(), part.footprint.begin(), part.footprint.end());
+      held.weighted_offset += static_cast<TimeNs>(part.footprint.size()) * (part.sweep_time - held.first_time);
+      ++held.parts;
+      outline.insert(outline.end(), part.footprint.begin(), part.footprint.end());
     }
-    out.destination = a.reply_to;
-    ++channel.next_sequence;  // wraps modulo 2^32, as the wire says
-    channel.matched = true;
-    channel.last_matched_sweep = c.sweep_time;
-    ++lidar_stats_.corrections;
-    result.corrections.push_back(std::move(out));
+    // Hold until the sweep has passed the grown footprint and the gathered clusters (a vehicle whose
+    // estimate is off may extend beyond its footprint), never longer than half a rotation.
+    held.release_at = std::max(held.release_at, std::min(passed_time(outline), held.first_time + rotation_period_ns_ / 2));
   }
+}
+
+void RsuCore::release_held(bool everything, TimeNs now, LidarStepResult& result) {
+  for (auto it = held_.begin(); it != held_.end();) {
+    if (everything || !sweep_known_ || it->release_at <= sweep_point_.time_ns) {
+      const HeldVehicle held = std::move(*it);
+      it = held_.erase(it);
+      correct_held(held, now, result);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult& result) {
+  const v2i::RegisteredVehicle* vehicle = registry_.find(held.vehicle_id, now);
+  if (vehicle == nullptr || held.footprint.empty())
+    return;
+  const v2i::VehicleAnnouncement& a = vehicle->announcement;
+
+  std::span<const Eigen::Vector2d> points(held.footprint);
+  TimeNs sweep_time = held.first_time + held.weighted_offset / static_cast<TimeNs>(held.footprint.size());
+  perception::RectangleFit fit = perception::fit_rectangle(points, lidar_xy_, config_.perception.fit);
+  const auto fits_vehicle = [&](const perception::RectangleFit& f, TimeNs t, std::size_t n) {
+    const v2i::FittedCluster as_cluster{f.center, f.yaw, f.length0, f.length1, n};
+    return f.ok() && v2i::check_pair(as_cluster, v2i::predict_hypothesis(a, t, config_.hypothesis),
+                                     config_.association)
+                             .verdict == v2i::PairGate::kPass;
+  };
+  if (held.parts > 1) {
+    if (fits_vehicle(fit, sweep_time, points.size())) {
+      lidar_stats_.fragments_merged += held.parts - 1;
+    } else {
+      // The union is not one vehicle of this size (something else was inside the footprint): the
+      // largest cluster alone; the consistency check of the correction guards it.
+      lidar_stats_.clusters_unmatched += held.parts - 1;
+      points = points.subspan(held.largest_part_begin, held.largest_part_size);
+      sweep_time = held.largest_part_time;
+      fit = perception::fit_rectangle(points, lidar_xy_, config_.perception.fit);
+    }
+  }
+  if (!fit.ok()) {
+    ++lidar_stats_.corrections_failed;
+    return;
+  }
+  if ((fit.center - lidar_xy_).norm() > config_.coverage_radius_m) {
+    ++lidar_stats_.clusters_out_of_coverage;
+    return;
+  }
+  // The yaw prior: the announced yaw carried to the sweep time with the announced motion (the
+  // hypothesis model), with its grown uncertainty.
+  const v2i::VehicleHypothesis at_sweep = v2i::predict_hypothesis(a, sweep_time, config_.hypothesis);
+  const double yaw_var = at_sweep.covariance(2, 2);
+  std::optional<perception::YawPrior> prior;
+  if (std::isfinite(at_sweep.yaw) && std::isfinite(yaw_var) && yaw_var >= 0.0) {
+    prior = perception::YawPrior{at_sweep.yaw, std::max(std::sqrt(yaw_var), 1e-3)};
+  }
+  const perception::CorrectedPose fix = perception::correct(
+      fit, points, perception::VehicleSize{a.size.length_m, a.size.width_m}, lidar_xy_, prior, config_.perception);
+  if (fix.status == perception::CorrectionStatus::inconsistent_box) {
+    ++lidar_stats_.corrections_inconsistent;
+    return;
+  }
+  if (!fix.ok()) {
+    ++lidar_stats_.corrections_failed;
+    return;
+  }
+  VehicleChannel& channel = channels_[a.vehicle_id];
+  CorrectionInputs inputs;
+  inputs.rsu_id = config_.rsu_id;
+  inputs.vehicle_id = a.vehicle_id;
+  inputs.sequence = channel.next_sequence;
+  inputs.announcement_sequence = a.sequence;
+  inputs.sweep_time = sweep_time;
+  inputs.points_used = points.size();
+  OutgoingCorrection out;
+  out.correction = make_correction(inputs, fix, fit, lidar_xy_);
+  out.bytes = v2i::encode_v2i_message(out.correction);
+  if (out.bytes.empty()) {
+    ++lidar_stats_.corrections_encode_failed;
+    return;
+  }
+  out.destination = a.reply_to;
+  ++channel.next_sequence;  // wraps modulo 2^32, as the wire says
+  channel.matched = true;
+  channel.last_matched_sweep = sweep_time;
+  ++lidar_stats_.corrections;
+  result.corrections.push_back(std::move(out));
 }
 
 std::size_t RsuCore::expire(TimeNs now) {
@@ -499,6 +654,7 @@ std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
   out.emplace_back("lidar.clusters_unmatched", l.clusters_unmatched);
   out.emplace_back("lidar.fragments_merged", l.fragments_merged);
   out.emplace_back("lidar.corrections_failed", l.corrections_failed);
+  out.emplace_back("lidar.corrections_inconsistent", l.corrections_inconsistent);
   out.emplace_back("lidar.corrections_encode_failed", l.corrections_encode_failed);
   out.emplace_back("lidar.corrections", l.corrections);
   return out;

@@ -8,8 +8,18 @@
 //       while learning: whole rotations train the background model (or load_background())
 //       then: per point background removal -> SweepClusterer releases each cluster as soon as the
 //       sweep has passed it -> rectangle fit -> association of the released batch with the registered
-//       vehicles (gating + one global assignment) -> size correction with the vehicle's announced size
-//       and predicted yaw as prior -> Correction datagram to the vehicle's reply_to address.
+//       vehicles (gating + one global assignment) -> every cluster inside a vehicle's predicted
+//       footprint is gathered for it, across the batches of one rotation, until the sweep has passed
+//       that footprint -> rectangle fit on the union -> size correction with the vehicle's announced
+//       size and predicted yaw as prior (rejected when the known-size box contradicts the points)
+//       -> Correction datagram to the vehicle's reply_to address.
+//
+// Why gather. A vehicle far away and seen head-on breaks into fragments more than the clustering
+// tolerance apart (bumper and front face low, cabin high, the hood between two rings), and the
+// VLP-32C's per-laser azimuth offsets (+-4.2 deg, DESIGN.md §2) close them in different batches. A
+// fragment fitted as the whole vehicle is metres off, so a vehicle's fix waits until the sweep has
+// passed its whole predicted footprint (grown by its uncertainty) and the clusters that closed there.
+// Near the LiDAR that footprint is passed about when its cluster closes: the wait is a few degrees.
 #pragma once
 
 #include <cstddef>
@@ -20,6 +30,7 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "common/time.h"
@@ -65,6 +76,7 @@ struct LidarStats {
   std::uint64_t fragments_merged = 0;     // extra clusters of one vehicle fitted with its main one
   std::uint64_t vehicles_in_batches = 0;  // registered vehicles offered to association
   std::uint64_t corrections_failed = 0;   // size correction refused the matched cluster
+  std::uint64_t corrections_inconsistent = 0;  // the known-size box contradicts the points: no fix
   std::uint64_t corrections_encode_failed = 0;
   std::uint64_t corrections = 0;
 };
@@ -131,7 +143,28 @@ class RsuCore {
   void to_map_frame(std::span<const LidarPoint> in, std::vector<LidarPoint>& out) const;
   LidarStepResult learn(std::span<const LidarPoint> map_points, bool whole_frame);
   void add_background_frame(std::span<const LidarPoint> map_points);
+  // The clusters gathered for one matched vehicle in this rotation, waiting for the sweep to pass the
+  // vehicle's predicted footprint (file comment).
+  struct HeldVehicle {
+    std::uint64_t vehicle_id = 0;
+    std::vector<Eigen::Vector2d> footprint;  // union of the gathered clusters' points, map frame
+    TimeNs first_time = 0;                   // sweep time of the first gathered cluster
+    TimeNs weighted_offset = 0;              // sum over points of (point's cluster time - first_time)
+    std::size_t parts = 0;                   // clusters gathered
+    std::size_t largest_part_begin = 0;      // the largest cluster's range in `footprint`
+    std::size_t largest_part_size = 0;
+    TimeNs largest_part_time = 0;
+    TimeNs release_at = 0;  // firing time when the sweep has passed the footprint and its clusters
+  };
+
   void correct_clusters(std::vector<SweptCluster>&& clusters, TimeNs now, LidarStepResult& result);
+  void gather(std::vector<SweptCluster>&& clusters, TimeNs now);
+  // Fixes the held vehicles whose footprint the sweep has passed (all of them if `everything`).
+  void release_held(bool everything, TimeNs now, LidarStepResult& result);
+  void correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult& result);
+  // The firing time at which the sweep has passed every point of `outline` (map frame) far enough
+  // that no cluster near them can still grow (the SweepClusterer's closing rule).
+  TimeNs passed_time(const std::vector<Eigen::Vector2d>& outline) const;
   DatagramOutcome finish(DatagramOutcome outcome);
 
   RsuCoreConfig config_;
@@ -150,6 +183,9 @@ class RsuCore {
   v2i::AnnouncementValidator validator_;
   v2i::VehicleRegistry registry_;
   std::unordered_map<std::uint64_t, VehicleChannel> channels_;
+  std::vector<HeldVehicle> held_;
+  bool sweep_known_ = false;
+  LidarPoint sweep_point_;  // the latest point of the stream: where the rotation is, and when
 
   v2i::EnumCounter<DatagramStage> datagram_stages_;
   v2i::EnumCounter<v2i::DecodeStatus> decode_counts_;

@@ -37,6 +37,22 @@ struct SweepConfig {
   double max_gap_rotations = 2.0;
 };
 
+// How a matched vehicle's clusters are gathered before its fix (RsuCore, file comment of rsu_core.h).
+// A vehicle far from the LiDAR and seen head-on breaks into fragments (bumper, cabin) more than the
+// clustering tolerance apart, and the VLP-32C's per-laser azimuth offsets release them in different
+// batches of the sweep; a fix from one fragment is metres off while it looks like a whole vehicle.
+struct GatheringConfig {
+  // The vehicle's predicted footprint (announced size, pose predicted to the sweep) is grown by this
+  // many standard deviations of its predicted centre (largest axis) and of its yaw (at the corners).
+  double footprint_sigmas = 2.5;
+  // ... and by at least this much (the fit's own noise, shape departures), at most this much (a
+  // vehicle with a lost estimate must not swallow its neighbours).
+  double min_margin_m = 0.4;
+  double max_margin_m = 2.0;
+  // A cluster belongs to a vehicle when at least this fraction of its points lies in the grown footprint.
+  double min_inside_fraction = 0.5;
+};
+
 struct RsuCoreConfig {
   std::uint64_t rsu_id = 1;
 
@@ -46,6 +62,7 @@ struct RsuCoreConfig {
 
   BackgroundLearningConfig background;
   SweepConfig sweep;
+  GatheringConfig gathering;
   perception::PerceptionConfig perception;
 
   // Clusters whose fitted centre is farther than this from the LiDAR get no correction: beyond it the
