@@ -106,6 +106,17 @@ class Corrector {
 
   const Frame& frame() const { return frame_; }
 
+  // Fraction of the points farther than `tolerance` outside the hypothesis box.
+  double outside_fraction(const Hypothesis& h, double tolerance) const {
+    if (pts_.empty()) {
+      return 0.0;
+    }
+    const auto outside = std::count_if(pts_.begin(), pts_.end(), [&](const Eigen::Vector2d& p) {
+      return ((p - h.centre).cwiseAbs() - h.half).maxCoeff() > tolerance;
+    });
+    return static_cast<double>(outside) / static_cast<double>(pts_.size());
+  }
+
  private:
   // Where the known-size box can sit along axis a (dimension `dim` on that axis).
   std::vector<AxisOption> axis_options(int a, double dim) const {
@@ -300,6 +311,11 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   } else {
     out.resolution = out.confidence >= config.min_confidence ? AmbiguityResolution::geometry
                                                              : AmbiguityResolution::unresolved;
+  }
+
+  if (corrector.outside_fraction(h, config.inconsistent_outside_m) > config.max_outside_fraction) {
+    out.status = CorrectionStatus::inconsistent_box;
+    return out;
   }
 
   const Frame& frame = corrector.frame();

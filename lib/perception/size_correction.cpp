@@ -29,6 +29,8 @@ std::string_view to_string(CorrectionStatus status) {
       return "invalid_size";
     case CorrectionStatus::invalid_input:
       return "invalid_input";
+    case CorrectionStatus::inconsistent_box:
+      return "inconsistent_box";
   }
   return "unknown";
 }

@@ -49,6 +49,9 @@ enum class CorrectionStatus {
   no_fit,         // the rectangle fit failed (see its status)
   invalid_size,   // size not finite and positive
   invalid_input,  // LiDAR position or prior not finite
+  // (improved correction) the best known-size box leaves too many points outside it: the points are
+  // not this vehicle seen whole (a fragment beside another object, two objects, a wrong size)
+  inconsistent_box,
 };
 
 enum class AmbiguityResolution {
@@ -82,6 +85,11 @@ struct CorrectionConfig {
   double geometry_scale = 0.05;        // score difference per unit of log-odds between the assignments
   double min_confidence = 0.9;         // resolved only above this; a prior this decisive is trusted
   bool refine_on_faces = true;         // re-fit the orientation to the seen faces first (face_refinement.h)
+  // The chosen known-size box must hold the points: more than max_outside_fraction of them farther
+  // outside it than inconsistent_outside_m (well beyond range noise and the box's rounded corners)
+  // rejects the fix (CorrectionStatus::inconsistent_box) instead of reporting a confident wrong pose.
+  double inconsistent_outside_m = 0.3;
+  double max_outside_fraction = 0.1;
   LShapeFitConfig fit;                 // face support and 'seen' rules (the pipeline passes its own)
   FaceRefinementConfig refinement;
   CovarianceModelConfig covariance;

@@ -5,6 +5,7 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <cstdio>
 
 #include "common/angles.h"
 
@@ -183,6 +184,16 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     if (members.size() > max_points_) {
       ++stats_.clusters_dropped_large;
       continue;
+    }
+    {
+      double need = -1e9; double rn = 0, an = 0; TimeNs tmax = 0; double umax=-1e9; int rg=-1;
+      for (const std::uint32_t i : members) {
+        const double v = azimuth_[i] + (range_[i] > tolerance ? std::asin(tolerance / range_[i]) : kPi);
+        if (v > need) { need = v; rn = range_[i]; an = azimuth_[i]; }
+        if (points_[i].time_ns > tmax) { tmax = points_[i].time_ns; }
+        if (azimuth_[i] > umax) { umax = azimuth_[i]; rg = points_[i].ring; }
+      }
+      if (members.size() > 50) std::fprintf(stderr, "REL n=%zu sweep=%.2f afut=%.2f span=[%.2f,%.2f] maxring=%d bind r=%.2f a=%.2f need=%.2f wait_ms=%.3f\n", members.size(), rad_to_deg(sweep_), rad_to_deg(a_future), rad_to_deg(state[c].min_u), rad_to_deg(state[c].max_u), rg, rn, rad_to_deg(an), rad_to_deg(need), (last_time_ - tmax) * 1e-6);
     }
     SweptCluster cluster;
     cluster.points.reserve(members.size());

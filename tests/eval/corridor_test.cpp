@@ -1,0 +1,92 @@
+// The realistic experiment's own parts: the NDT map, the vehicle's NDT self-localization and the error
+// statistics of the table, against ground truth the tests compute themselves.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/angles.h"
+#include "eval/corridor/map_sampling.h"
+#include "eval/corridor/ndt_localizer.h"
+#include "eval/corridor/report.h"
+#include "lidar/sensor_model.h"
+#include "sim/lidar_simulator.h"
+#include "sim/mesh.h"
+#include "sim/raycaster.h"
+#include "sim/scenario.h"
+
+namespace rsu::eval {
+namespace {
+
+TEST(MapSampling, PointsLieOnTheSurfaceAtTheRequestedDensity) {
+  // A 10 m x 4 m wall in the plane x = 3: 40 m^2 at 0.25 m spacing is 640 points on average.
+  sim::TriangleMesh wall;
+  wall.vertices = {{3, 0, 0}, {3, 10, 0}, {3, 10, 4}, {3, 0, 4}};
+  wall.triangles = {{0, 1, 2}, {0, 2, 3}};
+  const auto points = sample_surface(wall, 0.25, 7);
+  EXPECT_NEAR(static_cast<double>(points.size()), 640.0, 3.0);
+  double mean_y = 0, mean_z = 0;
+  for (const auto& p : points) {
+    EXPECT_FLOAT_EQ(p.x(), 3.0F);
+    EXPECT_GE(p.y(), 0.0F);
+    EXPECT_LE(p.y(), 10.0F);
+    EXPECT_GE(p.z(), 0.0F);
+    EXPECT_LE(p.z(), 4.0F);
+    mean_y += static_cast<double>(p.y());
+    mean_z += static_cast<double>(p.z());
+  }
+  // Uniform over the wall: the mean is its centre (5, 2) within a few standard errors.
+  EXPECT_NEAR(mean_y / static_cast<double>(points.size()), 5.0, 0.35);
+  EXPECT_NEAR(mean_z / static_cast<double>(points.size()), 2.0, 0.15);
+  EXPECT_EQ(sample_surface(wall, 0.25, 7).size(), points.size());  // seeded
+}
+
+TEST(NdtLocalizer, ConvergesFromAnOffsetGuessInTheCorridor) {
+  const sim::Scenario scenario = sim::load_scenario_file(RSU_SOURCE_DIR "/scenarios/corridor.yaml");
+  sim::Scene scene = scenario.scene;
+  scene.vehicles.clear();
+  const sim::Raycaster raycaster(scene);
+  std::vector<Eigen::Vector3f> map;
+  for (auto surface : {sim::SurfaceClass::kGround, sim::SurfaceClass::kBuilding, sim::SurfaceClass::kPole,
+                       sim::SurfaceClass::kVegetation}) {
+    const auto part = sample_surface(raycaster.static_mesh(surface), 0.5, 3);
+    map.insert(map.end(), part.begin(), part.end());
+  }
+  // A roof LiDAR standing still at a known pose near a lamp and the hedges.
+  const Pose2 truth{-12.0, -3.5, deg_to_rad(3.0)};
+  const Pose3 mount{0.0, 0.0, 2.0, 0.0, 0.0, 0.0};
+  const Pose3 sensor_in_map{truth.x, truth.y, mount.z, 0.0, 0.0, truth.yaw};
+  const sim::LidarSimulator lidar(make_vlp16(), sensor_in_map, sim::NoiseModel{}, raycaster);
+  const auto frame = lidar.simulate_frame(0);
+
+  NdtConfig config;  // Autoware's parameters
+  NdtLocalizer ndt(config, map, 5);
+  const Pose2 guess{truth.x + 0.5, truth.y - 0.3, truth.yaw + deg_to_rad(2.0)};
+  const NdtResult result = ndt.align(frame.frame.points, mount, guess);
+  EXPECT_TRUE(result.converged);
+  // One 0.1 m step cannot cover a 0.58 m offset: NDT must iterate (PCL's epsilon is a squared step).
+  EXPECT_GT(result.iterations, 1);
+  EXPECT_LT(std::hypot(result.pose.x - truth.x, result.pose.y - truth.y), 0.1);
+  EXPECT_LT(angle_distance(result.pose.yaw, truth.yaw), deg_to_rad(0.5));
+  EXPECT_GT(result.scan_points, 100u);
+  EXPECT_NEAR(result.covariance(0, 0), config.output_sigma_xy_m * config.output_sigma_xy_m, 1e-12);
+}
+
+TEST(ErrorStats, MatchesHandComputedValues) {
+  // 20 errors 0.01 .. 0.20: MAE 0.105, RMSE sqrt(mean of squares), nearest-rank p95 = the 19th value.
+  std::vector<double> errors;
+  double sum_sq = 0;
+  for (int i = 1; i <= 20; ++i) {
+    errors.push_back(0.01 * i);
+    sum_sq += 0.0001 * i * i;
+  }
+  const ErrorStats s = error_stats(errors);
+  EXPECT_EQ(s.count, 20u);
+  EXPECT_NEAR(s.mae_m, 0.105, 1e-12);
+  EXPECT_NEAR(s.rmse_m, std::sqrt(sum_sq / 20.0), 1e-12);
+  EXPECT_NEAR(s.p95_m, 0.19, 1e-12);
+  EXPECT_NEAR(s.max_m, 0.20, 1e-12);
+  EXPECT_EQ(error_stats({}).count, 0u);
+}
+
+}  // namespace
+}  // namespace rsu::eval
