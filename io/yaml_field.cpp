@@ -14,7 +14,8 @@ YAML::Node parse_yaml(const std::string& text, const std::string& source_name) {
 
 std::string read_text_file(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw YamlError(path + ":0: <file>: cannot open");
+  if (!in)
+    throw YamlError(path + ":0: <file>: cannot open");
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();

@@ -52,13 +52,20 @@ class YamlField {
 
   // Rejects keys outside `allowed` (typos would otherwise silently fall back to defaults).
   void expect_map(std::initializer_list<const char*> allowed) const {
-    if (!node_.IsMap()) fail("expected a mapping");
+    if (!node_.IsMap())
+      fail("expected a mapping");
     const std::set<std::string> keys(allowed.begin(), allowed.end());
     for (const auto& kv : node_) {
+      // A complex key ("? [a, b]: 1") is valid YAML but never one of ours; as<std::string>() would
+      // throw yaml-cpp's own exception, escaping the file:line: field error every caller expects.
+      if (!kv.first.IsScalar())
+        YamlField(kv.first, path_, source_, kv.first.Mark().line + 1)
+            .fail("expected a field name, got a complex key");
       const std::string key = kv.first.as<std::string>();
       if (!keys.contains(key)) {
         std::string list;
-        for (const auto& k : keys) list += (list.empty() ? "" : ", ") + k;
+        for (const auto& k : keys)
+          list += (list.empty() ? "" : ", ") + k;
         YamlField(kv.first, path_.empty() ? key : path_ + "." + key, source_, kv.first.Mark().line + 1)
             .fail("unknown field (expected one of: " + list + ")");
       }
@@ -66,7 +73,8 @@ class YamlField {
   }
 
   std::vector<YamlField> items() const {
-    if (!node_.IsSequence()) fail("expected a list");
+    if (!node_.IsSequence())
+      fail("expected a list");
     std::vector<YamlField> out;
     for (std::size_t i = 0; i < node_.size(); ++i) {
       const YAML::Node c = node_[i];
@@ -76,18 +84,21 @@ class YamlField {
   }
 
   double number() const {
-    if (!node_.IsScalar()) fail("expected a number");
+    if (!node_.IsScalar())
+      fail("expected a number");
     double v = 0;
     try {
       v = node_.as<double>();
     } catch (const YAML::Exception&) {
       fail("expected a number, got \"" + node_.Scalar() + "\"");
     }
-    if (!std::isfinite(v)) fail("expected a finite number, got \"" + node_.Scalar() + "\"");
+    if (!std::isfinite(v))
+      fail("expected a finite number, got \"" + node_.Scalar() + "\"");
     return v;
   }
   std::string text() const {
-    if (!node_.IsScalar()) fail("expected a string");
+    if (!node_.IsScalar())
+      fail("expected a string");
     return node_.Scalar();
   }
 
@@ -96,19 +107,22 @@ class YamlField {
   }
   double positive_or(const std::string& key, double fallback) const {
     const double v = number_or(key, fallback);
-    if (!(v > 0)) child(key).fail("must be > 0, got " + std::to_string(v));
+    if (!(v > 0))
+      child(key).fail("must be > 0, got " + std::to_string(v));
     return v;
   }
   double non_negative_or(const std::string& key, double fallback) const {
     const double v = number_or(key, fallback);
-    if (v < 0) child(key).fail("must be >= 0, got " + std::to_string(v));
+    if (v < 0)
+      child(key).fail("must be >= 0, got " + std::to_string(v));
     return v;
   }
   double angle_deg_or(const std::string& key, double fallback_rad) const {
     return has(key) ? deg_to_rad(child(key).number()) : fallback_rad;
   }
   YamlField required(const std::string& key) const {
-    if (!has(key)) fail("missing required field \"" + key + "\"");
+    if (!has(key))
+      fail("missing required field \"" + key + "\"");
     return child(key);
   }
   int line() const { return line_; }

@@ -31,14 +31,17 @@ LidarConfig read_lidar(const YamlField& f) {
   const YamlField model = f.required("model");
   lidar.model_name = model.text();
   auto resolved = sensor_model_by_name(lidar.model_name);
-  if (!resolved) model.fail("unknown LiDAR model \"" + lidar.model_name + "\" (vlp16, vlp32c, genericN)");
+  if (!resolved)
+    model.fail("unknown LiDAR model \"" + lidar.model_name + "\" (vlp16, vlp32c, genericN)");
   lidar.model = *resolved;
   if (f.has("rpm")) {
     const double rpm = f.child("rpm").number();
-    if (rpm < 300 || rpm > 1200) f.child("rpm").fail("must be within [300, 1200] rpm");
+    if (rpm < 300 || rpm > 1200)
+      f.child("rpm").fail("must be within [300, 1200] rpm");
     lidar.model.rpm = rpm;
   }
-  if (f.has("mount")) lidar.mount = read_mount(f.child("mount"));
+  if (f.has("mount"))
+    lidar.mount = read_mount(f.child("mount"));
   if (f.has("noise")) {
     const YamlField n = f.child("noise");
     n.expect_map({"range_sigma_m", "angle_sigma_rad", "seed"});
@@ -46,7 +49,8 @@ LidarConfig read_lidar(const YamlField& f) {
     lidar.noise.angle_sigma_rad = n.non_negative_or("angle_sigma_rad", lidar.noise.angle_sigma_rad);
     if (n.has("seed")) {
       const double seed = n.child("seed").number();
-      if (seed < 0 || seed != std::floor(seed)) n.child("seed").fail("must be a non-negative integer");
+      if (seed < 0 || seed != std::floor(seed))
+        n.child("seed").fail("must be a non-negative integer");
       lidar.noise.seed = static_cast<std::uint64_t>(seed);
     }
   }
@@ -65,7 +69,8 @@ void read_objects(const YamlField& list, std::vector<T>& out, ReadOne read_one) 
       const YamlField r = item.child("repeat");
       r.expect_map({"count", "dx", "dy"});
       const double c = r.required("count").number();
-      if (c < 1 || c > 10000 || c != std::floor(c)) r.child("count").fail("must be an integer in [1, 10000]");
+      if (c < 1 || c > 10000 || c != std::floor(c))
+        r.child("count").fail("must be an integer in [1, 10000]");
       count = static_cast<int>(c);
       dx = r.number_or("dx", 0);
       dy = r.number_or("dy", 0);
@@ -101,7 +106,8 @@ VehicleShape read_shape(const YamlField& f) {
   s.length = f.positive_or("length", s.length);
   s.width = f.positive_or("width", s.width);
   s.height = f.positive_or("height", s.height);
-  if (s.length > 25 || s.width > 5 || s.height > 6) f.fail("vehicle larger than 25 x 5 x 6 m");
+  if (s.length > 25 || s.width > 5 || s.height > 6)
+    f.fail("vehicle larger than 25 x 5 x 6 m");
   s.corner_radius = f.non_negative_or("corner_radius", s.corner_radius);
   s.ground_clearance = f.non_negative_or("ground_clearance", s.ground_clearance);
   s.belt_height = f.positive_or("belt_height", s.belt_height);
@@ -112,10 +118,12 @@ VehicleShape read_shape(const YamlField& f) {
   s.wheel_radius = f.positive_or("wheel_radius", s.wheel_radius);
   s.wheel_width = f.positive_or("wheel_width", s.wheel_width);
   s.wheelbase = f.positive_or("wheelbase", s.wheelbase);
-  if (2 * s.corner_radius > s.width) f.child("corner_radius").fail("must be at most half the width");
+  if (2 * s.corner_radius > s.width)
+    f.child("corner_radius").fail("must be at most half the width");
   if (s.belt_height >= s.height || s.ground_clearance >= s.belt_height)
     f.fail("need ground_clearance < belt_height < height");
-  if (s.wheelbase + 2 * s.wheel_radius > s.length) f.child("wheelbase").fail("wheels do not fit the length");
+  if (s.wheelbase + 2 * s.wheel_radius > s.length)
+    f.child("wheelbase").fail("wheels do not fit the length");
   return s;
 }
 
@@ -124,9 +132,12 @@ Pose2 read_pose2(const YamlField& f) {
 }
 
 Trajectory read_trajectory(const YamlField& f) {
-  f.expect_map({"static", "spin", "waypoints"});
+  f.expect_map({"static", "spin", "waypoints", "interpolation"});
   const int kinds = f.has("static") + f.has("spin") + f.has("waypoints");
-  if (kinds != 1) f.fail("exactly one of static, spin, waypoints is required");
+  if (kinds != 1)
+    f.fail("exactly one of static, spin, waypoints is required");
+  if (f.has("interpolation") && !f.has("waypoints"))
+    f.child("interpolation").fail("only waypoints are interpolated");
   if (f.has("static")) {
     const YamlField s = f.child("static");
     s.expect_map({"x", "y", "yaw_deg"});
@@ -144,13 +155,21 @@ Trajectory read_trajectory(const YamlField& f) {
     return spin;
   }
   Waypoints w;
+  if (f.has("interpolation")) {
+    const std::string mode = f.child("interpolation").text();
+    if (mode != "linear" && mode != "smooth")
+      f.child("interpolation").fail("must be linear or smooth");
+    w.smooth = mode == "smooth";
+  }
   for (const YamlField& item : f.child("waypoints").items()) {
     item.expect_map({"t_s", "x", "y", "yaw_deg"});
     const TimeNs t = from_seconds(item.required("t_s").number());
-    if (!w.points.empty() && t <= w.points.back().t) item.child("t_s").fail("times must increase");
+    if (!w.points.empty() && t <= w.points.back().t)
+      item.child("t_s").fail("times must increase");
     w.points.push_back({t, read_pose2(item)});
   }
-  if (w.points.empty()) f.child("waypoints").fail("needs at least one waypoint");
+  if (w.points.empty())
+    f.child("waypoints").fail("needs at least one waypoint");
   return w;
 }
 
@@ -167,7 +186,8 @@ Scene read_scene(const YamlField& f) {
     r.expect_map({"ground", "building", "pole", "vegetation", "vehicle"});
     auto read = [&](const char* key, double& v) {
       v = r.number_or(key, v);
-      if (v < 0 || v > 1) r.child(key).fail("must be within [0, 1]");
+      if (v < 0 || v > 1)
+        r.child(key).fail("must be within [0, 1]");
     };
     read("ground", scene.reflectivity.ground);
     read("building", scene.reflectivity.building);
@@ -175,7 +195,8 @@ Scene read_scene(const YamlField& f) {
     read("vegetation", scene.reflectivity.vegetation);
     read("vehicle", scene.reflectivity.vehicle);
   }
-  if (f.has("buildings")) read_objects(f.child("buildings"), scene.buildings, read_placed_box<Building>);
+  if (f.has("buildings"))
+    read_objects(f.child("buildings"), scene.buildings, read_placed_box<Building>);
   if (f.has("poles")) {
     read_objects(f.child("poles"), scene.poles, [](const YamlField& p) {
       p.expect_map({"x", "y", "radius", "height", "arm_length", "arm_yaw_deg", "repeat"});
@@ -201,7 +222,8 @@ Scene read_scene(const YamlField& f) {
       return o;
     });
   }
-  if (f.has("shrubs")) read_objects(f.child("shrubs"), scene.shrubs, read_placed_box<Shrub>);
+  if (f.has("shrubs"))
+    read_objects(f.child("shrubs"), scene.shrubs, read_placed_box<Shrub>);
   return scene;
 }
 
@@ -217,17 +239,21 @@ Scenario read_scenario(const YAML::Node& root, const std::string& source_name) {
   s.source = source_name;
   s.name = doc.has("name") ? doc.child("name").text() : source_name;
   s.lidar = read_lidar(doc.required("lidar"));
-  if (doc.has("scene")) s.scene = read_scene(doc.child("scene"));
+  if (doc.has("scene"))
+    s.scene = read_scene(doc.child("scene"));
   if (doc.has("vehicles")) {
     std::set<std::uint32_t> ids;
     for (const YamlField& v : doc.child("vehicles").items()) {
       v.expect_map({"id", "shape", "trajectory"});
       Vehicle vehicle;
       const double id = v.required("id").number();
-      if (id < 0 || id > 4294967295.0 || id != std::floor(id)) v.child("id").fail("must be a 32-bit unsigned integer");
+      if (id < 0 || id > 4294967295.0 || id != std::floor(id))
+        v.child("id").fail("must be a 32-bit unsigned integer");
       vehicle.id = static_cast<std::uint32_t>(id);
-      if (!ids.insert(vehicle.id).second) v.child("id").fail("duplicate vehicle id");
-      if (v.has("shape")) vehicle.shape = read_shape(v.child("shape"));
+      if (!ids.insert(vehicle.id).second)
+        v.child("id").fail("duplicate vehicle id");
+      if (v.has("shape"))
+        vehicle.shape = read_shape(v.child("shape"));
       vehicle.trajectory = read_trajectory(v.required("trajectory"));
       s.scene.vehicles.push_back(vehicle);
     }

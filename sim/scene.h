@@ -58,13 +58,13 @@ struct VehicleShape {
   double length = 4.89;
   double width = 1.92;
   double height = 1.70;
-  double corner_radius = 0.35;      // plan-view rounding of the body corners
-  double ground_clearance = 0.20;   // underside of the body
-  double belt_height = 1.00;        // where the glasshouse starts
-  double cabin_inset = 0.14;        // each side, glasshouse narrower than the body
-  double hood_length = 1.25;        // front overhang of the body ahead of the windscreen base
-  double windscreen_run = 0.75;     // horizontal run of the sloped windscreen
-  double rear_slope_run = 0.35;     // horizontal run of the sloped rear window
+  double corner_radius = 0.35;     // plan-view rounding of the body corners
+  double ground_clearance = 0.20;  // underside of the body
+  double belt_height = 1.00;       // where the glasshouse starts
+  double cabin_inset = 0.14;       // each side, glasshouse narrower than the body
+  double hood_length = 1.25;       // front overhang of the body ahead of the windscreen base
+  double windscreen_run = 0.75;    // horizontal run of the sloped windscreen
+  double rear_slope_run = 0.35;    // horizontal run of the sloped rear window
   double wheel_radius = 0.37;
   double wheel_width = 0.24;
   double wheelbase = 2.79;
@@ -85,10 +85,14 @@ struct TimedPose {
   TimeNs t = 0;
   Pose2 pose;
 };
-// Piecewise-linear in x, y and (shortest-way) yaw between time-stamped poses; held before the first
-// and after the last.
+// Time-stamped poses, held before the first and after the last. Between them either piecewise-linear in
+// x, y and (shortest-way) yaw, or, with `smooth`, a cubic Hermite path through the points (tangents by
+// central differences in time) with the yaw along the direction of motion, as a driven car moves: no
+// sideways crabbing and no jumps of the yaw rate at the points. (The points' yaw then only matters where
+// the vehicle stands still.)
 struct Waypoints {
   std::vector<TimedPose> points;
+  bool smooth = false;
 };
 using Trajectory = std::variant<StaticPose, Spin, Waypoints>;
 

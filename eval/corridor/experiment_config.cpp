@@ -10,7 +10,8 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
   using io::YamlField;
   const YAML::Node root = io::parse_yaml(io::read_text_file(path), path);
   const YamlField doc(root, "", path, 1);
-  doc.expect_map({"scenario", "vehicle_id", "rsu_models", "duration_s", "seed", "vehicle_lidar", "map", "ndt"});
+  doc.expect_map(
+      {"scenario", "vehicle_id", "rsu_models", "duration_s", "seed", "vehicle_lidar", "map", "ndt"});
   CorridorExperimentConfig c;
   c.source = path;
   const YamlField scenario = doc.required("scenario");
@@ -18,8 +19,10 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
   c.scenario = sim::load_scenario_file(scenario_path.string());
   c.vehicle_id = static_cast<std::uint32_t>(doc.number_or("vehicle_id", 1));
   bool found = false;
-  for (const auto& v : c.scenario.scene.vehicles) found = found || v.id == c.vehicle_id;
-  if (!found) doc.child("vehicle_id").fail("no vehicle with this id in " + scenario_path.string());
+  for (const auto& v : c.scenario.scene.vehicles)
+    found = found || v.id == c.vehicle_id;
+  if (!found)
+    doc.child("vehicle_id").fail("no vehicle with this id in " + scenario_path.string());
   for (const YamlField& m : doc.required("rsu_models").items()) {
     if (!sensor_model_by_name(m.text()) || !sensor_model_by_name(m.text())->has_packet_format())
       m.fail("not a LiDAR model with a Velodyne packet format (vlp16, vlp32c)");
@@ -31,17 +34,23 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
   const YamlField lidar = doc.required("vehicle_lidar");
   lidar.expect_map({"model", "mount", "noise"});
   c.vehicle_lidar_model = lidar.required("model").text();
-  if (!sensor_model_by_name(c.vehicle_lidar_model)) lidar.child("model").fail("unknown LiDAR model");
+  if (!sensor_model_by_name(c.vehicle_lidar_model))
+    lidar.child("model").fail("unknown LiDAR model");
   const YamlField mount = lidar.required("mount");
   mount.expect_map({"x", "y", "z", "roll_deg", "pitch_deg", "yaw_deg"});
-  c.vehicle_lidar_mount = Pose3{mount.number_or("x", 0), mount.number_or("y", 0), mount.number_or("z", 0),
-                                mount.angle_deg_or("roll_deg", 0), mount.angle_deg_or("pitch_deg", 0),
+  c.vehicle_lidar_mount = Pose3{mount.number_or("x", 0),
+                                mount.number_or("y", 0),
+                                mount.number_or("z", 0),
+                                mount.angle_deg_or("roll_deg", 0),
+                                mount.angle_deg_or("pitch_deg", 0),
                                 mount.angle_deg_or("yaw_deg", 0)};
   if (lidar.has("noise")) {
     const YamlField n = lidar.child("noise");
     n.expect_map({"range_sigma_m", "angle_sigma_rad"});
-    c.vehicle_lidar_noise.range_sigma_m = n.non_negative_or("range_sigma_m", c.vehicle_lidar_noise.range_sigma_m);
-    c.vehicle_lidar_noise.angle_sigma_rad = n.non_negative_or("angle_sigma_rad", c.vehicle_lidar_noise.angle_sigma_rad);
+    c.vehicle_lidar_noise.range_sigma_m =
+        n.non_negative_or("range_sigma_m", c.vehicle_lidar_noise.range_sigma_m);
+    c.vehicle_lidar_noise.angle_sigma_rad =
+        n.non_negative_or("angle_sigma_rad", c.vehicle_lidar_noise.angle_sigma_rad);
   }
   c.vehicle_lidar_noise.seed = c.seed;
 
@@ -60,7 +69,8 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
   c.ndt.max_iterations = static_cast<int>(ndt.positive_or("max_iterations", c.ndt.max_iterations));
   c.ndt.crop_range_m = ndt.positive_or("crop_range_m", c.ndt.crop_range_m);
   c.ndt.voxel_leaf_m = ndt.positive_or("voxel_leaf_m", c.ndt.voxel_leaf_m);
-  c.ndt.random_sample_points = static_cast<int>(ndt.positive_or("random_sample_points", c.ndt.random_sample_points));
+  c.ndt.random_sample_points =
+      static_cast<int>(ndt.positive_or("random_sample_points", c.ndt.random_sample_points));
   c.ndt.output_sigma_xy_m = ndt.positive_or("output_sigma_xy_m", c.ndt.output_sigma_xy_m);
   c.ndt.output_sigma_yaw_rad = ndt.positive_or("output_sigma_yaw_rad", c.ndt.output_sigma_yaw_rad);
   if (ndt.has("initial_pose_error")) {

@@ -23,7 +23,7 @@ struct CorridorExperimentConfig {
   sim::NoiseModel vehicle_lidar_noise;
   double map_spacing_m = 0.25;
   NdtConfig ndt;
-  Pose2 initial_pose_error;   // added to the true start pose to seed NDT
+  Pose2 initial_pose_error;  // added to the true start pose to seed NDT
 };
 
 // Throws io::YamlError / sim::ScenarioError naming the file, line and field.

@@ -22,7 +22,8 @@ int run_ndt(const eval::CorridorExperimentConfig& config, const std::filesystem:
   std::fprintf(stderr, "vehicle NDT self-localization (%s on the roof, %.1f s drive)\n",
                config.vehicle_lidar_model.c_str(), config.duration_s);
   const auto samples = eval::run_vehicle_ndt(config, [](int done, int total) {
-    if (done % 10 == 0 || done == total) std::fprintf(stderr, "\r  NDT frame %d/%d", done, total);
+    if (done % 10 == 0 || done == total)
+      std::fprintf(stderr, "\r  NDT frame %d/%d", done, total);
   });
   std::fprintf(stderr, "\n");
   std::ofstream csv(out / "ndt.csv");
@@ -30,20 +31,23 @@ int run_ndt(const eval::CorridorExperimentConfig& config, const std::filesystem:
   csv.precision(10);
   int converged = 0;
   for (const auto& s : samples) {
-    csv << s.time_ns << ',' << s.pose.x << ',' << s.pose.y << ',' << s.pose.yaw << ',' << s.covariance(0, 0) << ','
-        << s.covariance(1, 1) << ',' << s.covariance(2, 2) << ',' << (s.converged ? 1 : 0) << ',' << s.iterations
-        << ',' << s.truth.x << ',' << s.truth.y << ',' << s.truth.yaw << '\n';
+    csv << s.time_ns << ',' << s.pose.x << ',' << s.pose.y << ',' << s.pose.yaw << ',' << s.covariance(0, 0)
+        << ',' << s.covariance(1, 1) << ',' << s.covariance(2, 2) << ',' << (s.converged ? 1 : 0) << ','
+        << s.iterations << ',' << s.truth.x << ',' << s.truth.y << ',' << s.truth.yaw << '\n';
     converged += s.converged ? 1 : 0;
   }
-  std::fprintf(stderr, "  %zu poses (%d converged) -> %s\n", samples.size(), converged, (out / "ndt.csv").c_str());
+  std::fprintf(stderr, "  %zu poses (%d converged) -> %s\n", samples.size(), converged,
+               (out / "ndt.csv").c_str());
   return 0;
 }
 
 int run_report(const eval::CorridorExperimentConfig& config, const std::filesystem::path& out) {
   const eval::ExperimentScores scores = eval::score_experiment(config, out.string());
   std::vector<std::string> methods = {"ndt"};
-  for (const auto& m : config.rsu_models) methods.push_back("rsu_" + m);
-  for (const auto& m : config.rsu_models) methods.push_back("fused_" + m);
+  for (const auto& m : config.rsu_models)
+    methods.push_back("rsu_" + m);
+  for (const auto& m : config.rsu_models)
+    methods.push_back("fused_" + m);
   const std::string table = eval::format_table(scores, methods);
   std::cout << table;
   std::ofstream(out / "table.txt") << table;
@@ -57,10 +61,10 @@ int run_report(const eval::CorridorExperimentConfig& config, const std::filesyst
 int main(int argc, char** argv) {
   po::options_description options(
       "rsu-corridor {ndt|report} EXPERIMENT [--out DIR]: the paper's realistic experiment (Sec. 4)");
-  options.add_options()("help,h", "show this help")("out,o", po::value<std::string>()->default_value("out/corridor"),
-                                                     "output folder")(
-      "command", po::value<std::string>(), "ndt or report")("experiment", po::value<std::string>(),
-                                                            "experiment file, e.g. scenarios/corridor_experiment.yaml");
+  options.add_options()("help,h", "show this help")(
+      "out,o", po::value<std::string>()->default_value("out/corridor"), "output folder")(
+      "command", po::value<std::string>(), "ndt or report")(
+      "experiment", po::value<std::string>(), "experiment file, e.g. scenarios/corridor_experiment.yaml");
   po::positional_options_description positional;
   positional.add("command", 1).add("experiment", 1);
   po::variables_map vm;
@@ -75,8 +79,10 @@ int main(int argc, char** argv) {
     const std::filesystem::path out = vm["out"].as<std::string>();
     std::filesystem::create_directories(out);
     const std::string command = vm["command"].as<std::string>();
-    if (command == "ndt") return run_ndt(config, out);
-    if (command == "report") return run_report(config, out);
+    if (command == "ndt")
+      return run_ndt(config, out);
+    if (command == "report")
+      return run_report(config, out);
     std::fprintf(stderr, "rsu-corridor: unknown command \"%s\" (ndt or report)\n", command.c_str());
     return 2;
   } catch (const std::exception& e) {

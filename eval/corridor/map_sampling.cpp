@@ -6,7 +6,8 @@
 
 namespace rsu::eval {
 
-std::vector<Eigen::Vector3f> sample_surface(const sim::TriangleMesh& mesh, double spacing_m, std::uint64_t seed) {
+std::vector<Eigen::Vector3f> sample_surface(const sim::TriangleMesh& mesh, double spacing_m,
+                                            std::uint64_t seed) {
   std::vector<Eigen::Vector3f> out;
   const double cell = spacing_m * spacing_m;
   std::uint64_t counter = 0;
@@ -19,7 +20,8 @@ std::vector<Eigen::Vector3f> sample_surface(const sim::TriangleMesh& mesh, doubl
     // represented in proportion to their area.
     const double expected = area / cell;
     auto n = static_cast<std::uint64_t>(std::floor(expected));
-    if (uniform_open01(mix64(seed ^ mix64(++counter))) < expected - std::floor(expected)) ++n;
+    if (uniform_open01(mix64(seed ^ mix64(++counter))) < expected - std::floor(expected))
+      ++n;
     for (std::uint64_t i = 0; i < n; ++i) {
       // Uniform in the triangle: reflect (u, v) back into it when u + v > 1.
       double u = uniform_open01(mix64(seed ^ mix64(++counter)));

@@ -13,6 +13,7 @@ namespace rsu::eval {
 
 // About one point per spacing^2 of surface; every triangle gets at least one point if it is larger than
 // half a cell.
-std::vector<Eigen::Vector3f> sample_surface(const sim::TriangleMesh& mesh, double spacing_m, std::uint64_t seed);
+std::vector<Eigen::Vector3f> sample_surface(const sim::TriangleMesh& mesh, double spacing_m,
+                                            std::uint64_t seed);
 
 }  // namespace rsu::eval

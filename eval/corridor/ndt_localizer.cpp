@@ -22,7 +22,8 @@ NdtLocalizer::NdtLocalizer(const NdtConfig& config, const std::vector<Eigen::Vec
   impl_->seed = seed;
   auto map = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
   map->reserve(map_points.size());
-  for (const auto& p : map_points) map->emplace_back(p.x(), p.y(), p.z());
+  for (const auto& p : map_points)
+    map->emplace_back(p.x(), p.y(), p.z());
   impl_->ndt.setResolution(static_cast<float>(config.resolution_m));
   impl_->ndt.setStepSize(config.step_size_m);
   // Autoware's ndt_scan_matcher stops when a Newton step is shorter than trans_epsilon (a length, m).
@@ -36,7 +37,8 @@ NdtLocalizer::NdtLocalizer(const NdtConfig& config, const std::vector<Eigen::Vec
 
 NdtLocalizer::~NdtLocalizer() = default;
 
-NdtResult NdtLocalizer::align(const std::vector<LidarPoint>& scan, const Pose3& sensor_in_vehicle, const Pose2& guess) {
+NdtResult NdtLocalizer::align(const std::vector<LidarPoint>& scan, const Pose3& sensor_in_vehicle,
+                              const Pose2& guess) {
   // Scan into the vehicle frame, cropped to the measurement range, the vehicle itself left out.
   const Eigen::Isometry3d sensor_to_vehicle = sensor_in_vehicle.to_isometry();
   auto cropped = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
@@ -44,9 +46,11 @@ NdtResult NdtLocalizer::align(const std::vector<LidarPoint>& scan, const Pose3& 
   for (const LidarPoint& p : scan) {
     const double px = p.x, py = p.y;
     const double r2 = px * px + py * py;
-    if (r2 < config_.self_filter_radius_m * config_.self_filter_radius_m) continue;
+    if (r2 < config_.self_filter_radius_m * config_.self_filter_radius_m)
+      continue;
     const Eigen::Vector3d v = sensor_to_vehicle * Eigen::Vector3d(p.x, p.y, p.z);
-    if (std::abs(v.x()) > config_.crop_range_m || std::abs(v.y()) > config_.crop_range_m) continue;
+    if (std::abs(v.x()) > config_.crop_range_m || std::abs(v.y()) > config_.crop_range_m)
+      continue;
     cropped->emplace_back(static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z()));
   }
   auto voxelized = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
@@ -71,8 +75,9 @@ NdtResult NdtLocalizer::align(const std::vector<LidarPoint>& scan, const Pose3& 
   NdtResult result;
   result.scan_points = sampled->size();
   Eigen::Matrix4f initial = Eigen::Matrix4f::Identity();
-  initial.topLeftCorner<2, 2>() << static_cast<float>(std::cos(guess.yaw)), static_cast<float>(-std::sin(guess.yaw)),
-      static_cast<float>(std::sin(guess.yaw)), static_cast<float>(std::cos(guess.yaw));
+  initial.topLeftCorner<2, 2>() << static_cast<float>(std::cos(guess.yaw)),
+      static_cast<float>(-std::sin(guess.yaw)), static_cast<float>(std::sin(guess.yaw)),
+      static_cast<float>(std::cos(guess.yaw));
   initial(0, 3) = static_cast<float>(guess.x);
   initial(1, 3) = static_cast<float>(guess.y);
   if (sampled->empty()) {
@@ -88,7 +93,8 @@ NdtResult NdtLocalizer::align(const std::vector<LidarPoint>& scan, const Pose3& 
   result.fitness = impl_->ndt.getFitnessScore();
   result.pose = Pose2{t(0, 3), t(1, 3), std::atan2(t(1, 0), t(0, 0))};
   result.covariance.diagonal() << config_.output_sigma_xy_m * config_.output_sigma_xy_m,
-      config_.output_sigma_xy_m * config_.output_sigma_xy_m, config_.output_sigma_yaw_rad * config_.output_sigma_yaw_rad;
+      config_.output_sigma_xy_m * config_.output_sigma_xy_m,
+      config_.output_sigma_yaw_rad * config_.output_sigma_yaw_rad;
   return result;
 }
 

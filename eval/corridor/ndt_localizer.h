@@ -35,11 +35,11 @@ struct NdtConfig {
 };
 
 struct NdtResult {
-  Pose2 pose;                 // the vehicle's footprint centre and yaw, map frame
+  Pose2 pose;  // the vehicle's footprint centre and yaw, map frame
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   bool converged = false;
   int iterations = 0;
-  double fitness = 0.0;       // PCL's mean squared distance of the aligned scan to the map
+  double fitness = 0.0;  // PCL's mean squared distance of the aligned scan to the map
   std::size_t scan_points = 0;
 };
 

@@ -20,7 +20,8 @@ struct CsvTable {
 
   std::size_t column(const std::string& name, const std::string& path) const {
     const auto it = std::find(header.begin(), header.end(), name);
-    if (it == header.end()) throw std::runtime_error(path + ": no column \"" + name + "\"");
+    if (it == header.end())
+      throw std::runtime_error(path + ": no column \"" + name + "\"");
     return static_cast<std::size_t>(it - header.begin());
   }
 };
@@ -28,19 +29,23 @@ struct CsvTable {
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> out;
   std::stringstream in(line);
-  for (std::string cell; std::getline(in, cell, ',');) out.push_back(cell);
+  for (std::string cell; std::getline(in, cell, ',');)
+    out.push_back(cell);
   return out;
 }
 
 CsvTable read_csv(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open");
+  if (!in)
+    throw std::runtime_error(path + ": cannot open");
   CsvTable t;
   std::string line;
-  if (!std::getline(in, line)) throw std::runtime_error(path + ": empty file");
+  if (!std::getline(in, line))
+    throw std::runtime_error(path + ": empty file");
   t.header = split(line);
   while (std::getline(in, line)) {
-    if (!line.empty() && line[0] != '#') t.rows.push_back(split(line));
+    if (!line.empty() && line[0] != '#')
+      t.rows.push_back(split(line));
   }
   return t;
 }
@@ -52,14 +57,15 @@ double axis_error_deg(double a, double b) {
 
 const sim::Vehicle& vehicle_of(const CorridorExperimentConfig& c) {
   for (const auto& v : c.scenario.scene.vehicles) {
-    if (v.id == c.vehicle_id) return v;
+    if (v.id == c.vehicle_id)
+      return v;
   }
   throw std::runtime_error("no vehicle");
 }
 
 // epoch_ns: subtracted from the file's times (processes that ran on the host clock, see run_experiment.sh).
-std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, const std::string& path, bool box_yaw,
-                                       TimeNs epoch_ns) {
+std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, const std::string& path,
+                                       bool box_yaw, TimeNs epoch_ns) {
   const CsvTable t = read_csv(path);
   const std::size_t ct = t.column("time_ns", path), cx = t.column("x", path), cy = t.column("y", path),
                     cyaw = t.column("yaw", path);
@@ -70,8 +76,10 @@ std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, c
   const auto source_col = static_cast<std::size_t>(source_it - t.header.begin());
   std::vector<ScoredEstimate> out;
   for (const auto& row : t.rows) {
-    if (row.size() <= std::max({ct, cx, cy, cyaw})) continue;
-    if (source_it != t.header.end() && (row.size() <= source_col || row[source_col] != "ndt")) continue;
+    if (row.size() <= std::max({ct, cx, cy, cyaw}))
+      continue;
+    if (source_it != t.header.end() && (row.size() <= source_col || row[source_col] != "ndt"))
+      continue;
     ScoredEstimate e;
     e.time_ns = std::stoll(row[ct]) - epoch_ns;
     const Pose2 truth = sim::pose_at(vehicle.trajectory, e.time_ns);
@@ -97,7 +105,8 @@ std::string fmt(double v, int precision = 4) {
 ErrorStats error_stats(const std::vector<double>& errors) {
   ErrorStats s;
   s.count = errors.size();
-  if (errors.empty()) return s;
+  if (errors.empty())
+    return s;
   std::vector<double> sorted = errors;
   std::sort(sorted.begin(), sorted.end());
   double sum = 0, sum_sq = 0;
@@ -128,14 +137,16 @@ ExperimentScores score_experiment(const CorridorExperimentConfig& config, const 
     for (const auto& [range, half] : kRanges) {
       std::vector<double> errors;
       for (const auto& e : estimates) {
-        if (std::abs(e.along_road_m) <= half) errors.push_back(e.error_m);
+        if (std::abs(e.along_road_m) <= half)
+          errors.push_back(e.error_m);
       }
       scores.stats[method][range] = error_stats(errors);
     }
   }
   for (const auto& [range, half] : kRanges) {
     std::size_t n = 0;
-    for (const auto& e : scores.estimates["ndt"]) n += std::abs(e.along_road_m) <= half ? 1 : 0;
+    for (const auto& e : scores.estimates["ndt"])
+      n += std::abs(e.along_road_m) <= half ? 1 : 0;
     scores.frames_in_range[range] = n;
   }
   return scores;
@@ -149,11 +160,12 @@ std::string format_table(const ExperimentScores& scores, const std::vector<std::
     out << "  method          fixes      MAE m     RMSE m      p95 m      max m\n";
     for (const std::string& m : methods) {
       const auto it = scores.stats.find(m);
-      if (it == scores.stats.end()) continue;
+      if (it == scores.stats.end())
+        continue;
       const ErrorStats& s = it->second.at(range);
       char line[160];
-      std::snprintf(line, sizeof line, "  %-14s %6zu %10s %10s %10s %10s\n", m.c_str(), s.count, fmt(s.mae_m).c_str(),
-                    fmt(s.rmse_m).c_str(), fmt(s.p95_m).c_str(), fmt(s.max_m).c_str());
+      std::snprintf(line, sizeof line, "  %-14s %6zu %10s %10s %10s %10s\n", m.c_str(), s.count,
+                    fmt(s.mae_m).c_str(), fmt(s.rmse_m).c_str(), fmt(s.p95_m).c_str(), fmt(s.max_m).c_str());
       out << line;
     }
   }
@@ -169,13 +181,18 @@ std::string summary_json(const ExperimentScores& scores, const std::vector<std::
     bool first_method = true;
     for (const std::string& m : methods) {
       const auto it = scores.stats.find(m);
-      if (it == scores.stats.end()) continue;
+      if (it == scores.stats.end())
+        continue;
       out << (first_method ? "" : ", ") << '"' << m << "\": {";
       first_method = false;
       bool first_range = true;
       for (const auto& [range, half] : kRanges) {
         const ErrorStats& s = it->second.at(range);
-        const double v = f == 0 ? s.mae_m : f == 1 ? s.rmse_m : f == 2 ? s.p95_m : f == 3 ? s.max_m : static_cast<double>(s.count);
+        const double v = f == 0   ? s.mae_m
+                         : f == 1 ? s.rmse_m
+                         : f == 2 ? s.p95_m
+                         : f == 3 ? s.max_m
+                                  : static_cast<double>(s.count);
         out << (first_range ? "" : ", ") << '"' << range << "\": " << (f == 4 ? fmt(v, 0) : fmt(v, 6));
         first_range = false;
       }
@@ -189,7 +206,8 @@ std::string summary_json(const ExperimentScores& scores, const std::vector<std::
 
 void write_frames_csv(const ExperimentScores& scores, const std::string& path) {
   std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write " + path);
+  if (!out)
+    throw std::runtime_error("cannot write " + path);
   out << "method,time_ns,along_road_m,error_m,yaw_error_deg\n";
   for (const auto& [method, estimates] : scores.estimates) {
     for (const auto& e : estimates) {

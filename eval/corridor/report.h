@@ -14,9 +14,9 @@ namespace rsu::eval {
 // One estimate to score: when, where, and where the vehicle truly was then.
 struct ScoredEstimate {
   TimeNs time_ns = 0;
-  double along_road_m = 0;  // true x relative to the RSU LiDAR
-  double error_m = 0;       // planar position error
-  double yaw_error_deg = 0; // mod 180 for RSU fixes (a box has no front)
+  double along_road_m = 0;   // true x relative to the RSU LiDAR
+  double error_m = 0;        // planar position error
+  double yaw_error_deg = 0;  // mod 180 for RSU fixes (a box has no front)
 };
 
 struct ErrorStats {

@@ -14,14 +14,16 @@ namespace {
 
 const sim::Vehicle& find_vehicle(const sim::Scene& scene, std::uint32_t id) {
   for (const auto& v : scene.vehicles) {
-    if (v.id == id) return v;
+    if (v.id == id)
+      return v;
   }
   throw std::invalid_argument("no vehicle " + std::to_string(id));
 }
 
 // Moves each point from where the sensor was at its firing time to where it is at t_ref, assuming the
 // vehicle moved at constant speed and yaw rate (in its own frame) over the sweep.
-void deskew(std::vector<LidarPoint>& points, TimeNs t_ref, double speed, double yaw_rate, const Pose3& mount) {
+void deskew(std::vector<LidarPoint>& points, TimeNs t_ref, double speed, double yaw_rate,
+            const Pose3& mount) {
   const Eigen::Isometry3d sensor_to_vehicle = mount.to_isometry();
   const Eigen::Isometry3d vehicle_to_sensor = sensor_to_vehicle.inverse();
   for (LidarPoint& p : points) {
@@ -29,7 +31,8 @@ void deskew(std::vector<LidarPoint>& points, TimeNs t_ref, double speed, double 
     const double dyaw = yaw_rate * dt;
     Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();  // vehicle at t_i seen from vehicle at t_ref
     motion.linear() = Eigen::AngleAxisd(dyaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    motion.translation() = Eigen::Vector3d(speed * dt * std::cos(dyaw / 2), speed * dt * std::sin(dyaw / 2), 0.0);
+    motion.translation() =
+        Eigen::Vector3d(speed * dt * std::cos(dyaw / 2), speed * dt * std::sin(dyaw / 2), 0.0);
     const Eigen::Vector3d q = vehicle_to_sensor * motion * sensor_to_vehicle * Eigen::Vector3d(p.x, p.y, p.z);
     p.x = static_cast<float>(q.x());
     p.y = static_cast<float>(q.y());
@@ -49,16 +52,17 @@ std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
   std::vector<Eigen::Vector3f> map;
   for (auto surface : {sim::SurfaceClass::kGround, sim::SurfaceClass::kBuilding, sim::SurfaceClass::kPole,
                        sim::SurfaceClass::kVegetation}) {
-    const auto part = sample_surface(raycaster.static_mesh(surface),
-                                     surface == sim::SurfaceClass::kGround ? 2 * config.map_spacing_m : config.map_spacing_m,
-                                     config.seed + static_cast<std::uint64_t>(surface));
+    const auto part = sample_surface(
+        raycaster.static_mesh(surface),
+        surface == sim::SurfaceClass::kGround ? 2 * config.map_spacing_m : config.map_spacing_m,
+        config.seed + static_cast<std::uint64_t>(surface));
     map.insert(map.end(), part.begin(), part.end());
   }
   NdtLocalizer ndt(config.ndt, map, config.seed);
 
   const auto model = *sensor_model_by_name(config.vehicle_lidar_model);
-  const sim::LidarSimulator lidar(model, config.vehicle_lidar_mount, config.vehicle_lidar_noise, raycaster, 0, 0.0,
-                                  &vehicle.trajectory);
+  const sim::LidarSimulator lidar(model, config.vehicle_lidar_mount, config.vehicle_lidar_noise, raycaster, 0,
+                                  0.0, &vehicle.trajectory);
   const TimeNs period = lidar.rotation_period_ns();
   const int frames = static_cast<int>(std::floor(config.duration_s / to_seconds(period)));
 
@@ -103,7 +107,8 @@ std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
     s.iterations = r.iterations;
     s.truth = sim::pose_at(vehicle.trajectory, t_ref);
     samples.push_back(s);
-    if (progress) progress(f + 1, frames);
+    if (progress)
+      progress(f + 1, frames);
   }
   return samples;
 }

@@ -12,12 +12,12 @@
 namespace rsu::eval {
 
 struct NdtSample {
-  TimeNs time_ns = 0;   // the scan's reference time (its last firing)
-  Pose2 pose;           // NDT's vehicle pose
+  TimeNs time_ns = 0;  // the scan's reference time (its last firing)
+  Pose2 pose;          // NDT's vehicle pose
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   bool converged = false;
   int iterations = 0;
-  Pose2 truth;          // the true pose at time_ns
+  Pose2 truth;  // the true pose at time_ns
 };
 
 // progress(done, total) is called after each frame.

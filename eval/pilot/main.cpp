@@ -15,8 +15,8 @@ namespace po = boost::program_options;
 int main(int argc, char** argv) {
   rsu::eval::PilotConfig defaults;
   po::options_description options("rsu-pilot [options]: the paper's pilot experiment (Sec. 3.1)");
-  options.add_options()("help,h", "show this help")("out,o", po::value<std::string>()->default_value("out/pilot"),
-                                                     "output folder")(
+  options.add_options()("help,h", "show this help")(
+      "out,o", po::value<std::string>()->default_value("out/pilot"), "output folder")(
       "models", po::value<std::string>()->default_value("vlp16,vlp32c"), "comma-separated LiDAR models")(
       "distance-min", po::value<double>()->default_value(defaults.distance_min_m), "m")(
       "distance-max", po::value<double>()->default_value(defaults.distance_max_m), "m")(
@@ -42,7 +42,8 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(out);
     std::vector<std::string> models;
     std::stringstream list(vm["models"].as<std::string>());
-    for (std::string m; std::getline(list, m, ',');) models.push_back(m);
+    for (std::string m; std::getline(list, m, ',');)
+      models.push_back(m);
 
     std::ostringstream json;
     json << "{\n";
@@ -68,8 +69,9 @@ int main(int argc, char** argv) {
                   "p95 m", "no fit");
       for (const char* method : {"lshape", "algorithm1", "improved"}) {
         const auto s = rsu::eval::summarize(result, method);
-        std::printf("        %-11s %11.1f%% %9d %10.3f %10.3f %7d\n", method, 100.0 * s.share_below_0p10_6_36m,
-                    s.off_by_90_cells, s.median_error_m, s.p95_error_m, s.no_fit_cells);
+        std::printf("        %-11s %11.1f%% %9d %10.3f %10.3f %7d\n", method,
+                    100.0 * s.share_below_0p10_6_36m, s.off_by_90_cells, s.median_error_m, s.p95_error_m,
+                    s.no_fit_cells);
       }
     }
     json << "\n}\n";

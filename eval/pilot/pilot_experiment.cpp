@@ -44,9 +44,11 @@ Pose3 pilot_mount(const PilotConfig& config) {
 // Only the azimuths around the vehicle are cast: the rest of the empty scene is ground, which the
 // pilot's filter removes anyway. Saves 80-95 % of the rays; noise is keyed per firing, so the cast rays
 // see exactly the noise they would in a full frame.
-std::optional<sim::AzimuthSector> vehicle_sector(const Pose3& mount, double distance, const sim::VehicleShape& shape) {
+std::optional<sim::AzimuthSector> vehicle_sector(const Pose3& mount, double distance,
+                                                 const sim::VehicleShape& shape) {
   const double radius = 0.5 * std::hypot(shape.length, shape.width) + 0.5;
-  if (radius >= distance) return std::nullopt;
+  if (radius >= distance)
+    return std::nullopt;
   const Eigen::Vector3d in_sensor = mount.to_isometry().inverse() * Eigen::Vector3d(distance, 0, 0);
   const double centre = wrap_angle_positive(std::atan2(-in_sensor.y(), in_sensor.x()));  // clockwise
   const double half = std::asin(radius / distance);
@@ -58,8 +60,8 @@ struct DistanceRun {
   std::uint64_t rays = 0;
 };
 
-DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, int distance_index, double distance,
-                         int frames_per_turn) {
+DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, int distance_index,
+                         double distance, int frames_per_turn) {
   const TimeNs period = from_seconds(60.0 / model.rpm);
   const TimeNs t0 = static_cast<TimeNs>(distance_index) * frames_per_turn * period;
 
@@ -108,7 +110,8 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
     times.clear();
     for (std::uint32_t i : foreground.indices) {
       const Eigen::Vector2d xy(map_points[i].x, map_points[i].y);
-      if ((xy - Eigen::Vector2d(distance, 0.0)).norm() > roi_radius) continue;
+      if ((xy - Eigen::Vector2d(distance, 0.0)).norm() > roi_radius)
+        continue;
       footprint.push_back(xy);
       times.push_back(map_points[i].time_ns);
     }
@@ -118,7 +121,8 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
     cell.frame_in_turn = j;
     cell.points = footprint.size();
     if (!times.empty()) {
-      std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
+      std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2),
+                       times.end());
       cell.sweep_ns = times[times.size() / 2];
     } else {
       cell.sweep_ns = t0 + j * period + period / 2;
@@ -148,9 +152,12 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
     cell.alg1_yaw_err_deg = alg1.ok() ? axis_error_deg(alg1.pose.yaw, truth.yaw) : kNaN;
 
     // The vehicle's own yaw estimate: the truth plus a uniform error in [-bound, +bound], drawn per cell.
-    const std::uint64_t key = mix64(config.noise.seed ^ mix64(0x70696c6f74ULL + static_cast<std::uint64_t>(distance_index) * 100000ULL + static_cast<std::uint64_t>(j)));
+    const std::uint64_t key = mix64(
+        config.noise.seed ^ mix64(0x70696c6f74ULL + static_cast<std::uint64_t>(distance_index) * 100000ULL +
+                                  static_cast<std::uint64_t>(j)));
     const double u = 2.0 * uniform_open01(key) - 1.0;
-    const perception::YawPrior prior{truth.yaw + deg_to_rad(config.prior_error_deg) * u, deg_to_rad(config.prior_sigma_deg)};
+    const perception::YawPrior prior{truth.yaw + deg_to_rad(config.prior_error_deg) * u,
+                                     deg_to_rad(config.prior_sigma_deg)};
     const auto improved = perception::correct_improved(fit, footprint, size, lidar_xy, prior);
     if (improved.ok()) {
       cell.improved_center_err_m = (Eigen::Vector2d(improved.pose.x, improved.pose.y) - truth_xy).norm();
@@ -167,7 +174,8 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
 }
 
 double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return kNaN;
+  if (v.empty())
+    return kNaN;
   std::sort(v.begin(), v.end());
   const double pos = q * static_cast<double>(v.size() - 1);
   const auto lo = static_cast<std::size_t>(std::floor(pos));
@@ -176,7 +184,8 @@ double percentile(std::vector<double> v, double q) {
 }
 
 std::string number(double v) {
-  if (!std::isfinite(v)) return "null";
+  if (!std::isfinite(v))
+    return "null";
   std::ostringstream out;
   out.precision(6);
   out << v;
@@ -187,29 +196,38 @@ std::string number(double v) {
 
 PilotResult run_pilot(const PilotConfig& config) {
   const auto model = sensor_model_by_name(config.model_name);
-  if (!model) throw std::invalid_argument("unknown LiDAR model " + config.model_name);
-  if (!(config.distance_step_m > 0) || config.distance_max_m < config.distance_min_m || config.distance_min_m <= 0)
+  if (!model)
+    throw std::invalid_argument("unknown LiDAR model " + config.model_name);
+  if (!(config.distance_step_m > 0) || config.distance_max_m < config.distance_min_m ||
+      config.distance_min_m <= 0)
     throw std::invalid_argument("pilot: need 0 < distance_min <= distance_max and a positive step");
   const double period_s = 60.0 / model->rpm;
   PilotResult result;
   result.config = config;
   result.frames_per_turn = static_cast<int>(std::lround(360.0 / (config.spin_rate_deg_s * period_s)));
-  if (result.frames_per_turn < 1 || result.frames_per_turn > 36000) throw std::invalid_argument("pilot: bad spin rate");
-  const int steps = static_cast<int>(std::floor((config.distance_max_m - config.distance_min_m) / config.distance_step_m + 1e-9)) + 1;
-  for (int i = 0; i < steps; ++i) result.distances.push_back(config.distance_min_m + i * config.distance_step_m);
+  if (result.frames_per_turn < 1 || result.frames_per_turn > 36000)
+    throw std::invalid_argument("pilot: bad spin rate");
+  const int steps = static_cast<int>(std::floor(
+                        (config.distance_max_m - config.distance_min_m) / config.distance_step_m + 1e-9)) +
+                    1;
+  for (int i = 0; i < steps; ++i)
+    result.distances.push_back(config.distance_min_m + i * config.distance_step_m);
 
   const auto wall_start = std::chrono::steady_clock::now();
   std::vector<DistanceRun> runs(result.distances.size());
   std::atomic<std::size_t> next{0};
   auto worker = [&] {
     for (std::size_t i = next++; i < runs.size(); i = next++) {
-      runs[i] = run_distance(config, *model, static_cast<int>(i), result.distances[i], result.frames_per_turn);
+      runs[i] =
+          run_distance(config, *model, static_cast<int>(i), result.distances[i], result.frames_per_turn);
     }
   };
   std::vector<std::thread> threads;
-  for (int t = 1; t < std::max(1, config.threads); ++t) threads.emplace_back(worker);
+  for (int t = 1; t < std::max(1, config.threads); ++t)
+    threads.emplace_back(worker);
   worker();
-  for (auto& t : threads) t.join();
+  for (auto& t : threads)
+    t.join();
   for (auto& r : runs) {
     result.rays_cast += r.rays;
     result.cells.insert(result.cells.end(), r.cells.begin(), r.cells.end());
@@ -241,10 +259,12 @@ MethodSummary summarize(const PilotResult& result, const std::string& method) {
     } else {
       ++s.no_fit_cells;
     }
-    if (std::isfinite(yaw) && yaw > 45.0) ++s.off_by_90_cells;
+    if (std::isfinite(yaw) && yaw > 45.0)
+      ++s.off_by_90_cells;
     if (c.distance_m >= 6.0 - 1e-9 && c.distance_m <= 36.0 + 1e-9) {
       ++in_range;
-      if (std::isfinite(err) && err < 0.10) ++below;
+      if (std::isfinite(err) && err < 0.10)
+        ++below;
     }
   }
   s.share_below_0p10_6_36m = in_range > 0 ? static_cast<double>(below) / in_range : kNaN;
@@ -255,18 +275,21 @@ MethodSummary summarize(const PilotResult& result, const std::string& method) {
 
 void write_cells_csv(const PilotResult& result, const std::string& path, bool append) {
   std::ofstream out(path, append ? std::ios::app : std::ios::trunc);
-  if (!out) throw std::runtime_error("cannot write " + path);
+  if (!out)
+    throw std::runtime_error("cannot write " + path);
   if (!append) {
     out << "model,distance_m,frame,yaw_deg,sweep_ns,points,fit_ok,lshape_center_err_m,area_err_m2,"
            "lshape_yaw_err_deg,alg1_center_err_m,alg1_yaw_err_deg,improved_center_err_m,improved_yaw_err_deg,"
            "improved_sigma_m,improved_resolution\n";
   }
   for (const PilotCell& c : result.cells) {
-    out << result.config.model_name << ',' << c.distance_m << ',' << c.frame_in_turn << ',' << number(c.yaw_deg) << ','
-        << c.sweep_ns << ',' << c.points << ',' << (c.fit_ok ? 1 : 0) << ',' << number(c.lshape_center_err_m) << ','
-        << number(c.area_err_m2) << ',' << number(c.lshape_yaw_err_deg) << ',' << number(c.alg1_center_err_m) << ','
+    out << result.config.model_name << ',' << c.distance_m << ',' << c.frame_in_turn << ','
+        << number(c.yaw_deg) << ',' << c.sweep_ns << ',' << c.points << ',' << (c.fit_ok ? 1 : 0) << ','
+        << number(c.lshape_center_err_m) << ',' << number(c.area_err_m2) << ','
+        << number(c.lshape_yaw_err_deg) << ',' << number(c.alg1_center_err_m) << ','
         << number(c.alg1_yaw_err_deg) << ',' << number(c.improved_center_err_m) << ','
-        << number(c.improved_yaw_err_deg) << ',' << number(c.improved_sigma_m) << ',' << c.improved_resolution << '\n';
+        << number(c.improved_yaw_err_deg) << ',' << number(c.improved_sigma_m) << ',' << c.improved_resolution
+        << '\n';
   }
 }
 
@@ -276,12 +299,15 @@ std::string summary_json_entry(const PilotResult& result) {
   const char* methods[] = {"lshape", "algorithm1", "improved"};
   for (int m = 0; m < 3; ++m) {
     const MethodSummary s = summarize(result, methods[m]);
-    out << (m ? ", " : "") << '"' << methods[m] << "\": {\"share_below_0p10_6_36m\": " << number(s.share_below_0p10_6_36m)
-        << ", \"off_by_90_cells\": " << s.off_by_90_cells << ", \"median_error_m\": " << number(s.median_error_m)
+    out << (m ? ", " : "") << '"' << methods[m]
+        << "\": {\"share_below_0p10_6_36m\": " << number(s.share_below_0p10_6_36m)
+        << ", \"off_by_90_cells\": " << s.off_by_90_cells
+        << ", \"median_error_m\": " << number(s.median_error_m)
         << ", \"p95_error_m\": " << number(s.p95_error_m) << ", \"no_fit_cells\": " << s.no_fit_cells << "}";
   }
   out << ", \"cells\": " << result.cells.size() << ", \"frames_per_turn\": " << result.frames_per_turn
-      << ", \"rays_cast\": " << result.rays_cast << ", \"wall_seconds\": " << number(result.wall_seconds) << "}";
+      << ", \"rays_cast\": " << result.rays_cast << ", \"wall_seconds\": " << number(result.wall_seconds)
+      << "}";
   return out.str();
 }
 

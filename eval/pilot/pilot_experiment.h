@@ -17,35 +17,35 @@ namespace rsu::eval {
 
 struct PilotConfig {
   std::string model_name = "vlp16";
-  double lidar_height_m = 2.0;         // Table 1
-  double distance_min_m = 3.0;         // Sec. 3.1: 3 m to 40 m
+  double lidar_height_m = 2.0;  // Table 1
+  double distance_min_m = 3.0;  // Sec. 3.1: 3 m to 40 m
   double distance_max_m = 40.0;
   double distance_step_m = 0.5;
-  double spin_rate_deg_s = 20.0;       // Table 1: 20 deg/s at 10 Hz = 2 deg per frame
-  double prior_error_deg = 10.0;       // the improved correction's yaw prior error bound (issue target)
-  double prior_sigma_deg = 10.0;       // the sigma the prior is announced with
-  double ground_filter_height_m = 0.2; // the pilot's "drop zero-height points"
-  sim::VehicleShape vehicle;           // Lexus RX450h by default
-  sim::NoiseModel noise;               // DESIGN.md §2 defaults
+  double spin_rate_deg_s = 20.0;        // Table 1: 20 deg/s at 10 Hz = 2 deg per frame
+  double prior_error_deg = 10.0;        // the improved correction's yaw prior error bound (issue target)
+  double prior_sigma_deg = 10.0;        // the sigma the prior is announced with
+  double ground_filter_height_m = 0.2;  // the pilot's "drop zero-height points"
+  sim::VehicleShape vehicle;            // Lexus RX450h by default
+  sim::NoiseModel noise;                // DESIGN.md §2 defaults
   int threads = 2;
 };
 
 // One frame of the experiment.
 struct PilotCell {
   double distance_m = 0;
-  int frame_in_turn = 0;          // 0 .. frames_per_turn - 1
-  double yaw_deg = 0;             // true yaw at the sweep time, [0, 360)
-  TimeNs sweep_ns = 0;            // median firing time of the vehicle's points
-  std::size_t points = 0;         // foreground points (all on the vehicle: the scene is empty)
+  int frame_in_turn = 0;   // 0 .. frames_per_turn - 1
+  double yaw_deg = 0;      // true yaw at the sweep time, [0, 360)
+  TimeNs sweep_ns = 0;     // median firing time of the vehicle's points
+  std::size_t points = 0;  // foreground points (all on the vehicle: the scene is empty)
   bool fit_ok = false;
-  double lshape_center_err_m = 0; // NaN when no fit
-  double area_err_m2 = 0;         // fitted area - true area
-  double lshape_yaw_err_deg = 0;  // longer fitted edge vs the true length axis, mod 180, in [0, 90]
+  double lshape_center_err_m = 0;  // NaN when no fit
+  double area_err_m2 = 0;          // fitted area - true area
+  double lshape_yaw_err_deg = 0;   // longer fitted edge vs the true length axis, mod 180, in [0, 90]
   double alg1_center_err_m = 0;
   double alg1_yaw_err_deg = 0;
   double improved_center_err_m = 0;
   double improved_yaw_err_deg = 0;
-  double improved_sigma_m = 0;    // sqrt of the larger eigenvalue of the reported position covariance
+  double improved_sigma_m = 0;  // sqrt of the larger eigenvalue of the reported position covariance
   std::string improved_resolution;
 };
 
@@ -53,7 +53,7 @@ struct PilotResult {
   PilotConfig config;
   int frames_per_turn = 0;
   std::vector<double> distances;
-  std::vector<PilotCell> cells;   // distance-major
+  std::vector<PilotCell> cells;  // distance-major
   double wall_seconds = 0;
   std::uint64_t rays_cast = 0;
 };

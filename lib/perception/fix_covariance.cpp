@@ -31,8 +31,13 @@ Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig
   double yaw_information = 0.0;
   for (const auto& face : e.seen_faces) {
     if (face.points >= 2 && face.length_m > 0.0) {
-      yaw_information +=
-          static_cast<double>(face.points) * face.length_m * face.length_m / (12.0 * noise_var);
+      // Point noise averages out over the face's points; the body's departure from a plane (bumpers,
+      // rounded corners, the narrower glasshouse) does not: it tilts the face's fitted direction by about
+      // 2 sigma_shape / length whatever the number of points.
+      const double l2 = face.length_m * face.length_m;
+      const double var_noise = 12.0 * noise_var / (static_cast<double>(face.points) * l2);
+      const double var_shape = 4.0 * shape_var / l2;
+      yaw_information += 1.0 / (var_noise + var_shape);
     }
   }
   const double max_var = config.max_yaw_sigma_rad * config.max_yaw_sigma_rad;

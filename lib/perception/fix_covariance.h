@@ -5,8 +5,10 @@
 // vehicle's departure from a box (bumpers, mirrors, rounded corners) adds sigma_shape, which does not
 // average out over points. Point spacing along a face is s = R * azimuth resolution.
 //  - Yaw: each seen face with n points over length l constrains the direction like a line fit,
-//    information n l^2 / (12 sigma_n^2) (slope variance of least squares with evenly spread points);
-//    faces add information. Plus the search's quantisation (step^2 / 12). No face seen: max_yaw_sigma.
+//    information n l^2 / (12 sigma_n^2) (slope variance of least squares with evenly spread points),
+//    limited by the body's departure from a plane, which does not average out: a face's direction
+//    variance is 12 sigma_n^2 / (n l^2) + 4 sigma_shape^2 / l^2; faces add information. Plus the search's
+//    quantisation (step^2 / 12). No face seen: max_yaw_sigma.
 //  - Position along each box axis, by how the centre coordinate on that axis was found:
 //      face      (a seen face perpendicular to the axis + half the known size): sigma_n^2 / n + shape^2;
 //      midpoint  (both ends of a face seen whole, no perpendicular face): each end lies inside the true

@@ -42,6 +42,7 @@ struct AxisOption {
   double centre = 0.0;  // centre coordinate on this axis
   double anchor = 0.0;  // the coordinate the centre was derived from
   AxisEvidence evidence;
+  bool alternative = false;  // an end anchor offered against a seen face
 };
 
 struct Hypothesis {
@@ -51,6 +52,7 @@ struct Hypothesis {
   Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // local
   std::array<AxisEvidence, 2> evidence{};            // along e1, e2
   double score = 0.0;                                // lower is better
+  bool alternative = false;  // anchored at a points' end although a face was seen on that axis
 };
 
 double median(std::vector<double>& v) {
@@ -76,11 +78,10 @@ class Corrector {
     cover_radius_ = std::max(config.cover_radius_m, range * config.covariance.azimuth_resolution_rad);
   }
 
-  // Of every known-size box worth considering, the most consistent one per assignment.
-  std::array<Hypothesis, 2> best_hypotheses(const VehicleSize& size) const {
-    std::array<Hypothesis, 2> best;
+  // Every known-size box worth considering, for both assignments.
+  std::vector<Hypothesis> hypotheses(const VehicleSize& size) const {
+    std::vector<Hypothesis> all;
     for (int length_axis = 0; length_axis < 2; ++length_axis) {
-      bool first = true;
       const std::array<double, 2> dims = length_axis == 0 ? std::array<double, 2>{size.length, size.width}
                                                           : std::array<double, 2>{size.width, size.length};
       const auto along0 = axis_options(0, dims[0]);
@@ -93,12 +94,28 @@ class Corrector {
           h.half = {dims[0] / 2.0, dims[1] / 2.0};
           h.anchor = {o0.anchor, o1.anchor};
           h.evidence = {o0.evidence, o1.evidence};
+          h.alternative = o0.alternative || o1.alternative;
           h.score = score(h);
-          if (first || h.score < best[static_cast<std::size_t>(length_axis)].score) {
-            best[static_cast<std::size_t>(length_axis)] = h;
-            first = false;
-          }
+          all.push_back(h);
         }
+      }
+    }
+    return all;
+  }
+
+  // The most consistent box per assignment, of the boxes anchored on seen faces where there are any
+  // (the alternatives only test the chosen box, below).
+  static std::array<Hypothesis, 2> best_per_assignment(const std::vector<Hypothesis>& all) {
+    std::array<Hypothesis, 2> best;
+    std::array<bool, 2> found{false, false};
+    for (const Hypothesis& h : all) {
+      if (h.alternative) {
+        continue;
+      }
+      const auto a = static_cast<std::size_t>(h.length_axis);
+      if (!found[a] || h.score < best[a].score) {
+        best[a] = h;
+        found[a] = true;
       }
     }
     return best;
@@ -131,7 +148,15 @@ class Corrector {
       const double face = face_position(a, use_low);
       const std::size_t n = use_low ? low.support_points : high.support_points;
       const double centre = use_low ? face + dim / 2.0 : face - dim / 2.0;
-      return {{centre, face, {AxisAnchor::face, n}}};
+      // The face may not be an outer face of the vehicle: at long range a few points of the cabin or
+      // an occlusion edge look like one. The boxes anchored at either end of the points' extent compete
+      // with it on consistency (score), and their distance makes the fix's covariance honest.
+      std::vector<AxisOption> options{{centre, face, {AxisAnchor::face, n}}};
+      if (config_.strict_consistency_checks && hi - lo < dim - config_.full_face_tolerance_m) {
+        options.push_back({lo + dim / 2.0, lo, {AxisAnchor::one_end, 0}, true});
+        options.push_back({hi - dim / 2.0, hi, {AxisAnchor::one_end, 0}, true});
+      }
+      return options;
     }
     if (std::abs((hi - lo) - dim) <= config_.full_face_tolerance_m) {
       return {{0.5 * (lo + hi), 0.5 * (lo + hi), {AxisAnchor::midpoint, 0}}};
@@ -286,7 +311,8 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
                                    ? refine_on_faces(fit, cluster_xy, lidar_xy, config.fit, config.refinement)
                                    : fit;
   const Corrector corrector(refined, cluster_xy, lidar_xy, config);
-  const std::array<Hypothesis, 2> best = corrector.best_hypotheses(size);
+  const std::vector<Hypothesis> all = corrector.hypotheses(size);
+  const std::array<Hypothesis, 2> best = Corrector::best_per_assignment(all);
 
   // Log-odds that the length lies along e1 rather than e2.
   const double geometry_log_odds = (best[1].score - best[0].score) / config.geometry_scale;
@@ -347,6 +373,37 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   evidence.assignment_confidence = out.confidence;
   evidence.alternative_offset = frame.map(other.centre) - centre;
   out.covariance = fix_covariance(evidence, config.covariance);
+
+  // A yaw far outside both its own and the prior's uncertainty: the fitted faces are not the
+  // vehicle's outline (a few points of a cabin, an occlusion edge), so the box built on them is not either.
+  if (prior && config.strict_consistency_checks) {
+    const double sigma = std::sqrt(prior->sigma * prior->sigma + out.covariance(2, 2));
+    if (angle_distance(yaw, prior->yaw) >
+        std::max(config.max_prior_disagreement_sigmas * sigma, config.min_prior_disagreement_rad)) {
+      out = CorrectedPose{};
+      out.status = CorrectionStatus::inconsistent_box;
+      return out;
+    }
+  }
+
+  // Where else the box of the chosen assignment could sit, and how likely (same log-odds scale as the
+  // assignment): a position the points do not decide is either refused or reported with its spread.
+  for (const Hypothesis& alt : all) {
+    if (alt.length_axis != h.length_axis || !alt.alternative) {
+      continue;
+    }
+    const Eigen::Vector2d offset = frame.map(alt.centre) - centre;
+    if (offset.norm() < config.position_ambiguity_min_m) {
+      continue;
+    }
+    const double p_alt = logistic(-(alt.score - h.score) / config.geometry_scale);
+    if (p_alt > config.max_position_ambiguity) {
+      out = CorrectedPose{};
+      out.status = CorrectionStatus::ambiguous_position;
+      return out;
+    }
+    out.covariance.topLeftCorner<2, 2>() += p_alt * offset * offset.transpose();
+  }
   return out;
 }
 

@@ -31,6 +31,8 @@ std::string_view to_string(CorrectionStatus status) {
       return "invalid_input";
     case CorrectionStatus::inconsistent_box:
       return "inconsistent_box";
+    case CorrectionStatus::ambiguous_position:
+      return "ambiguous_position";
   }
   return "unknown";
 }

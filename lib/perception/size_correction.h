@@ -50,8 +50,12 @@ enum class CorrectionStatus {
   invalid_size,   // size not finite and positive
   invalid_input,  // LiDAR position or prior not finite
   // (improved correction) the best known-size box leaves too many points outside it: the points are
-  // not this vehicle seen whole (a fragment beside another object, two objects, a wrong size)
+  // not this vehicle seen whole (a fragment beside another object, two objects, a wrong size); or
+  // its yaw contradicts a confident yaw prior
   inconsistent_box,
+  // (improved correction) boxes of the chosen assignment metres apart fit the points about equally
+  // well (e.g. an occlusion edge that may or may not be the vehicle's side): no fix
+  ambiguous_position,
 };
 
 enum class AmbiguityResolution {
@@ -90,7 +94,22 @@ struct CorrectionConfig {
   // rejects the fix (CorrectionStatus::inconsistent_box) instead of reporting a confident wrong pose.
   double inconsistent_outside_m = 0.3;
   double max_outside_fraction = 0.1;
-  LShapeFitConfig fit;                 // face support and 'seen' rules (the pipeline passes its own)
+  // ... and (with strict_consistency_checks, below) with a yaw prior, its yaw must agree with the prior
+  // within this many combined sigmas (never tighter than the angle below: the prior may be somewhat
+  // overconfident).
+  double max_prior_disagreement_sigmas = 4.0;
+  double min_prior_disagreement_rad = deg_to_rad(5.0);
+  // Where a seen face anchors an axis, boxes anchored at the ends of the points instead (the face may
+  // be an occlusion edge or the cabin) are alternatives when farther than position_ambiguity_min_m from
+  // the chosen box: one more likely than max_position_ambiguity (same log-odds scale as the
+  // assignment, geometry_scale) refuses the fix, less likely
+  // ones add their spread to the covariance.
+  // Off by default (the single-frame pipeline); the RSU turns it on (rsu/rsu_core_config.h), where a
+  // far, fragmented vehicle's one-fragment "faces" gave confident fixes a metre off.
+  bool strict_consistency_checks = false;
+  double position_ambiguity_min_m = 0.2;
+  double max_position_ambiguity = 0.1;
+  LShapeFitConfig fit;  // face support and 'seen' rules (the pipeline passes its own)
   FaceRefinementConfig refinement;
   CovarianceModelConfig covariance;
 };

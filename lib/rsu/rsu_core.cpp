@@ -426,7 +426,8 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
       for (std::size_t j = 0; j < vehicles.size(); ++j) {
         if (members[j].empty())
           continue;
-        const v2i::PairCheck check = v2i::check_pair(fitted[fitted_index[c]], hypotheses[j], config_.association);
+        const v2i::PairCheck check =
+            v2i::check_pair(fitted[fitted_index[c]], hypotheses[j], config_.association);
         if (check.verdict == v2i::PairGate::kPass && check.distance_sq < best_distance) {
           best_distance = check.distance_sq;
           best = static_cast<std::ptrdiff_t>(j);
@@ -444,7 +445,8 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
     if (members[j].empty())
       continue;
     const std::uint64_t id = vehicles[j]->announcement.vehicle_id;
-    auto it = std::find_if(held_.begin(), held_.end(), [id](const HeldVehicle& h) { return h.vehicle_id == id; });
+    auto it =
+        std::find_if(held_.begin(), held_.end(), [id](const HeldVehicle& h) { return h.vehicle_id == id; });
     if (it == held_.end()) {
       HeldVehicle fresh;
       fresh.vehicle_id = id;
@@ -462,13 +464,15 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
         held.largest_part_time = part.sweep_time;
       }
       held.footprint.insert(held.footprint.end(), part.footprint.begin(), part.footprint.end());
-      held.weighted_offset += static_cast<TimeNs>(part.footprint.size()) * (part.sweep_time - held.first_time);
+      held.weighted_offset +=
+          static_cast<TimeNs>(part.footprint.size()) * (part.sweep_time - held.first_time);
       ++held.parts;
       outline.insert(outline.end(), part.footprint.begin(), part.footprint.end());
     }
     // Hold until the sweep has passed the grown footprint and the gathered clusters (a vehicle whose
     // estimate is off may extend beyond its footprint), never longer than half a rotation.
-    held.release_at = std::max(held.release_at, std::min(passed_time(outline), held.first_time + rotation_period_ns_ / 2));
+    held.release_at =
+        std::max(held.release_at, std::min(passed_time(outline), held.first_time + rotation_period_ns_ / 2));
   }
 }
 
@@ -495,9 +499,9 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
   perception::RectangleFit fit = perception::fit_rectangle(points, lidar_xy_, config_.perception.fit);
   const auto fits_vehicle = [&](const perception::RectangleFit& f, TimeNs t, std::size_t n) {
     const v2i::FittedCluster as_cluster{f.center, f.yaw, f.length0, f.length1, n};
-    return f.ok() && v2i::check_pair(as_cluster, v2i::predict_hypothesis(a, t, config_.hypothesis),
-                                     config_.association)
-                             .verdict == v2i::PairGate::kPass;
+    return f.ok() &&
+           v2i::check_pair(as_cluster, v2i::predict_hypothesis(a, t, config_.hypothesis), config_.association)
+                   .verdict == v2i::PairGate::kPass;
   };
   if (held.parts > 1) {
     if (fits_vehicle(fit, sweep_time, points.size())) {
@@ -527,9 +531,11 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
   if (std::isfinite(at_sweep.yaw) && std::isfinite(yaw_var) && yaw_var >= 0.0) {
     prior = perception::YawPrior{at_sweep.yaw, std::max(std::sqrt(yaw_var), 1e-3)};
   }
-  const perception::CorrectedPose fix = perception::correct(
-      fit, points, perception::VehicleSize{a.size.length_m, a.size.width_m}, lidar_xy_, prior, config_.perception);
-  if (fix.status == perception::CorrectionStatus::inconsistent_box) {
+  const perception::CorrectedPose fix =
+      perception::correct(fit, points, perception::VehicleSize{a.size.length_m, a.size.width_m}, lidar_xy_,
+                          prior, config_.perception);
+  if (fix.status == perception::CorrectionStatus::inconsistent_box ||
+      fix.status == perception::CorrectionStatus::ambiguous_position) {
     ++lidar_stats_.corrections_inconsistent;
     return;
   }

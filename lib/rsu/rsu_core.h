@@ -76,7 +76,8 @@ struct LidarStats {
   std::uint64_t fragments_merged = 0;     // extra clusters of one vehicle fitted with its main one
   std::uint64_t vehicles_in_batches = 0;  // registered vehicles offered to association
   std::uint64_t corrections_failed = 0;   // size correction refused the matched cluster
-  std::uint64_t corrections_inconsistent = 0;  // the known-size box contradicts the points: no fix
+  // the known-size box contradicts the points, or the points do not decide where it sits: no fix
+  std::uint64_t corrections_inconsistent = 0;
   std::uint64_t corrections_encode_failed = 0;
   std::uint64_t corrections = 0;
 };

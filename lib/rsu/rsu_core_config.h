@@ -53,6 +53,14 @@ struct GatheringConfig {
   double min_inside_fraction = 0.5;
 };
 
+// The perception defaults, with the improved correction testing seen faces against end-anchored boxes
+// (size_correction.h): the RSU sees vehicles up to its coverage radius, fragmented at long range.
+inline perception::PerceptionConfig rsu_perception_defaults() {
+  perception::PerceptionConfig c;
+  c.correction.strict_consistency_checks = true;
+  return c;
+}
+
 struct RsuCoreConfig {
   std::uint64_t rsu_id = 1;
 
@@ -63,7 +71,7 @@ struct RsuCoreConfig {
   BackgroundLearningConfig background;
   SweepConfig sweep;
   GatheringConfig gathering;
-  perception::PerceptionConfig perception;
+  perception::PerceptionConfig perception = rsu_perception_defaults();
 
   // Clusters whose fitted centre is farther than this from the LiDAR get no correction: beyond it the
   // fit is too sparse to beat the vehicle's own estimate (paper Table 2: VLP-16 beyond 36 m).

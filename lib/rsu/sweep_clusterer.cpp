@@ -5,7 +5,6 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
-#include <cstdio>
 
 #include "common/angles.h"
 
@@ -25,26 +24,54 @@ struct ComponentState {
 }  // namespace
 
 SweepClusterer::SweepClusterer(const SweepConfig& config, const perception::ClusteringConfig& clustering,
+                               const Eigen::Vector2d& lidar_xy, double rotation_hz,
+                               std::span<const double> laser_azimuth_offsets_rad)
+    : config_(config),
+      clustering_(clustering),
+      min_points_(clustering.min_points),
+      max_points_(clustering.max_points),
+      lidar_xy_(lidar_xy),
+      laser_offset_rad_(laser_azimuth_offsets_rad.begin(), laser_azimuth_offsets_rad.end()) {
+  if (laser_offset_rad_.empty() || !std::all_of(laser_offset_rad_.begin(), laser_offset_rad_.end(),
+                                                [](double o) { return std::isfinite(o); })) {
+    throw std::invalid_argument("SweepClusterer: the laser azimuth offsets must be finite, one per laser");
+  }
+  const auto [lo, hi] = std::minmax_element(laser_offset_rad_.begin(), laser_offset_rad_.end());
+  if (*hi - *lo > kPi / 2.0) {
+    throw std::invalid_argument("SweepClusterer: laser azimuth offsets spread over more than 90 deg");
+  }
+  // A future point of laser i lands at >= E + o_i: the smallest offset bounds them all.
+  lag_rad_ = -*lo;
+  init(rotation_hz);
+}
+
+SweepClusterer::SweepClusterer(const SweepConfig& config, const perception::ClusteringConfig& clustering,
                                const Eigen::Vector2d& lidar_xy, double rotation_hz, double azimuth_spread_rad)
     : config_(config),
       clustering_(clustering),
       min_points_(clustering.min_points),
       max_points_(clustering.max_points),
       lidar_xy_(lidar_xy) {
+  if (!std::isfinite(azimuth_spread_rad) || azimuth_spread_rad < 0.0 || azimuth_spread_rad > kPi / 2.0) {
+    throw std::invalid_argument("SweepClusterer: azimuth spread must be finite, in [0, 90 deg]");
+  }
+  lag_rad_ = azimuth_spread_rad;
+  init(rotation_hz);
+}
+
+void SweepClusterer::init(double rotation_hz) {
   if (!(rotation_hz > 0.0) || !std::isfinite(rotation_hz)) {
     throw std::invalid_argument("SweepClusterer: rotation rate must be finite and > 0");
   }
-  if (!std::isfinite(azimuth_spread_rad) || azimuth_spread_rad < 0.0 ||
-      !std::isfinite(config.release_margin_deg) || config.release_margin_deg < 0.0 ||
-      !(config.max_gap_rotations > 0.0) || !lidar_xy.allFinite()) {
-    throw std::invalid_argument(
-        "SweepClusterer: spread, margin, gap and LiDAR position must be finite, >= 0");
+  if (!std::isfinite(config_.release_margin_deg) || config_.release_margin_deg < 0.0 ||
+      !(config_.max_gap_rotations > 0.0) || !lidar_xy_.allFinite()) {
+    throw std::invalid_argument("SweepClusterer: margin, gap and LiDAR position must be finite, >= 0");
   }
   clustering_.min_points = 1;  // every component is returned so that noise can be released (and dropped)
   clustering_.max_points = std::numeric_limits<std::size_t>::max();
   radians_per_ns_ = kTwoPi * rotation_hz * 1e-9;
-  max_gap_ns_ = static_cast<TimeNs>(config.max_gap_rotations / rotation_hz * 1e9);
-  lag_rad_ = azimuth_spread_rad + deg_to_rad(config.release_margin_deg);
+  max_gap_ns_ = static_cast<TimeNs>(config_.max_gap_rotations / rotation_hz * 1e9);
+  lag_rad_ += deg_to_rad(config_.release_margin_deg);
 }
 
 void SweepClusterer::restart() {
@@ -62,19 +89,28 @@ void SweepClusterer::add(const LidarPoint& p, bool foreground) {
     ++stats_.invalid_points;
     return;
   }
+  double offset = 0.0;  // beam azimuth - encoder azimuth of this point's laser
+  if (!laser_offset_rad_.empty()) {
+    if (p.ring >= laser_offset_rad_.size()) {
+      ++stats_.invalid_points;
+      return;
+    }
+    offset = laser_offset_rad_[p.ring];
+  }
   const double a = wrap_angle_positive(static_cast<double>(p.azimuth_rad));
   if (running_ && (p.time_ns < last_time_ || p.time_ns - last_time_ > max_gap_ns_)) {
     restart();
   }
   if (!running_) {
     running_ = true;
-    sweep_ = a;
+    sweep_ = a - offset;
     last_time_ = p.time_ns;
   }
-  // Unwrap against where the sweep should be by now: robust to lost packets shorter than half a turn.
-  const double expected = sweep_ + radians_per_ns_ * static_cast<double>(p.time_ns - last_time_);
+  // Unwrap against where this laser should point by now: robust to lost packets shorter than half a
+  // turn.
+  const double expected = sweep_ + offset + radians_per_ns_ * static_cast<double>(p.time_ns - last_time_);
   const double u = a + kTwoPi * std::round((expected - a) / kTwoPi);
-  sweep_ = std::max(sweep_, u);
+  sweep_ = std::max(sweep_, u - offset);
   last_time_ = p.time_ns;
   if (!foreground) {
     return;
@@ -184,16 +220,6 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     if (members.size() > max_points_) {
       ++stats_.clusters_dropped_large;
       continue;
-    }
-    {
-      double need = -1e9; double rn = 0, an = 0; TimeNs tmax = 0; double umax=-1e9; int rg=-1;
-      for (const std::uint32_t i : members) {
-        const double v = azimuth_[i] + (range_[i] > tolerance ? std::asin(tolerance / range_[i]) : kPi);
-        if (v > need) { need = v; rn = range_[i]; an = azimuth_[i]; }
-        if (points_[i].time_ns > tmax) { tmax = points_[i].time_ns; }
-        if (azimuth_[i] > umax) { umax = azimuth_[i]; rg = points_[i].ring; }
-      }
-      if (members.size() > 50) std::fprintf(stderr, "REL n=%zu sweep=%.2f afut=%.2f span=[%.2f,%.2f] maxring=%d bind r=%.2f a=%.2f need=%.2f wait_ms=%.3f\n", members.size(), rad_to_deg(sweep_), rad_to_deg(a_future), rad_to_deg(state[c].min_u), rad_to_deg(state[c].max_u), rg, rn, rad_to_deg(an), rad_to_deg(need), (last_time_ - tmax) * 1e-6);
     }
     SweptCluster cluster;
     cluster.points.reserve(members.size());

@@ -4,17 +4,31 @@
 // 5 ms) although a rotation takes 100 ms: a vehicle swept early in the rotation is corrected then, not
 // up to 100 ms later.
 //
-// Release rule (exact, geometric). Points arrive in firing order; a spinning LiDAR's beam azimuth
-// only grows (unwrapped), except for the spread of the per-laser azimuth offsets (VLP-32C: -4.2 to
-// +4.2 deg, DESIGN.md §2). So every point still to come in this rotation has an azimuth of at least
-//     a_future = sweep - spread - margin,
-// where `sweep` is the largest azimuth seen so far. Euclidean clustering joins a future point q to a
-// cluster only if q is within the tolerance d of one of its points p (planar distance, as the
-// perception clustering). The future points all lie in the wedge of azimuths >= a_future, and the
-// planar distance from p (range r, azimuth a < a_future) to that wedge is r sin(a_future - a) while
-// the angle is below 90 deg, and at most r beyond. A cluster is therefore CLOSED - no later point can
-// join it - when every one of its points has r sin(min(a_future - a, 90 deg)) > d. At 20 m with
-// d = 0.7 m that is 2 deg (0.56 ms at 10 Hz) past the cluster's last point, plus the offset spread.
+// Release rule (exact, geometric, laser-aware). Points arrive in firing order. Laser i's beam azimuth
+// is the encoder azimuth at its firing plus its fixed offset o_i (sensor_model.h; VLP-32C: four
+// groups at -4.2, -1.4, +1.4, +4.2 deg, DESIGN.md §2), and the encoder azimuth only grows (unwrapped).
+// Every return therefore tells the encoder azimuth it was fired at, u - o_ring, and with E the newest
+// such encoder azimuth seen, every point laser i still sends has a beam azimuth of at least E + o_i:
+// its future points lie in the wedge W_i of azimuths >= E + o_i, at any range.
+// Euclidean clustering joins a future point q to a cluster only if q is within the tolerance d of one
+// of its points p (planar distance, as the perception clustering; a spatial distance is never
+// smaller). The planar distance from p (range r, azimuth a) to W_i is r sin(E + o_i - a) while that
+// angle is in [0, 90 deg], at most r beyond, and 0 when p is inside W_i. A cluster is CLOSED - no
+// later point of any laser can join it - when every one of its points is farther than d from every
+// W_i. The wedges are nested (W_i contains W_j when o_i <= o_j), so the test against all lasers is
+// exactly the test against the laser group with the smallest offset: every point must have
+//     r sin(min(a_future - a, 90 deg)) > d,   a_future = E + min_i o_i - margin.
+// This bound is tight: the smallest-offset lasers really still sweep the wedge's edge, and a return
+// there at range r cos(a_future - a) would join. (An earlier rule took the sweep as the largest BEAM
+// azimuth seen and subtracted the whole offset spread; that equals this rule only while the
+// largest-offset lasers keep returning, and lags by up to the spread where they see nothing, e.g.
+// the sky or open road. Without a per-laser table, the constructor taking only the spread keeps it.)
+// At 10 m with d = 0.7 m the cluster is closed asin(0.07) = 4 deg (1.1 ms at 10 Hz) after the
+// smallest-offset lasers have passed its last point; at 2.5 m, 16 deg (4.5 ms): the exact rule cannot
+// release a vehicle that close much sooner, whatever the sensor.
+// `margin` (SweepConfig::release_margin_deg) covers the VLP-16's interpolated second-sequence
+// azimuths (not exactly monotone across packets) and a slightly tilted mount (azimuths are the
+// sensor's, ranges are measured from the LiDAR's map position).
 // A closed cluster is released when, in addition, no open cluster overlaps its azimuth span, so that
 // vehicles side by side in one line of sight reach association together (RsuCore associates each
 // released batch with one global assignment).
@@ -22,13 +36,11 @@
 // Bookkeeping: points pending for more than half a rotation are dropped (counted) so that the next
 // rotation's points never merge with this one's (only points within d of the LiDAR itself can stay
 // open that long); a gap or time going backwards restarts the stream and drops what is pending.
-// The azimuths are the sensor's beam azimuths (LidarPoint::azimuth_rad); ranges are measured from
-// the LiDAR's map position, which equals the sensor's horizontal range for a level mount (a small tilt
-// is covered by the margin).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -53,14 +65,23 @@ struct SweepClustererStats {
   std::uint64_t points_dropped_stale = 0;     // pending for half a rotation (see file comment)
   std::uint64_t points_dropped_overflow = 0;  // over SweepConfig::max_pending_points
   std::uint64_t points_dropped_restart = 0;   // pending when the stream restarted
-  std::uint64_t invalid_points = 0;           // non-finite coordinates, azimuth or time
+  std::uint64_t invalid_points = 0;           // non-finite coordinates or azimuth, or a ring the
+                                              // laser table does not have
   std::uint64_t restarts = 0;
 };
 
 class SweepClusterer {
  public:
-  // `azimuth_spread_rad`: max - min of the sensor's per-laser azimuth offsets. Throws
-  // std::invalid_argument for a non-positive rotation rate or non-finite numbers.
+  // Laser-aware (the exact rule of the file comment): `laser_azimuth_offsets_rad[ring]` is laser
+  // `ring`'s azimuth offset (SensorModel::azimuth_offset_deg, in radians, channel order). Throws
+  // std::invalid_argument for a non-positive rotation rate, non-finite numbers, an empty table or
+  // offsets spread over more than 90 deg.
+  SweepClusterer(const SweepConfig& config, const perception::ClusteringConfig& clustering,
+                 const Eigen::Vector2d& lidar_xy, double rotation_hz,
+                 std::span<const double> laser_azimuth_offsets_rad);
+  // Without a laser table: `azimuth_spread_rad` is max - min of the per-laser offsets, and every
+  // future point is assumed to lag the largest beam azimuth seen by the whole spread (conservative;
+  // equal to the laser-aware rule while the largest-offset lasers keep returning).
   SweepClusterer(const SweepConfig& config, const perception::ClusteringConfig& clustering,
                  const Eigen::Vector2d& lidar_xy, double rotation_hz, double azimuth_spread_rad);
 
@@ -77,6 +98,7 @@ class SweepClusterer {
   const SweepClustererStats& stats() const { return stats_; }
 
  private:
+  void init(double rotation_hz);
   void restart();
   std::vector<SweptCluster> release(bool everything);
   void drop_stale();
@@ -88,10 +110,13 @@ class SweepClusterer {
   Eigen::Vector2d lidar_xy_;
   double radians_per_ns_;
   TimeNs max_gap_ns_;
-  double lag_rad_;  // spread + margin: how far behind the sweep a future point may still land
+  // Per ring, the offset subtracted from a beam azimuth to get the encoder azimuth it was fired at;
+  // empty without a laser table (then sweep_ tracks the largest beam azimuth).
+  std::vector<double> laser_offset_rad_;
+  double lag_rad_;  // how far behind sweep_ a future point may still land (file comment), + margin
 
   bool running_ = false;
-  double sweep_ = 0.0;  // largest unwrapped azimuth seen, radians
+  double sweep_ = 0.0;  // newest unwrapped encoder azimuth seen (largest beam azimuth without table)
   TimeNs last_time_ = 0;
 
   // Pending foreground points and, in parallel, their unwrapped azimuth and planar range.

@@ -45,7 +45,8 @@ TEST(Pilot, PointCountFallsWithDistance) {
   const PilotResult result = short_pilot("vlp32c");
   double mean_points[3] = {0, 0, 0};
   for (const PilotCell& c : result.cells) {
-    mean_points[static_cast<int>(std::lround((c.distance_m - 10.0) / 5.0))] += static_cast<double>(c.points) / 180.0;
+    mean_points[static_cast<int>(std::lround((c.distance_m - 10.0) / 5.0))] +=
+        static_cast<double>(c.points) / 180.0;
   }
   EXPECT_GT(mean_points[0], mean_points[1]);
   EXPECT_GT(mean_points[1], mean_points[2]);

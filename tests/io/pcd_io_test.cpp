@@ -13,7 +13,8 @@ namespace rsu::io {
 namespace {
 
 std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("rsu_io_test_" + std::to_string(::getpid()) + "_" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("rsu_io_test_" + std::to_string(::getpid()) + "_" + name))
+      .string();
 }
 
 TEST(PcdIo, RoundTripKeepsEveryField) {
@@ -79,6 +80,96 @@ TEST(PcdIo, MissingFileNamesThePath) {
   } catch (const PcdError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/frame.pcd"), std::string::npos);
   }
+}
+
+// Inputs found by fuzz/pcd_fuzzer that crashed PCL's reader or escaped it as another exception: each
+// must now be a PcdError naming the file.
+struct MalformedPcd {
+  const char* label;
+  const char* text;
+};
+
+class PcdIoMalformed : public ::testing::TestWithParam<MalformedPcd> {};
+
+TEST_P(PcdIoMalformed, IsAPcdErrorNamingTheFile) {
+  const std::string path = temp_path(std::string(GetParam().label) + ".pcd");
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << GetParam().text;
+  }
+  try {
+    read_pcd(path);
+    ADD_FAILURE() << "expected a PcdError";
+  } catch (const PcdError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    FuzzFindings, PcdIoMalformed,
+    ::testing::Values(
+        // PCL 1.13 dereferenced the first of no fields (SEGV).
+        MalformedPcd{"empty", ""}, MalformedPcd{"newline_only", "\n"},
+        MalformedPcd{"version_only", "VERSION .7\n"},
+        // PCL's header parser threw std::out_of_range on a DATA line without a separate type.
+        MalformedPcd{"data_without_type",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA'ascii\n1 2 3\n"},
+        // PCL allocated the declared cloud (here 12 GB) before reading a byte of data.
+        MalformedPcd{"declares_billions",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                     "WIDTH 1000000000\nHEIGHT 1\nPOINTS 1000000000\nDATA ascii\n1 2 3\n"},
+        MalformedPcd{"size_not_a_number",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 43333333333333333333 4\nTYPE F F F\n"
+                     "COUNT 1 1 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n"},
+        // A COUNT that wraps PCL's uint32 point size let its ASCII reader write outside the cloud.
+        MalformedPcd{"count_negative",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 -1\n"
+                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n"},
+        MalformedPcd{"count_huge",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNTS 1 1 2147483647\n"
+                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n"},
+        // FIELDS again after POINTS: PCL sized its buffer for one float per point, then wrote three.
+        MalformedPcd{"fields_after_points",
+                     "VERSION 0.7\nFIELDS x\nSIZE 4\nTYPE F\nCOUNT 1\nWIDTH 1\nHEIGHT 1\n"
+                     "POINTS 1\nFIELDS x y z\nDATA ascii\n1 2 3\n"},
+        // PCL parses header lines after DATA too: this COUNT grew the layout after the buffer was sized.
+        MalformedPcd{"count_after_data",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\n"
+                     "HEIGHT 1\nPOINTS 1\nDATA ascii\nCOUNT 1 1 64\n1 2 3\n"},
+        // A keyword behind a vertical tab is still one to PCL (it trims the line first).
+        MalformedPcd{"keyword_after_vertical_tab",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\n\vFIELDS x y z w\nDATA ascii\n1 2 3\n"},
+        // A ring or time that does not fit its integer type was cast anyway (undefined behaviour).
+        MalformedPcd{"ring_too_large",
+                     "VERSION 0.7\nFIELDS x y z ring\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 542328000\n"},
+        MalformedPcd{"ring_negative",
+                     "VERSION 0.7\nFIELDS x y z ring\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 -1\n"},
+        MalformedPcd{"time_beyond_clock",
+                     "VERSION 0.7\nFIELDS x y z time\nSIZE 4 4 4 8\nTYPE F F F F\n"
+                     "COUNT 1 1 1 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 1e12\n"}),
+    [](const ::testing::TestParamInfo<MalformedPcd>& param_info) {
+      return std::string(param_info.param.label);
+    });
+
+// binary_compressed data states its uncompressed size, which PCL allocated (here 1 GB) and unpacked
+// every declared point into, whatever it said.
+TEST(PcdIo, CompressedSizeDisagreeingWithTheHeaderIsAPcdError) {
+  const std::string path = temp_path("compressed.pcd");
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
+           "DATA binary_compressed\n";
+    const std::uint32_t sizes[2] = {4, 1'000'000'000};  // compressed, uncompressed (the header says 12)
+    out.write(reinterpret_cast<const char*>(sizes), sizeof(sizes));
+    out << "abcd";
+  }
+  EXPECT_THROW(read_pcd(path), PcdError);
+  std::filesystem::remove(path);
 }
 
 }  // namespace

@@ -45,13 +45,19 @@ inline sim::Vehicle static_vehicle(std::uint32_t id, const Pose2& pose) {
 class SimStream {
  public:
   SimStream(const std::vector<sim::Vehicle>& vehicles, int empty_rotations)
-      : model_(make_vlp16()), empty_rotations_(empty_rotations) {
-    sim::Scene empty = street_scene();
+      : SimStream(street_scene(), vehicles, make_vlp16(), roadside_mount(), sim::NoiseModel{},
+                  empty_rotations) {}
+
+  // Any scene (its own vehicles ignored), sensor and mount.
+  SimStream(const sim::Scene& scene, const std::vector<sim::Vehicle>& vehicles, const SensorModel& model,
+            const Pose3& mount, const sim::NoiseModel& noise, int empty_rotations)
+      : model_(model), empty_rotations_(empty_rotations) {
+    sim::Scene empty = scene;
+    empty.vehicles.clear();
     sim::Scene busy = empty;
     busy.vehicles = vehicles;
-    const sim::NoiseModel noise;
-    empty_ = std::make_unique<sim::LidarSimulator>(model_, roadside_mount(), noise, empty);
-    busy_ = std::make_unique<sim::LidarSimulator>(model_, roadside_mount(), noise, busy);
+    empty_ = std::make_unique<sim::LidarSimulator>(model_, mount, noise, empty);
+    busy_ = std::make_unique<sim::LidarSimulator>(model_, mount, noise, busy);
   }
 
   TimeNs rotation_ns() const { return busy_->rotation_period_ns(); }

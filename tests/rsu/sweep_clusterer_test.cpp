@@ -4,11 +4,21 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <map>
+#include <numeric>
+#include <set>
+#include <utility>
 #include <vector>
 
 #include "common/angles.h"
+#include "common/pose.h"
+#include "lidar/sensor_model.h"
+#include "sim/lidar_simulator.h"
+#include "sim/scene.h"
 
 namespace rsu::core {
 namespace {
@@ -138,6 +148,282 @@ TEST(SweepClusterer, ReleaseAllEndsAFrameAndNonFinitePointsAreCounted) {
 TEST(SweepClusterer, RejectsBadParameters) {
   EXPECT_THROW(SweepClusterer({}, clustering(), Eigen::Vector2d::Zero(), 0.0, 0.0), std::invalid_argument);
   EXPECT_THROW(SweepClusterer({}, clustering(), Eigen::Vector2d::Zero(), kHz, -1.0), std::invalid_argument);
+}
+
+// --- Laser-aware rule --------------------------------------------------------------------------
+
+std::vector<double> offsets_rad(const SensorModel& model) {
+  std::vector<double> out;
+  for (const double o : model.azimuth_offset_deg)
+    out.push_back(deg_to_rad(o));
+  return out;
+}
+
+// Background returns from ONE laser only (the VLP-32C's ring 6, offset -4.2 deg): the rule must
+// read the encoder azimuth from whichever laser returns. The spread-only rule takes the largest
+// BEAM azimuth as the sweep and so lags by the whole 8.4 deg spread here.
+TEST(SweepClusterer, LaserAwareRuleReadsTheEncoderFromAnyLaser) {
+  const SensorModel vlp32c = make_vlp32c();
+  const std::vector<double> offsets = offsets_rad(vlp32c);
+  ASSERT_DOUBLE_EQ(vlp32c.azimuth_offset_deg[6], -4.2);
+  SweepConfig config;
+  config.release_margin_deg = 0.5;
+  for (const double r : {4.0, 10.0, 25.0}) {
+    for (const bool laser_aware : {true, false}) {
+      SweepClusterer sweep =
+          laser_aware ? SweepClusterer(config, clustering(), Eigen::Vector2d::Zero(), kHz,
+                                       std::span<const double>(offsets))
+                      : SweepClusterer(config, clustering(), Eigen::Vector2d::Zero(), kHz, deg_to_rad(8.4));
+      for (int i = 0; i < 20; ++i) {
+        LidarPoint p = at(r, 40.0 + 0.25 * i);
+        p.ring = 6;
+        sweep.add(p, true);
+      }
+      double released_at = std::numeric_limits<double>::quiet_NaN();
+      for (double a = 45.0; a < 90.0 && std::isnan(released_at); a += 0.05) {
+        LidarPoint p = at(50.0, a);
+        p.ring = 6;
+        sweep.add(p, false);
+        if (!sweep.release_closed().empty())
+          released_at = a;
+      }
+      // Independently: the ring-6 beam at azimuth b means encoder b + 4.2; the -4.2 deg lasers' wedge
+      // starts at b, so the last point (44.75 deg) is clear once b - margin - 44.75 >= asin(0.7 / r);
+      // the spread rule needs another 8.4 deg.
+      const double needed =
+          44.75 + rad_to_deg(std::asin(0.7 / r)) + config.release_margin_deg + (laser_aware ? 0.0 : 8.4);
+      EXPECT_GE(released_at, needed) << "r " << r << " laser-aware " << laser_aware;
+      EXPECT_LE(released_at, needed + 0.06) << "r " << r << " laser-aware " << laser_aware;
+    }
+  }
+}
+
+TEST(SweepClusterer, LaserAwareRejectsBadTablesAndCountsUnknownRings) {
+  const std::vector<double> empty;
+  const std::vector<double> nan{0.0, std::numeric_limits<double>::quiet_NaN()};
+  const std::vector<double> wide{-1.0, 1.0};  // 115 deg apart
+  for (const auto* table : {&empty, &nan, &wide}) {
+    EXPECT_THROW(
+        SweepClusterer({}, clustering(), Eigen::Vector2d::Zero(), kHz, std::span<const double>(*table)),
+        std::invalid_argument);
+  }
+  const std::vector<double> two{0.0, 0.01};
+  SweepClusterer sweep({}, clustering(), Eigen::Vector2d::Zero(), kHz, std::span<const double>(two));
+  LidarPoint p = at(10.0, 10.0);
+  p.ring = 2;
+  sweep.add(p, true);
+  EXPECT_EQ(sweep.stats().invalid_points, 1U);
+  EXPECT_EQ(sweep.pending_points(), 0U);
+}
+
+// Exactness against an offline clustering of the whole frame, on simulated VLP-16 and VLP-32C
+// frames: every cluster released while the sweep runs is exactly one connected component of the
+// frame's foreground (no later point joined it), and it is released by the first packet after the
+// closure bound (computed here from the sensor's offset table) is met.
+struct PlacedVehicle {
+  double range_m;
+  double azimuth_deg;  // Velodyne beam azimuth of the centre (clockwise from the sensor's +x)
+  double yaw;          // in the map frame
+};
+
+// Offline components of `points` (planar distance <= tolerance), by union-find over pairs found
+// through a sort on x.
+std::vector<int> offline_components(const std::vector<LidarPoint>& points, double tolerance) {
+  std::vector<int> parent(points.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i)
+      i = parent[static_cast<std::size_t>(i)] =
+          parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+    return i;
+  };
+  std::vector<std::size_t> order(points.size());
+  std::iota(order.begin(), order.end(), 0U);
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return points[a].x < points[b].x; });
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const LidarPoint& p = points[order[i]];
+    for (std::size_t j = i + 1;
+         j < order.size() && static_cast<double>(points[order[j]].x - p.x) <= tolerance; ++j) {
+      const LidarPoint& q = points[order[j]];
+      const double dx = static_cast<double>(q.x - p.x);
+      const double dy = static_cast<double>(q.y - p.y);
+      if (dx * dx + dy * dy <= tolerance * tolerance) {
+        parent[static_cast<std::size_t>(find(static_cast<int>(order[i])))] = find(static_cast<int>(order[j]));
+      }
+    }
+  }
+  std::vector<int> label(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    label[i] = find(static_cast<int>(i));
+  return label;
+}
+
+void check_exact_against_offline(const SensorModel& model, const std::vector<PlacedVehicle>& placed) {
+  const Pose3 mount{.x = 2.0, .y = -3.0, .z = 2.0, .roll = 0.0, .pitch = 0.0, .yaw = 0.3};
+  sim::Scene scene;
+  scene.ground.half_extent_m = 60.0;
+  std::uint32_t id = 1;
+  for (const PlacedVehicle& v : placed) {
+    const double a = deg_to_rad(v.azimuth_deg);
+    const double sx = v.range_m * std::cos(a);  // sensor frame (Velodyne azimuth is clockwise)
+    const double sy = -v.range_m * std::sin(a);
+    sim::Vehicle vehicle;
+    vehicle.id = id++;
+    vehicle.trajectory =
+        sim::StaticPose{Pose2{mount.x + std::cos(mount.yaw) * sx - std::sin(mount.yaw) * sy,
+                              mount.y + std::sin(mount.yaw) * sx + std::cos(mount.yaw) * sy, v.yaw}};
+    scene.vehicles.push_back(vehicle);
+  }
+  const sim::LidarSimulator sim(model, mount, sim::NoiseModel{}, scene);
+  // The frame starts with the encoder at 60 deg, so the 0/360 cut is in its middle.
+  const TimeNs start = sim.rotation_period_ns() / 6;
+  const sim::SimulatedFrame frame = sim.simulate_frame(start);
+
+  // Map frame, as RsuCore hands points over; foreground = vehicle returns (the simulator's truth).
+  const Eigen::Isometry3d to_map = mount.to_isometry();
+  std::vector<LidarPoint> points;
+  std::vector<bool> foreground;
+  for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
+    LidarPoint p = frame.frame.points[i];
+    const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+    p.x = static_cast<float>(m.x());
+    p.y = static_cast<float>(m.y());
+    p.z = static_cast<float>(m.z());
+    points.push_back(p);
+    foreground.push_back(frame.truth[i].surface == sim::SurfaceClass::kVehicle);
+  }
+  std::vector<LidarPoint> fg_points;
+  std::vector<std::size_t> fg_index;  // stream index of each foreground point
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (foreground[i]) {
+      fg_points.push_back(points[i]);
+      fg_index.push_back(i);
+    }
+  }
+  ASSERT_GT(fg_points.size(), 100U * placed.size());
+  constexpr double kTolerance = 0.7;
+  const std::vector<int> label = offline_components(fg_points, kTolerance);
+  std::map<std::pair<TimeNs, std::uint16_t>, int> label_of;  // a return is one (firing time, laser)
+  std::map<int, std::size_t> component_size;
+  for (std::size_t k = 0; k < fg_points.size(); ++k) {
+    label_of[{fg_points[k].time_ns, fg_points[k].ring}] = label[k];
+    ++component_size[label[k]];
+  }
+
+  perception::ClusteringConfig all = clustering();
+  all.min_points = 1;
+  all.max_points = std::numeric_limits<std::size_t>::max();
+  SweepConfig config;
+  const std::vector<double> offsets = offsets_rad(model);
+  SweepClusterer sweep(config, all, Eigen::Vector2d(mount.x, mount.y), model.rotation_hz(),
+                       std::span<const double>(offsets));
+  const double min_offset = *std::min_element(offsets.begin(), offsets.end());
+  const double margin = deg_to_rad(config.release_margin_deg);
+
+  // The test's own closure bound: the unwrapped encoder azimuth E each cluster needs (largest over its
+  // points of a + asin(d / r) - min offset + margin).
+  double encoder = -std::numeric_limits<double>::infinity();  // unwrapped newest encoder azimuth
+  double previous_encoder = encoder;
+  const auto unwrap = [&](double a, double offset) {
+    if (!std::isfinite(encoder))
+      return a;
+    return a + 2.0 * kPi * std::round((encoder + offset - a) / (2.0 * kPi));
+  };
+  std::map<std::pair<TimeNs, std::uint16_t>, std::pair<double, double>> seen;  // unwrapped azimuth, range
+
+  struct Release {
+    int component;
+    double needed;            // encoder azimuth of the closure bound
+    double previous_encoder;  // at the packet before the release
+  };
+  std::vector<Release> releases;
+  std::set<int> released_components;
+  std::size_t released_while_sweeping = 0;
+  const auto check_released = [&](const std::vector<SweptCluster>& clusters, bool sweeping) {
+    for (const SweptCluster& c : clusters) {
+      ASSERT_FALSE(c.points.empty());
+      const int component = label_of.at({c.points.front().time_ns, c.points.front().ring});
+      for (const LidarPoint& p : c.points) {
+        ASSERT_EQ(label_of.at({p.time_ns, p.ring}), component) << "two components released as one";
+      }
+      EXPECT_EQ(c.points.size(), component_size.at(component)) << "released before a later point joined";
+      EXPECT_TRUE(released_components.insert(component).second) << "a component released twice";
+      if (!sweeping)
+        continue;
+      ++released_while_sweeping;
+      double needed = -std::numeric_limits<double>::infinity();
+      for (const LidarPoint& p : c.points) {
+        const auto [u, r] = seen.at({p.time_ns, p.ring});
+        needed = std::max(needed, r > kTolerance ? u + std::asin(kTolerance / r) - min_offset + margin
+                                                 : std::numeric_limits<double>::infinity());
+      }
+      EXPECT_GE(encoder, needed - 1e-6) << "released before the closure bound";
+      releases.push_back({component, needed, previous_encoder});
+    }
+  };
+
+  std::int64_t packet = sim.packet_index_at(points.front().time_ns);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::int64_t k = sim.packet_index_at(points[i].time_ns);
+    if (k != packet) {  // a packet is complete: RsuCore asks for closed clusters here
+      check_released(sweep.release_closed(), true);
+      previous_encoder = encoder;
+      packet = k;
+    }
+    const LidarPoint& p = points[i];
+    const double offset = offsets[p.ring];
+    const double u = unwrap(static_cast<double>(p.azimuth_rad), offset);
+    encoder = std::max(encoder, u - offset);
+    if (foreground[i]) {
+      seen[{p.time_ns, p.ring}] = {
+          u, std::hypot(static_cast<double>(p.x) - mount.x, static_cast<double>(p.y) - mount.y)};
+    }
+    sweep.add(p, foreground[i]);
+  }
+  check_released(sweep.release_closed(), true);
+  check_released(sweep.release_all(), false);
+  EXPECT_EQ(released_components.size(), component_size.size());
+  // Promptness: a component whose azimuth span overlaps no other one's (so that the wait for an
+  // overlapping open cluster never applies) is released by the first packet that meets the bound.
+  std::map<int, std::pair<double, double>> span;
+  for (const auto& [key, value] : seen) {
+    auto [it, inserted] = span.try_emplace(label_of.at(key), value.first, value.first);
+    it->second.first = std::min(it->second.first, value.first);
+    it->second.second = std::max(it->second.second, value.first);
+  }
+  std::size_t isolated = 0;
+  for (const Release& r : releases) {
+    const auto [lo, hi] = span.at(r.component);
+    const bool overlaps = std::any_of(span.begin(), span.end(), [&](const auto& other) {
+      return other.first != r.component && other.second.first <= hi && other.second.second >= lo;
+    });
+    if (overlaps)
+      continue;
+    ++isolated;
+    EXPECT_LT(r.previous_encoder, r.needed) << "not released by the first packet that met the bound";
+  }
+  EXPECT_GE(isolated, 2U);  // vehicles can shed small fragments at overlapping azimuths
+  // Each vehicle is released while the sweep runs (fragments may also be), not only at the end.
+  EXPECT_GE(released_while_sweeping, placed.size());
+  EXPECT_EQ(sweep.stats().points_dropped_stale, 0U);
+}
+
+const std::vector<std::vector<PlacedVehicle>> kLayouts = {
+    // Across the 0/360 cut at 6 m, broadside at 3.5 m, 10 m and 25 m.
+    {{6.0, 0.0, 0.4}, {3.5, 150.0, 1.2}, {10.0, 240.0, 0.0}, {25.0, 300.0, 2.0}},
+    // Just before and just after the cut, far and mid range, and near.
+    {{15.0, 357.0, 1.0}, {4.5, 110.0, 0.0}, {30.0, 190.0, 0.7}, {8.0, 270.0, 1.9}, {20.0, 4.0, 0.2}},
+};
+
+TEST(SweepClusterer, ExactAgainstOfflineClusteringVlp16) {
+  for (const auto& layout : kLayouts)
+    check_exact_against_offline(make_vlp16(), layout);
+}
+
+TEST(SweepClusterer, ExactAgainstOfflineClusteringVlp32c) {
+  for (const auto& layout : kLayouts)
+    check_exact_against_offline(make_vlp32c(), layout);
 }
 
 }  // namespace

@@ -48,6 +48,7 @@ TEST(Scenario, CorridorFileExpandsRepeatedObjects) {
   EXPECT_DOUBLE_EQ(s.scene.poles[1].x - s.scene.poles[0].x, 25.0);
   ASSERT_EQ(s.scene.vehicles.size(), 1u);
   const auto& w = std::get<Waypoints>(s.scene.vehicles[0].trajectory);
+  EXPECT_TRUE(w.smooth);
   EXPECT_EQ(w.points.front().pose.x, -60.0);
   EXPECT_EQ(w.points.back().pose.x, 60.0);
 }
@@ -83,9 +84,12 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BrokenCase{"not_a_number", "lidar:\n  model: vlp16\n  mount:\n    z: two\n",
                    "broken.yaml:4: lidar.mount.z: expected a number, got \"two\""},
-        BrokenCase{"unknown_field", "lidar:\n  model: vlp16\n  mont: {z: 2}\n", "broken.yaml:3: lidar.mont: unknown field"},
-        BrokenCase{"missing_model", "name: x\nlidar:\n  rpm: 600\n", "broken.yaml:3: lidar: missing required field \"model\""},
-        BrokenCase{"unknown_model", "lidar:\n  model: hdl64\n", "broken.yaml:2: lidar.model: unknown LiDAR model"},
+        BrokenCase{"unknown_field", "lidar:\n  model: vlp16\n  mont: {z: 2}\n",
+                   "broken.yaml:3: lidar.mont: unknown field"},
+        BrokenCase{"missing_model", "name: x\nlidar:\n  rpm: 600\n",
+                   "broken.yaml:3: lidar: missing required field \"model\""},
+        BrokenCase{"unknown_model", "lidar:\n  model: hdl64\n",
+                   "broken.yaml:2: lidar.model: unknown LiDAR model"},
         BrokenCase{"negative_sigma", "lidar:\n  model: vlp16\n  noise:\n    range_sigma_m: -1\n",
                    "broken.yaml:4: lidar.noise.range_sigma_m: must be >= 0"},
         BrokenCase{"waypoints_not_increasing",
@@ -100,16 +104,36 @@ INSTANTIATE_TEST_SUITE_P(
                    "lidar: {model: vlp16}\nvehicles:\n  - {id: 1, trajectory: {static: {x: 1}}}\n"
                    "  - {id: 1, trajectory: {static: {x: 2}}}\n",
                    "broken.yaml:4: vehicles[1].id: duplicate vehicle id"},
-        BrokenCase{"absurd_vehicle", "lidar: {model: vlp16}\nvehicles:\n  - id: 1\n    shape: {length: 100}\n"
-                                     "    trajectory: {static: {x: 1}}\n",
+        BrokenCase{"absurd_vehicle",
+                   "lidar: {model: vlp16}\nvehicles:\n  - id: 1\n    shape: {length: 100}\n"
+                   "    trajectory: {static: {x: 1}}\n",
                    "broken.yaml:4: vehicles[0].shape: vehicle larger than"},
         BrokenCase{"syntax_error", "lidar:\n  model: [vlp16\n", "broken.yaml:"},
         BrokenCase{"list_expected", "lidar: {model: vlp16}\nscene:\n  poles: {x: 1}\n",
                    "broken.yaml:3: scene.poles: expected a list"},
-        BrokenCase{"bad_repeat", "lidar: {model: vlp16}\nscene:\n  poles:\n    - {x: 1, repeat: {count: 0}}\n",
+        BrokenCase{"bad_repeat",
+                   "lidar: {model: vlp16}\nscene:\n  poles:\n    - {x: 1, repeat: {count: 0}}\n",
                    "broken.yaml:4: scene.poles[0].repeat.count: must be an integer"},
-        BrokenCase{"infinite", "lidar:\n  model: vlp16\n  mount: {x: .inf}\n", "lidar.mount.x: expected a finite number"}),
-    [](const ::testing::TestParamInfo<BrokenCase>& param_info) { return std::string(param_info.param.label); });
+        BrokenCase{
+            "bad_interpolation",
+            "lidar: {model: vlp16}\nvehicles:\n  - id: 1\n    trajectory:\n      interpolation: cubic\n"
+            "      waypoints: [{t_s: 0, x: 0}]\n",
+            "broken.yaml:5: vehicles[0].trajectory.interpolation: must be linear or smooth"},
+        BrokenCase{
+            "interpolated_static",
+            "lidar: {model: vlp16}\nvehicles:\n  - id: 1\n    trajectory:\n      interpolation: smooth\n"
+            "      static: {x: 1}\n",
+            "vehicles[0].trajectory.interpolation: only waypoints are interpolated"},
+        BrokenCase{"infinite", "lidar:\n  model: vlp16\n  mount: {x: .inf}\n",
+                   "lidar.mount.x: expected a finite number"},
+        // Found by fuzz/scenario_fuzzer: a complex key used to escape as yaml-cpp's TypedBadConversion.
+        BrokenCase{"complex_key", "lidar:\n  model: vlp16\n  ? [a, b]\n  : 1\n",
+                   "broken.yaml:3: lidar: expected a field name, got a complex key"},
+        BrokenCase{"complex_key_at_top", "? {lidar: 1}\n: 2\n",
+                   "broken.yaml:1: <document>: expected a field name, got a complex key"}),
+    [](const ::testing::TestParamInfo<BrokenCase>& param_info) {
+      return std::string(param_info.param.label);
+    });
 
 TEST(Scenario, MissingFileIsNamed) {
   try {

@@ -7,6 +7,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "common/angles.h"
+
 namespace rsu::sim {
 namespace {
 
@@ -122,6 +124,44 @@ TEST(SimTrajectory, InvalidTrajectoriesThrow) {
   EXPECT_THROW(validate_trajectory(StaticPose{{std::numeric_limits<double>::quiet_NaN(), 0, 0}}),
                std::invalid_argument);
   EXPECT_NO_THROW(validate_trajectory(Spin{}));
+}
+
+// Smooth waypoints: through every point at its time, yaw along the direction of motion, and velocity
+// continuous across the points (the ground truth is computed here by finite differences).
+TEST(SimTrajectory, SmoothWaypointsFollowTheirTangent) {
+  Waypoints w;
+  w.smooth = true;
+  w.points = {{0, {-60.0, -5.25, 0.0}},
+              {from_seconds(4.5), {-10.0, -5.25, 0.0}},
+              {from_seconds(5.75), {3.9, -3.5, 0.0}},
+              {from_seconds(7.0), {17.8, -1.75, 0.0}},
+              {from_seconds(10.8), {60.0, -1.75, 0.0}}};
+  const Trajectory tr = w;
+  for (const TimedPose& p : w.points) {
+    const Pose2 at = pose_at(tr, p.t);
+    EXPECT_NEAR(at.x, p.pose.x, 1e-9);
+    EXPECT_NEAR(at.y, p.pose.y, 1e-9);
+  }
+  const TimeNs h = 100'000;  // 0.1 ms
+  for (TimeNs t = from_seconds(0.3); t < from_seconds(10.5); t += from_seconds(0.173)) {
+    const Pose2 a = pose_at(tr, t - h), b = pose_at(tr, t + h), c = pose_at(tr, t);
+    const double vx = (b.x - a.x) / to_seconds(2 * h), vy = (b.y - a.y) / to_seconds(2 * h);
+    EXPECT_NEAR(c.yaw, std::atan2(vy, vx), 1e-6) << "t = " << to_seconds(t);
+    const Velocity2 v = velocity_at(tr, t);
+    EXPECT_NEAR(v.vx, vx, 1e-4);
+    EXPECT_NEAR(v.vy, vy, 1e-4);
+    EXPECT_NEAR(v.yaw_rate, wrap_angle(b.yaw - a.yaw) / to_seconds(2 * h), 2e-3);
+  }
+  // No jump of the velocity at an interior point.
+  const TimeNs knot = w.points[2].t;
+  const Velocity2 before = velocity_at(tr, knot - h), after = velocity_at(tr, knot + h);
+  EXPECT_NEAR(before.vx, after.vx, 1e-2);
+  EXPECT_NEAR(before.vy, after.vy, 1e-2);
+  // The linear version of the same points crabs: its yaw (0) differs from its direction of motion.
+  Waypoints linear = w;
+  linear.smooth = false;
+  const Velocity2 crab = velocity_at(linear, from_seconds(5.0));
+  EXPECT_GT(std::abs(std::atan2(crab.vy, crab.vx)), deg_to_rad(5.0));
 }
 
 }  // namespace

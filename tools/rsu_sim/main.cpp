@@ -31,8 +31,10 @@ int main(int argc, char** argv) {
   const std::string command = argv[1];
   const std::vector<std::string> args(argv + 2, argv + argc);
   try {
-    if (command == "simulate") return rsu::tools::run_simulate(args);
-    if (command == "stream") return rsu::tools::run_stream(args);
+    if (command == "simulate")
+      return rsu::tools::run_simulate(args);
+    if (command == "stream")
+      return rsu::tools::run_stream(args);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "rsu-sim: %s\n", e.what());
     return 1;

@@ -26,7 +26,8 @@ namespace {
 void write_file(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary);
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (!out) throw std::runtime_error("cannot write " + path.string());
+  if (!out)
+    throw std::runtime_error("cannot write " + path.string());
 }
 
 // When the LiDAR swept vehicle `id` (DESIGN.md §3): the median firing time of its points, or the
@@ -38,7 +39,8 @@ TimeNs sweep_time(const sim::SimulatedFrame& frame, std::uint32_t id) {
     if (frame.truth[i].surface == sim::SurfaceClass::kVehicle && frame.truth[i].vehicle_id == id)
       times.push_back(frame.frame.points[i].time_ns);
   }
-  if (times.empty()) return (frame.frame.start_ns + frame.frame.end_ns) / 2;
+  if (times.empty())
+    return (frame.frame.start_ns + frame.frame.end_ns) / 2;
   std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
   return times[times.size() / 2];
 }
@@ -53,7 +55,8 @@ void write_topdown(const std::filesystem::path& out_dir, const sim::Scenario& sc
     const LidarPoint& p = frame.frame.points[i];
     const Eigen::Vector3d m = sensor_to_map * Eigen::Vector3d(p.x, p.y, p.z);
     const auto& truth = frame.truth[i];
-    const long label = truth.surface == sim::SurfaceClass::kVehicle ? static_cast<long>(truth.vehicle_id) : -1L;
+    const long label =
+        truth.surface == sim::SurfaceClass::kVehicle ? static_cast<long>(truth.vehicle_id) : -1L;
     points << m.x() << ',' << m.y() << ',' << m.z() << ',' << label << '\n';
   }
   std::ofstream boxes(out_dir / "topdown_boxes.csv");
@@ -64,7 +67,8 @@ void write_topdown(const std::filesystem::path& out_dir, const sim::Scenario& sc
           << v.shape.width << '\n';
   }
   std::ofstream lidar(out_dir / "topdown_lidar.csv");
-  lidar << "x,y,z\n" << scenario.lidar.mount.x << ',' << scenario.lidar.mount.y << ',' << scenario.lidar.mount.z << '\n';
+  lidar << "x,y,z\n"
+        << scenario.lidar.mount.x << ',' << scenario.lidar.mount.y << ',' << scenario.lidar.mount.z << '\n';
 }
 
 }  // namespace
@@ -82,17 +86,20 @@ int run_simulate(const std::vector<std::string>& args) {
   po::store(po::command_line_parser(args).options(options).positional(positional).run(), vm);
   po::notify(vm);
   if (vm.count("help")) {
-    std::cout << options << "\nWrites into the output folder:\n"
-              << "  frame_NNNN.pcd     points in the sensor frame (x y z intensity ring azimuth time)\n"
-              << "  packets.pcap       the Velodyne data packets (UDP port 2368), if the model has a packet format\n"
-              << "  truth.csv          true vehicle poses when the LiDAR swept them (median point time)\n"
-              << "  topdown_*.csv      data of the top-down picture of the middle frame (eval/plots/topdown.py)\n";
+    std::cout
+        << options << "\nWrites into the output folder:\n"
+        << "  frame_NNNN.pcd     points in the sensor frame (x y z intensity ring azimuth time)\n"
+        << "  packets.pcap       the Velodyne data packets (UDP port 2368), if the model has a packet "
+           "format\n"
+        << "  truth.csv          true vehicle poses when the LiDAR swept them (median point time)\n"
+        << "  topdown_*.csv      data of the top-down picture of the middle frame (eval/plots/topdown.py)\n";
     return 0;
   }
 
   const sim::Scenario scenario = load_scenario(vm);
   const int frames = vm.count("frames") ? vm["frames"].as<int>() : scenario.frames;
-  if (frames < 1 || frames > 100000) throw std::runtime_error("simulate: --frames must be within [1, 100000]");
+  if (frames < 1 || frames > 100000)
+    throw std::runtime_error("simulate: --frames must be within [1, 100000]");
   const std::filesystem::path out_dir = vm["out"].as<std::string>();
   std::filesystem::create_directories(out_dir);
 
@@ -120,7 +127,8 @@ int run_simulate(const std::vector<std::string>& args) {
       truth << f << ',' << swept << ',' << v.id << ',' << pose.x << ',' << pose.y << ',' << pose.yaw << ','
             << v.shape.length << ',' << v.shape.width << '\n';
     }
-    if (f == frames / 2) write_topdown(out_dir, scenario, frame);
+    if (f == frames / 2)
+      write_topdown(out_dir, scenario, frame);
   }
 
   std::uint64_t packets = 0;
@@ -132,7 +140,8 @@ int run_simulate(const std::vector<std::string>& args) {
     for (std::int64_t k = first; k < last; ++k) {
       const PacketReturns returns = simulator.simulate_packet(k);
       encode_packet(scenario.lidar.model, returns, payload);
-      append_udp_record(pcap, returns.blocks.first_firing_ns, {ipv4_address(192, 168, 1, 201), kVelodyneDataPort},
+      append_udp_record(pcap, returns.blocks.first_firing_ns,
+                        {ipv4_address(192, 168, 1, 201), kVelodyneDataPort},
                         {ipv4_address(255, 255, 255, 255), kVelodyneDataPort}, payload);
       ++packets;
     }
@@ -144,9 +153,9 @@ int run_simulate(const std::vector<std::string>& args) {
   std::printf("lidar      %s, %zu lasers, mount (%.2f, %.2f, %.2f) m\n", scenario.lidar.model_name.c_str(),
               scenario.lidar.model.laser_count(), scenario.lidar.mount.x, scenario.lidar.mount.y,
               scenario.lidar.mount.z);
-  std::printf("frames     %d x %.1f ms: %llu firings, %llu points (%.0f per frame)\n", frames, to_seconds(period) * 1e3,
-              static_cast<unsigned long long>(total_firings), static_cast<unsigned long long>(total_points),
-              static_cast<double>(total_points) / frames);
+  std::printf("frames     %d x %.1f ms: %llu firings, %llu points (%.0f per frame)\n", frames,
+              to_seconds(period) * 1e3, static_cast<unsigned long long>(total_firings),
+              static_cast<unsigned long long>(total_points), static_cast<double>(total_points) / frames);
   std::printf("packets    %llu Velodyne data packets\n", static_cast<unsigned long long>(packets));
   std::printf("wall time  %.2f s\n", seconds);
   std::printf("output     %s\n", out_dir.string().c_str());

@@ -26,17 +26,21 @@ namespace {
 
 asio::ip::udp::endpoint parse_endpoint(const std::string& text) {
   const auto colon = text.rfind(':');
-  if (colon == std::string::npos) throw std::runtime_error("--to must be HOST:PORT, got \"" + text + "\"");
+  if (colon == std::string::npos)
+    throw std::runtime_error("--to must be HOST:PORT, got \"" + text + "\"");
   boost::system::error_code ec;
   const auto address = asio::ip::make_address(text.substr(0, colon), ec);
-  if (ec) throw std::runtime_error("--to: \"" + text.substr(0, colon) + "\" is not an IP address");
+  if (ec)
+    throw std::runtime_error("--to: \"" + text.substr(0, colon) + "\" is not an IP address");
   const int port = std::stoi(text.substr(colon + 1));
-  if (port < 1 || port > 65535) throw std::runtime_error("--to: port out of range");
+  if (port < 1 || port > 65535)
+    throw std::runtime_error("--to: port out of range");
   return {address, static_cast<unsigned short>(port)};
 }
 
 TimeNs wall_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -45,7 +49,7 @@ TimeNs wall_now_ns() {
 int run_stream(const std::vector<std::string>& args) {
   po::options_description options("rsu-sim stream SCENARIO --to HOST:PORT [options]");
   options.add_options()("help,h", "show this help")("to", po::value<std::string>(),
-                                                     "destination, e.g. 127.0.0.1:2368")(
+                                                    "destination, e.g. 127.0.0.1:2368")(
       "seconds", po::value<double>()->default_value(10.0), "simulated seconds to send")(
       "start", po::value<double>(), "simulation start time, s (default: the scenario's simulation.start_s)")(
       "fast", "send as fast as possible instead of at real time")(
@@ -64,15 +68,19 @@ int run_stream(const std::vector<std::string>& args) {
     std::cout << options;
     return 0;
   }
-  if (!vm.count("to")) throw std::runtime_error("stream: --to HOST:PORT is required");
+  if (!vm.count("to"))
+    throw std::runtime_error("stream: --to HOST:PORT is required");
   const std::string clock = vm["clock"].as<std::string>();
-  if (clock != "sim" && clock != "wall") throw std::runtime_error("stream: --clock must be sim or wall");
+  if (clock != "sim" && clock != "wall")
+    throw std::runtime_error("stream: --clock must be sim or wall");
   const double seconds = vm["seconds"].as<double>();
-  if (!(seconds > 0 && seconds <= 86400)) throw std::runtime_error("stream: --seconds must be within (0, 86400]");
+  if (!(seconds > 0 && seconds <= 86400))
+    throw std::runtime_error("stream: --seconds must be within (0, 86400]");
 
   const sim::Scenario scenario = load_scenario(vm);
   if (!scenario.lidar.model.has_packet_format())
-    throw std::runtime_error("stream: LiDAR model " + scenario.lidar.model_name + " has no Velodyne packet format");
+    throw std::runtime_error("stream: LiDAR model " + scenario.lidar.model_name +
+                             " has no Velodyne packet format");
   const TimeNs sim_start = vm.count("start") ? from_seconds(vm["start"].as<double>()) : scenario.start_ns;
   const sim::LidarSimulator simulator(scenario.lidar.model, scenario.lidar.mount, scenario.lidar.noise,
                                       scenario.scene, 0, scenario.lidar.start_azimuth_deg);
@@ -87,7 +95,7 @@ int run_stream(const std::vector<std::string>& args) {
   const auto wall_start = std::chrono::steady_clock::now();
   // Shifts only the packets' timestamps: the scene keeps moving on the scenario's clock.
   const bool has_epoch = vm.count("epoch-ns") > 0;
-  const TimeNs clock_offset = has_epoch ? static_cast<TimeNs>(vm["epoch-ns"].as<long long>())
+  const TimeNs clock_offset = has_epoch         ? static_cast<TimeNs>(vm["epoch-ns"].as<long long>())
                               : clock == "wall" ? wall_now_ns() - sim_start
                                                 : 0;
   std::array<std::uint8_t, kPacketBytes> payload{};
