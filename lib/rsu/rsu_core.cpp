@@ -50,6 +50,14 @@ double azimuth_spread_rad(const SensorModel& model) {
   return deg_to_rad(*hi - *lo);
 }
 
+// The per-laser azimuth offsets in radians, channel order: the sweep clusterer's laser-aware closure rule.
+std::vector<double> laser_offsets_rad(const SensorModel& model) {
+  std::vector<double> out;
+  for (const double deg : model.azimuth_offset_deg)
+    out.push_back(deg_to_rad(deg));
+  return out;
+}
+
 FrameAssemblerConfig assembler_config(const SensorModel& model) {
   FrameAssemblerConfig c;
   c.rotation_hz = model.rotation_hz();
@@ -127,7 +135,7 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       assembler_(assembler_config(model_)),
       background_(perception::background_model_config(config.perception), lidar_xy_),
       clusterer_(config.sweep, config.perception.clustering, lidar_xy_, model_.rotation_hz(),
-                 azimuth_spread_rad(model_)),
+                 laser_offsets_rad(model_)),
       background_ready_(config.background.learning_frames == 0),
       flood_limiter_(config.datagram_flood),
       validator_(config.announcement_limits),
