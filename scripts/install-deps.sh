@@ -11,6 +11,7 @@ packages=(
   libspdlog-dev libfmt-dev protobuf-compiler libprotobuf-dev
   libyaml-cpp-dev libsystemd-dev libpng-dev libsodium-dev
   cyclonedds-dev cyclonedds-tools
+  clang libclang-rt-14-dev  # fuzz/ (scripts/fuzz.sh): clang recommends, not depends on, the libFuzzer runtime
   systemd
   python3 python3-numpy python3-matplotlib python3-yaml
 )

@@ -1,0 +1,208 @@
+// Writes the seed corpora of the fuzz harnesses into <dir>/<harness>/ (fuzz/corpus/ in the repository):
+// valid V2I datagrams from encode_v2i_message, valid VLP-16 and VLP-32C packets from the encoder,
+// a small capture and a small PCD. The configuration and scenario seeds are the shipped files
+// (deploy/rsud.yaml, scenarios/*.yaml), copied by hand. Usage: fuzz_seed_corpus <dir>.
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "common/time.h"
+#include "io/pcd_io.h"
+#include "lidar/firing_schedule.h"
+#include "lidar/pcap.h"
+#include "lidar/velodyne_packet.h"
+#include "v2i/wire_codec.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Bytes = std::vector<std::uint8_t>;
+
+// Matches the harnesses' receive time (1'718'000'000 s) so that the seeds pass validation.
+constexpr rsu::TimeNs kNow = 1'718'000'000LL * rsu::kNsPerSecond;
+
+void write_file(const fs::path& path, std::span<const std::uint8_t> bytes) {
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+void put_u16(Bytes& out, std::uint32_t v) {
+  out.push_back(static_cast<std::uint8_t>(v & 0xFF));
+  out.push_back(static_cast<std::uint8_t>((v >> 8) & 0xFF));
+}
+
+rsu::v2i::VehicleAnnouncement announcement(std::uint64_t id, std::uint32_t sequence, rsu::TimeNs t) {
+  rsu::v2i::VehicleAnnouncement a;
+  a.vehicle_id = id;
+  a.sequence = sequence;
+  a.generation_time = t;
+  a.size = {4.89, 1.92, 1.70};
+  a.reference_offset = {-1.35, 0.0};
+  a.pose = {12.5, -3.25, 0.4};
+  a.pose_covariance << 0.04, 0.01, 0.0, 0.01, 0.05, 0.0, 0.0, 0.0, 0.001;
+  a.speed_mps = 8.5;
+  a.yaw_rate_rps = 0.02;
+  a.reply_to = {"192.0.2.17", 47001};
+  return a;
+}
+
+void write_v2i(const fs::path& dir) {
+  write_file(dir / "announcement", rsu::v2i::encode_v2i_message(announcement(7, 1, kNow)));
+  rsu::v2i::VehicleAnnouncement minimal = announcement(8, 2, kNow);
+  minimal.speed_mps.reset();
+  minimal.yaw_rate_rps.reset();
+  minimal.reply_to = {"2001:db8::17", 47003};
+  write_file(dir / "announcement_minimal", rsu::v2i::encode_v2i_message(minimal));
+
+  rsu::v2i::Correction c;
+  c.rsu_id = 3;
+  c.vehicle_id = 7;
+  c.sequence = 4;
+  c.sweep_time = kNow;
+  c.pose = {12.1, -3.0, 0.41};
+  c.pose_covariance = Eigen::Matrix3d::Identity() * 0.01;
+  c.quality = {.points_used = 240,
+               .faces_seen = 2,
+               .range_m = 13.0,
+               .yaw_resolution = rsu::v2i::YawResolution::kGeometry,
+               .confidence = 0.9};
+  c.announcement_sequence = 1;
+  write_file(dir / "correction", rsu::v2i::encode_v2i_message(c));
+
+  rsu::v2i::RsuAdvertisement ad;
+  ad.rsu_id = 3;
+  ad.lidar_pose = {0.0, 0.0, 2.5, 0.0, 0.0, 0.3};
+  ad.coverage_radius_m = 50.0;
+  ad.correction_port = 4500;
+  ad.announcement_port = 4500;
+  write_file(dir / "advertisement", rsu::v2i::encode_v2i_message(ad));
+}
+
+// rsu_datagram framing: { u8 source, u16 ms since the previous, u16 length, bytes }.
+void add_record(Bytes& out, std::uint8_t source, std::uint32_t dt_ms, const Bytes& datagram) {
+  out.push_back(source);
+  put_u16(out, dt_ms);
+  put_u16(out, static_cast<std::uint32_t>(datagram.size()));
+  out.insert(out.end(), datagram.begin(), datagram.end());
+}
+
+void write_rsu(const fs::path& dir) {
+  Bytes one;
+  add_record(one, 0, 0, rsu::v2i::encode_v2i_message(announcement(7, 1, kNow)));
+  write_file(dir / "one_announcement", one);
+
+  // Two vehicles at 10 Hz, a repeated sequence, then silence long enough to expire them.
+  Bytes stream;
+  for (std::uint32_t k = 0; k < 5; ++k) {
+    const rsu::TimeNs t = kNow + static_cast<rsu::TimeNs>(k) * 100 * rsu::kNsPerMs;
+    add_record(stream, 0, k == 0 ? 0 : 50, rsu::v2i::encode_v2i_message(announcement(7, k + 1, t)));
+    add_record(stream, 0, 50, rsu::v2i::encode_v2i_message(announcement(9, k + 1, t + 50 * rsu::kNsPerMs)));
+  }
+  add_record(stream, 0, 0, rsu::v2i::encode_v2i_message(announcement(9, 5, kNow + 450 * rsu::kNsPerMs)));
+  add_record(stream, 1, 3000, rsu::v2i::encode_v2i_message(announcement(7, 6, kNow + 3450 * rsu::kNsPerMs)));
+  write_file(dir / "two_vehicles", stream);
+}
+
+// Packets of a spinning sensor with every range a smooth function of the firing, as a scene would give.
+std::vector<Bytes> packets(const rsu::SensorModel& model, rsu::TimeNs t0, int count, std::int64_t first) {
+  const rsu::FiringSchedule schedule(model, t0);
+  std::vector<Bytes> out;
+  for (int k = 0; k < count; ++k) {
+    rsu::PacketReturns r;
+    r.blocks = schedule.packet(first + k);
+    for (const rsu::Firing& f : schedule.firings(r.blocks)) {
+      const auto b = static_cast<std::size_t>(f.block);
+      const auto c = static_cast<std::size_t>(f.channel);
+      r.distance_raw[b][c] =
+          (c % 7 == 3) ? 0 : rsu::quantize_distance(model, 5.0 + 0.5 * static_cast<double>(c));
+      r.reflectivity[b][c] = static_cast<std::uint8_t>(10 * c);
+    }
+    Bytes bytes(rsu::kPacketBytes);
+    rsu::encode_packet(model, r, std::span<std::uint8_t, rsu::kPacketBytes>(bytes.data(), rsu::kPacketBytes));
+    out.push_back(std::move(bytes));
+  }
+  return out;
+}
+
+void write_velodyne(const fs::path& dir) {
+  struct Case {
+    const char* name;
+    rsu::SensorModel model;
+    std::uint8_t flags;
+    std::uint32_t step_us;
+    int count;
+  };
+  // Packet periods: VLP-16 1327 us, VLP-32C 664 us. The VLP-16 stream crosses its first frame cut.
+  const Case cases[] = {{"vlp16_packets", rsu::make_vlp16(), 0, 1327, 4},
+                        {"vlp32c_packets", rsu::make_vlp32c(), 1, 664, 4},
+                        {"vlp16_partial_frames", rsu::make_vlp16(), 2, 1327, 3}};
+  for (const Case& c : cases) {
+    Bytes input{c.flags};
+    put_u16(input, c.step_us);
+    for (const Bytes& p : packets(c.model, kNow, c.count, 0))
+      input.insert(input.end(), p.begin(), p.end());
+    write_file(dir / c.name, input);
+  }
+}
+
+void write_pcap(const fs::path& dir) {
+  Bytes file = rsu::pcap_global_header();
+  const rsu::UdpEndpoint sensor{rsu::ipv4_address(192, 168, 1, 201), 2368};
+  const rsu::UdpEndpoint host{rsu::ipv4_address(192, 168, 1, 100), rsu::kVelodyneDataPort};
+  rsu::TimeNs t = kNow;
+  for (const Bytes& p : packets(rsu::make_vlp16(), kNow, 2, 0)) {
+    rsu::append_udp_record(file, t, sensor, host, p);
+    t += 1327 * rsu::kNsPerUs;
+  }
+  write_file(dir / "two_vlp16_packets.pcap", file);
+  const Bytes small{1, 2, 3, 4};
+  Bytes tiny = rsu::pcap_global_header();
+  rsu::append_udp_record(tiny, kNow, sensor, host, small);
+  write_file(dir / "small_datagram.pcap", tiny);
+}
+
+void write_pcd(const fs::path& dir) {
+  fs::create_directories(dir);
+  std::vector<rsu::LidarPoint> points;
+  for (int i = 0; i < 6; ++i) {
+    rsu::LidarPoint p;
+    p.x = 1.0F + static_cast<float>(i);
+    p.y = -0.5F * static_cast<float>(i);
+    p.z = 0.25F;
+    p.intensity = static_cast<float>(10 * i);
+    p.ring = static_cast<std::uint16_t>(i);
+    p.azimuth_rad = 0.1F * static_cast<float>(i);
+    p.time_ns = kNow + i * rsu::kNsPerUs;
+    points.push_back(p);
+  }
+  rsu::io::write_pcd((dir / "six_points.pcd").string(), points);
+  // An ASCII PCD with only x y z, as other tools write them.
+  const std::string ascii =
+      "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+      "COUNT 1 1 1\nWIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n1 2 3\n4 5 6\n7 8 "
+      "nan\n";
+  write_file(dir / "ascii_xyz.pcd",
+             std::span(reinterpret_cast<const std::uint8_t*>(ascii.data()), ascii.size()));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::cerr << "usage: fuzz_seed_corpus <corpus dir>\n";
+    return 2;
+  }
+  const fs::path root = argv[1];
+  write_v2i(root / "v2i_datagram");
+  write_rsu(root / "rsu_datagram");
+  write_velodyne(root / "velodyne_packet");
+  write_pcap(root / "pcap");
+  write_pcd(root / "pcd");
+  std::cout << "seed corpora written to " << root << "\n";
+  return 0;
+}

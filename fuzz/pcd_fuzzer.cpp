@@ -1,0 +1,44 @@
+// Fuzzes PCD reading (io/pcd_io.h, PCL's reader underneath): any file must give points or a PcdError.
+// read_pcd takes a path, so each input is written to a temporary file first.
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include <pcl/console/print.h>
+
+#include "io/pcd_io.h"
+
+namespace {
+
+std::string temp_path() {
+  return "/tmp/rsu_pcd_fuzzer_" + std::to_string(::getpid()) + ".pcd";
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  // PCL reports every malformed header on stderr; at a thousand files a second that is all one sees.
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string path = temp_path();
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr)
+    std::abort();
+  if (size > 0 && std::fwrite(data, 1, size, f) != size)
+    std::abort();
+  std::fclose(f);
+  try {
+    (void)rsu::io::read_pcd(path);
+  } catch (const rsu::io::PcdError&) {
+    // the documented failure
+  }
+  std::remove(path.c_str());
+  return 0;
+}
