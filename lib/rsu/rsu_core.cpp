@@ -478,9 +478,13 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
       outline.insert(outline.end(), part.footprint.begin(), part.footprint.end());
     }
     // Hold until the sweep has passed the grown footprint and the gathered clusters (a vehicle whose
-    // estimate is off may extend beyond its footprint), never longer than half a rotation.
-    held.release_at =
-        std::max(held.release_at, std::min(passed_time(outline), held.first_time + rotation_period_ns_ / 2));
+    // estimate is off may extend beyond its footprint), never longer than half a rotation. Only far
+    // vehicles are held: a near one is not split across batches (its faces are dense and its rings close
+    // together), so its fix goes as soon as the sweep clusterer releases it (latency, issue 4).
+    const bool far = (hypotheses[j].centre - lidar_xy_).norm() > g.hold_beyond_m;
+    held.release_at = far ? std::max(held.release_at,
+                                     std::min(passed_time(outline), held.first_time + rotation_period_ns_ / 2))
+                          : held.first_time;
   }
 }
 

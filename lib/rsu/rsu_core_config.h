@@ -51,6 +51,10 @@ struct GatheringConfig {
   double max_margin_m = 2.0;
   // A cluster belongs to a vehicle when at least this fraction of its points lies in the grown footprint.
   double min_inside_fraction = 0.5;
+  // Vehicles predicted farther than this are held until the sweep has passed their footprint, so that
+  // fragments released in later batches join them (a head-on car splits where the hood falls between
+  // rings, seen from 26 m on in the corridor); nearer ones are fixed at once.
+  double hold_beyond_m = 25.0;
 };
 
 // The perception defaults, with the improved correction testing seen faces against end-anchored boxes
