@@ -165,6 +165,10 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder with the tools")
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "corridor"))
     args = ap.parse_args()
+    # Absolute: the paths written into rsud's config are resolved relative to the config's own folder.
+    args.out = os.path.abspath(args.out)
+    args.build = os.path.abspath(args.build)
+    args.experiment = os.path.abspath(args.experiment)
     args.build_dir = args.build
     os.makedirs(args.out, exist_ok=True)
     with open(args.experiment) as f:
