@@ -132,20 +132,11 @@ void SweepClusterer::add(const LidarPoint& p, bool foreground) {
 
 void SweepClusterer::drop_stale() {
   const double oldest_allowed = sweep_ - kPi;
-  std::size_t keep = 0;
-  for (std::size_t i = 0; i < points_.size(); ++i) {
-    if (azimuth_[i] < oldest_allowed) {
-      ++stats_.points_dropped_stale;
-      continue;
-    }
-    points_[keep] = points_[i];
-    azimuth_[keep] = azimuth_[i];
-    range_[keep] = range_[i];
-    ++keep;
-  }
-  points_.resize(keep);
-  azimuth_.resize(keep);
-  range_.resize(keep);
+  compact_pending([&](std::size_t i) {
+    const bool stale = azimuth_[i] < oldest_allowed;
+    stats_.points_dropped_stale += stale ? 1 : 0;
+    return stale;
+  });
 }
 
 std::vector<SweptCluster> SweepClusterer::release_closed() {
@@ -231,19 +222,7 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   }
   // Points cluster_grid refused (none should remain: every pending point is finite) are left pending
   // and age out as stale.
-  std::size_t keep = 0;
-  for (std::size_t i = 0; i < points_.size(); ++i) {
-    if (take[i]) {
-      continue;
-    }
-    points_[keep] = points_[i];
-    azimuth_[keep] = azimuth_[i];
-    range_[keep] = range_[i];
-    ++keep;
-  }
-  points_.resize(keep);
-  azimuth_.resize(keep);
-  range_.resize(keep);
+  compact_pending([&](std::size_t i) { return static_cast<bool>(take[i]); });
   if (everything) {
     stats_.invalid_points += points_.size();
     points_.clear();

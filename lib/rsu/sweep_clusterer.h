@@ -102,6 +102,22 @@ class SweepClusterer {
   void restart();
   std::vector<SweptCluster> release(bool everything);
   void drop_stale();
+  // Keeps the pending points for which drop(i) is false, in order (points_, azimuth_, range_ together).
+  template <typename Drop>
+  void compact_pending(Drop drop) {
+    std::size_t keep = 0;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      if (drop(i))
+        continue;
+      points_[keep] = points_[i];
+      azimuth_[keep] = azimuth_[i];
+      range_[keep] = range_[i];
+      ++keep;
+    }
+    points_.resize(keep);
+    azimuth_.resize(keep);
+    range_.resize(keep);
+  }
 
   SweepConfig config_;
   perception::ClusteringConfig clustering_;  // min 1 / max unbounded: size limits applied on release
