@@ -6,14 +6,19 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 kind=${1:-release}
 jobs=${RSU_JOBS:-$(nproc)}
+# ccache, when installed (developer machines), lets several checkouts share compiled objects.
+launcher=()
+if command -v ccache >/dev/null 2>&1; then
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 case "$kind" in
   release)
-    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DRSU_WERROR=ON >/dev/null
+    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DRSU_WERROR=ON "${launcher[@]}" >/dev/null
     cmake --build build -j "$jobs"
     ;;
   asan)
     cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE=ON \
-      -DRSU_BUILD_BENCHMARKS=OFF -DRSU_WERROR=ON >/dev/null
+      -DRSU_BUILD_BENCHMARKS=OFF -DRSU_WERROR=ON "${launcher[@]}" >/dev/null
     cmake --build build-asan -j "$jobs"
     ;;
   *) echo "usage: $0 [release|asan]" >&2; exit 2 ;;
