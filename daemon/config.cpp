@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "common/angles.h"
+#include "daemon/dds_config.h"
 #include "io/yaml_field.h"
 #include "lidar/sensor_model.h"
 
@@ -55,10 +56,13 @@ Pose3 read_mount(const YamlField& f) {
 }
 
 LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
-  f.expect_map({"velodyne_udp", "pcd", "simulator"});
-  const int kinds = int{f.has("velodyne_udp")} + int{f.has("pcd")} + int{f.has("simulator")};
+  f.expect_map({"velodyne_udp", "pcd", "simulator", "dds_pointcloud2"});
+  const int kinds = int{f.has("velodyne_udp")} + int{f.has("pcd")} + int{f.has("simulator")} +
+                    int{f.has("dds_pointcloud2")};
   if (kinds != 1)
-    f.fail("exactly one of velodyne_udp, pcd, simulator is required");
+    f.fail("exactly one of velodyne_udp, pcd, simulator, dds_pointcloud2 is required");
+  if (f.has("dds_pointcloud2"))
+    return read_dds_pointcloud2_input(f.child("dds_pointcloud2"));
   if (f.has("velodyne_udp")) {
     const YamlField u = f.child("velodyne_udp");
     u.expect_map({"bind_address", "port"});
@@ -253,7 +257,7 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
     const YAML::Node root = io::parse_yaml(yaml_text, source_name);
     const YamlField f(root, "", c.source, 1);
     f.expect_map({"rsu_id", "lidar", "background", "perception", "v2i", "registry", "flood_limit",
-                  "association", "logging"});
+                  "association", "dds", "logging"});
     c.core.rsu_id = unsigned_of(f.required("rsu_id"), 9.007e15);
     if (c.core.rsu_id == 0)
       f.child("rsu_id").fail("must be non-zero");
@@ -272,6 +276,14 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
       read_flood(f.child("flood_limit"), c);
     if (f.has("association"))
       read_association(f.child("association"), c);
+    if (f.has("dds"))
+      c.dds = read_dds_config(f.child("dds"), base);
+    if (std::holds_alternative<DdsPointCloud2Input>(c.input) && !c.dds.enabled) {
+      f.child("lidar")
+          .child("input")
+          .child("dds_pointcloud2")
+          .fail("needs the DDS participant: set dds.enabled: true");
+    }
     if (f.has("logging"))
       read_logging(f.child("logging"), c);
   } catch (const io::YamlError& e) {
@@ -305,6 +317,9 @@ std::string summarize(const DaemonConfig& c) {
     out << "input pcd " << p->files.size() << " file(s) at " << p->rate_hz << " Hz\n";
   } else if (const auto* s = std::get_if<SimulatorInput>(&c.input)) {
     out << "input simulator " << s->scenario << "\n";
+  } else if (const auto* d = std::get_if<DdsPointCloud2Input>(&c.input)) {
+    out << "input dds_pointcloud2 " << d->topic << (d->whole_rotation ? " (whole rotations)" : " (parts)")
+        << "\n";
   }
   if (c.background_pcd_files.empty()) {
     out << "background learned from the first " << c.core.background.learning_frames << " rotations\n";
@@ -319,6 +334,13 @@ std::string summarize(const DaemonConfig& c) {
   if (c.advertisement.enabled) {
     out << "advertisement to " << c.advertisement.address << ":" << c.advertisement.port << " every "
         << c.advertisement.interval_s << " s\n";
+  }
+  if (c.dds.enabled) {
+    out << "dds domain " << c.dds.participant.domain_id << " ("
+        << (c.dds.participant.cyclone_config.empty() ? std::string("Cyclone defaults / CYCLONEDDS_URI")
+                                                     : c.dds.participant.cyclone_config)
+        << "), poses on " << (c.dds.pose_topic.empty() ? "-" : c.dds.pose_topic) << ", object list on "
+        << (c.dds.object_list_topic.empty() ? "-" : c.dds.object_list_topic) << "\n";
   }
   out << "log level " << c.logging.level << "\n";
   return out.str();

@@ -11,6 +11,9 @@
 #include <variant>
 #include <vector>
 
+#include "dds/participant.h"
+#include "dds/qos_config.h"
+#include "ros/pointcloud2_layout.h"
 #include "rsu/rsu_core_config.h"
 
 namespace rsu::daemon {
@@ -32,7 +35,33 @@ struct SimulatorInput {
   std::string scenario;
 };
 
-using LidarInput = std::variant<VelodyneUdpInput, PcdInput, SimulatorInput>;
+// sensor_msgs/PointCloud2 from a ROS 2 LiDAR driver over DDS (needs dds.enabled). Points in the
+// LiDAR's own frame (header.frame_id is not interpreted: lidar.mount places them).
+struct DdsPointCloud2Input {
+  std::string topic = "points";  // ROS name; "rt/points" on the wire
+  dds::QosConfig qos;
+  // true: each message is one whole rotation (ROS drivers' default), its clusters released at its
+  // end; false: each message is a part of a rotation in firing order, released as the sweep passes.
+  bool whole_rotation = true;
+  ros::RingOrder ring_order = ros::RingOrder::kChannel;  // kElevation: the Velodyne ROS drivers' ring
+};
+
+using LidarInput = std::variant<VelodyneUdpInput, PcdInput, SimulatorInput, DdsPointCloud2Input>;
+
+// The DDS data bus (Cyclone DDS, ROS 2 compatible; DESIGN.md §5). Off by default.
+struct DdsConfig {
+  bool enabled = false;
+  dds::ParticipantConfig participant;
+  // Each correction as geometry_msgs/PoseWithCovarianceStamped on this ROS topic, "{vehicle_id}"
+  // replaced by the vehicle's id; empty: not published.
+  std::string pose_topic = "vehicles/{vehicle_id}/rsu/pose_with_covariance";
+  std::string frame_id = "map";  // header.frame_id of the poses and the object list
+  dds::QosConfig pose_qos;
+  // Every current fix (rsu_msgs/VehicleFixArray) once per rotation; empty: not published.
+  std::string object_list_topic = "rsu/vehicle_fixes";
+  dds::QosConfig object_list_qos;
+  double object_list_max_age_s = 0.3;  // a fix older than this (sweep time) is no longer current
+};
 
 struct AdvertisementConfig {
   bool enabled = false;
@@ -58,6 +87,7 @@ struct DaemonConfig {
   std::string v2i_listen_address = "0.0.0.0";
   std::uint16_t v2i_port = 4500;
   AdvertisementConfig advertisement;
+  DdsConfig dds;
   LoggingConfig logging;
   // Where --stats-file style snapshots go: empty disables. Written on every stats interval and on exit.
   std::string stats_file;

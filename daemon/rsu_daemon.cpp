@@ -8,6 +8,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "daemon/dds_edge.h"
+#include "daemon/host_clock.h"
 #include "daemon/systemd_notify.h"
 #include "io/pcd_io.h"
 #include "lidar/velodyne_packet.h"
@@ -19,13 +21,6 @@ namespace rsu::daemon {
 namespace asio = boost::asio;
 
 namespace {
-
-// The common clock (DESIGN.md §3): the host's real-time clock, GNSS/PTP-disciplined on a real RSU.
-TimeNs now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 asio::ip::address parse_address(const std::string& text, const char* what) {
   boost::system::error_code ec;
@@ -66,7 +61,9 @@ RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, std::string conf
       watchdog_timer_(io),
       advertise_timer_(io),
       stats_timer_(io),
-      input_timer_(io) {}
+      input_timer_(io),
+      object_list_timer_(io),
+      sensor_model_(*sensor_model_by_name(config_.core.sensor_model)) {}
 
 RsuDaemon::~RsuDaemon() = default;
 
@@ -82,6 +79,7 @@ void RsuDaemon::start() {
 
   if (!config_.background_pcd_files.empty())
     load_background_pcd();
+  start_dds();
   start_input();
 
   signals_.async_wait([this](const boost::system::error_code& ec, int signal_number) {
@@ -150,9 +148,33 @@ void RsuDaemon::start_input() {
     }
     spdlog::info("replaying {} PCD frame(s) at {} Hz", pcd_frames_.size(), p->rate_hz);
     every(input_timer_, seconds(1.0 / p->rate_hz), &RsuDaemon::on_pcd_frame);
+  } else if (const auto* d = std::get_if<DdsPointCloud2Input>(&config_.input)) {
+    dds_->start_input(*d, sensor_model_.elevation_deg,
+                      [this](std::span<const LidarPoint> points, bool whole) {
+                        if (stopping_)
+                          return;
+                        handle_lidar_result(whole ? core_.on_lidar_frame(points, now_ns())
+                                                  : core_.on_lidar_points(points, now_ns()));
+                      });
   } else {
     start_simulator();
   }
+}
+
+// ---- DDS ------------------------------------------------------------------------------------------
+
+void RsuDaemon::start_dds() {
+  if (!config_.dds.enabled)
+    return;
+  dds_ = std::make_unique<DdsEdge>(io_, config_.dds, config_.core.rsu_id, bad_input_);
+  if (!config_.dds.object_list_topic.empty()) {
+    // Once per rotation (issue 6: the object list each rotation).
+    every(object_list_timer_, seconds(1.0 / sensor_model_.rotation_hz()), &RsuDaemon::on_object_list);
+  }
+}
+
+void RsuDaemon::on_object_list() {
+  dds_->publish_object_list(now_ns());
 }
 
 void RsuDaemon::receive_lidar() {
@@ -267,6 +289,8 @@ void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
 }
 
 void RsuDaemon::send_corrections(const std::vector<core::OutgoingCorrection>& corrections) {
+  if (dds_)
+    dds_->publish(corrections);
   for (const core::OutgoingCorrection& c : corrections) {
     boost::system::error_code ec;
     const auto address = asio::ip::make_address(c.destination.address, ec);
@@ -336,6 +360,8 @@ void RsuDaemon::on_v2i_datagram(std::size_t bytes) {
 
 void RsuDaemon::on_housekeeping() {
   const std::size_t expired = core_.expire(now_ns());
+  if (dds_)
+    dds_->forget_quiet_vehicles(now_ns());
   if (expired > 0)
     spdlog::info("{} silent vehicle(s) expired from the registry", expired);
   bad_input_.maybe_summarize(steady::now());
@@ -369,6 +395,8 @@ void RsuDaemon::log_counters(bool only_nonzero) const {
   }
   spdlog::info("stats: corrections_sent={} correction_sends_failed={} {}", corrections_sent_,
                correction_sends_failed_, line);
+  if (dds_)
+    spdlog::info("stats: {}", dds_->stats_line());
 }
 
 void RsuDaemon::write_stats_file() const {
@@ -386,6 +414,8 @@ void RsuDaemon::write_stats_file() const {
     out << "lidar_packets_rejected " << lidar_packets_rejected_ << "\n";
     for (const auto& [name, value] : core_.counters())
       out << name << " " << value << "\n";
+    if (dds_)
+      dds_->write_stats(out);
   }
   std::error_code ec;
   std::filesystem::rename(tmp, config_.stats_file, ec);
@@ -417,15 +447,16 @@ void RsuDaemon::reload() {
                  summary.background_kept ? "kept" : "to be learned again");
     const bool inputs_changed =
         next.v2i_listen_address != config_.v2i_listen_address || next.v2i_port != config_.v2i_port ||
-        next.input.index() != config_.input.index() ||
+        next.input.index() != config_.input.index() || next.dds.enabled != config_.dds.enabled ||
         (std::holds_alternative<VelodyneUdpInput>(next.input) &&
          (std::get<VelodyneUdpInput>(next.input).port != std::get<VelodyneUdpInput>(config_.input).port ||
           std::get<VelodyneUdpInput>(next.input).bind_address !=
               std::get<VelodyneUdpInput>(config_.input).bind_address));
     if (inputs_changed)
       spdlog::warn("socket addresses or the LiDAR input changed: they take effect after a restart");
-    // Sockets and input stay as they are; everything else follows the new file.
+    // Sockets, input and the DDS participant stay as they are; everything else follows the new file.
     next.input = config_.input;
+    next.dds = config_.dds;
     next.v2i_listen_address = config_.v2i_listen_address;
     next.v2i_port = config_.v2i_port;
     config_ = std::move(next);
@@ -461,7 +492,8 @@ void RsuDaemon::drain_and_stop() {
   signals_.cancel(ignored);
   v2i_socket_.close(ignored);
   lidar_socket_.close(ignored);
-  for (auto* t : {&housekeeping_timer_, &watchdog_timer_, &advertise_timer_, &stats_timer_, &input_timer_})
+  for (auto* t : {&housekeeping_timer_, &watchdog_timer_, &advertise_timer_, &stats_timer_, &input_timer_,
+                  &object_list_timer_})
     t->cancel();
   exit_code_ = 0;
   io_.stop();

@@ -18,6 +18,7 @@
 
 #include "daemon/bad_input_log.h"
 #include "daemon/config.h"
+#include "lidar/sensor_model.h"
 #include "rsu/rsu_core.h"
 
 namespace rsu::sim {
@@ -26,6 +27,8 @@ struct Scenario;
 }  // namespace rsu::sim
 
 namespace rsu::daemon {
+
+class DdsEdge;
 
 class RsuDaemon {
  public:
@@ -56,6 +59,8 @@ class RsuDaemon {
   void on_stats();
   void on_pcd_frame();
   void on_simulator_tick();
+  void on_object_list();
+  void start_dds();
 
   void start_input();
   void load_background_pcd();
@@ -85,6 +90,10 @@ class RsuDaemon {
   boost::asio::steady_timer advertise_timer_;
   boost::asio::steady_timer stats_timer_;
   boost::asio::steady_timer input_timer_;
+  boost::asio::steady_timer object_list_timer_;
+
+  SensorModel sensor_model_;
+  std::unique_ptr<DdsEdge> dds_;  // when dds.enabled (after bad_input_: it reports there)
 
   // PCD replay
   std::vector<std::vector<LidarPoint>> pcd_frames_;
