@@ -1,0 +1,298 @@
+#!/usr/bin/env python3
+"""rsud over DDS seen by an independent ROS 2-style participant (issue 6, "must show"): the real rsud
+with its dds_pointcloud2 input, the real Cyclone DDS on loopback (deploy/cyclonedds-loopback.xml, given
+to the participant through CYCLONEDDS_URI as a ROS 2 user would), `rsu-sim simulate` for the scene, the
+test announcer for the vehicle's V2I announcements, and tests/dds/participant/ros2_participant (plain C,
+its own IDL) publishing sensor_msgs/PointCloud2 and reading the geometry_msgs/PoseWithCovarianceStamped
+rsud publishes. Checks:
+  - poses arrive for the announced vehicle, each within 0.10 m and 2 deg of the simulated truth;
+  - the covariance is symmetric, positive semi-definite, its yaw variance finite and positive;
+  - header.stamp is the sweep time: inside the rotation of one published cloud (stamp .. stamp + 0.1 s);
+  - header.frame_id is the configured one;
+  - rsud counted every cloud it took and rejected none.
+Every wait is bounded; every child is killed on the way out.
+"""
+import argparse
+import math
+import os
+import shutil
+import socket
+import struct
+import subprocess
+import sys
+import time
+
+TRUTH = (14.0, -5.0, math.radians(25.0))  # footprint centre x, y (m), yaw (rad) of the static car
+FRAME_ID = "test_map"
+TOLERANCE_M = 0.10
+TOLERANCE_YAW = math.radians(2.0)
+ROTATION_S = 0.1
+
+
+def free_udp_port():
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+SCENE = """lidar:
+  model: vlp32c
+  mount: {x: 0, y: 0, z: 2.0}
+  noise: {range_sigma_m: 0.02, angle_sigma_rad: 0.001, seed: 11}
+scene:
+  ground: {half_extent_m: 60}
+  buildings:
+    - {x: 0, y: 30, length: 40, width: 10, height: 10}
+    - {x: 0, y: -30, length: 40, width: 10, height: 10}
+  poles:
+    - {x: -5, y: 3, radius: 0.15, height: 6}
+simulation: {start_s: 0.0, frames: 4}
+"""
+
+
+def read_pcd(path):
+    """The binary PCD rsu-sim writes: returns (fields, sizes, types, points, rows of bytes)."""
+    with open(path, "rb") as f:
+        blob = f.read()
+    header_end = blob.index(b"DATA binary\n") + len(b"DATA binary\n")
+    header = {}
+    for line in blob[:header_end].decode().splitlines():
+        words = line.split()
+        if words and not words[0].startswith("#"):
+            header[words[0]] = words[1:]
+    names, sizes, types = header["FIELDS"], [int(s) for s in header["SIZE"]], header["TYPE"]
+    n = int(header["POINTS"][0])
+    codes = {("F", 4): "f", ("F", 8): "d", ("U", 2): "H", ("U", 1): "B", ("U", 4): "I"}
+    fmt = "<" + "".join(codes[(t, s)] for t, s in zip(types, sizes))
+    step = struct.calcsize(fmt)
+    data = blob[header_end:header_end + n * step]
+    return [dict(zip(names, struct.unpack_from(fmt, data, i * step))) for i in range(n)]
+
+
+def write_cloud_file(points, path):
+    """A Velodyne-ROS-driver-like PointCloud2 (x y z _ intensity ring _ time, 32-byte points, time in
+    float32 seconds relative to the stamp = the rotation's first firing), in ros2_participant's format."""
+    t0 = min(p["time"] for p in points)
+    layout = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 16, 7), ("ring", 20, 4), ("time", 24, 7)]
+    step = 32
+    data = bytearray(step * len(points))
+    for i, p in enumerate(points):
+        struct.pack_into("<fff", data, i * step, p["x"], p["y"], p["z"])
+        struct.pack_into("<fHxxf", data, i * step + 16, p["intensity"], p["ring"], p["time"] - t0)
+    out = b"PC2B" + struct.pack("<IIIIBBI", len(points), 1, step, step * len(points), 0, 1, len(layout))
+    for name, offset, datatype in layout:
+        out += struct.pack("<B", len(name)) + name.encode() + struct.pack("<IBI", offset, datatype, 1)
+    out += struct.pack("<I", len(data)) + bytes(data)
+    with open(path, "wb") as f:
+        f.write(out)
+
+
+def symmetric_psd(m, n=6):
+    """Symmetric within 1e-12 and positive semi-definite (Cholesky of m + tiny ridge succeeds)."""
+    for i in range(n):
+        for j in range(n):
+            if abs(m[i * n + j] - m[j * n + i]) > 1e-12 * max(1.0, abs(m[i * n + j])):
+                return False
+    ridge = 1e-12
+    L = [[0.0] * n for _ in range(n)]
+    for i in range(n):
+        for j in range(i + 1):
+            s = m[i * n + j] + (ridge if i == j else 0.0) - sum(L[i][k] * L[j][k] for k in range(j))
+            if i == j:
+                if s <= 0:
+                    return False
+                L[i][i] = math.sqrt(s)
+            else:
+                L[i][j] = s / L[j][j]
+    return True
+
+
+class Harness:
+    def __init__(self, args):
+        self.args = args
+        self.work = args.work
+        shutil.rmtree(self.work, ignore_errors=True)
+        os.makedirs(self.work)
+        self.children = []
+
+    def path(self, name):
+        return os.path.join(self.work, name)
+
+    def spawn(self, cmd, out_name, env=None):
+        out = open(self.path(out_name), "w")
+        p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, env=env)
+        self.children.append(p)
+        return p
+
+    def kill_all(self):
+        for p in self.children:
+            if p.poll() is None:
+                p.kill()
+                try:
+                    p.wait(timeout=5)
+                except subprocess.TimeoutExpired:
+                    pass
+
+    def read(self, name):
+        with open(self.path(name)) as f:
+            return f.read()
+
+    def wait_for(self, condition, seconds, what, process=None, log=None):
+        deadline = time.time() + seconds
+        while time.time() < deadline:
+            if condition():
+                return
+            if process is not None and process.poll() is not None:
+                raise AssertionError("%s exited (code %s) while waiting for %s:\n%s" % (
+                    log, process.returncode, what, self.read(log) if log else ""))
+            time.sleep(0.02)
+        raise AssertionError("timed out after %.1f s waiting for %s" % (seconds, what))
+
+    def simulate(self):
+        with open(self.path("empty.yaml"), "w") as f:
+            f.write("name: empty\n" + SCENE)
+        vehicle = """vehicles:
+  - id: 1
+    shape: {length: 4.89, width: 1.92, height: 1.70}
+    trajectory:
+      static: {x: %.3f, y: %.3f, yaw_deg: %.3f}
+""" % (TRUTH[0], TRUTH[1], math.degrees(TRUTH[2]))
+        with open(self.path("street.yaml"), "w") as f:
+            f.write("name: street\n" + SCENE + vehicle)
+        for name, out in (("empty.yaml", "bg"), ("street.yaml", "street")):
+            r = subprocess.run([self.args.rsu_sim, "simulate", self.path(name), "-o", self.path(out), "--frames", "4"],
+                               capture_output=True, text=True, timeout=60)
+            assert r.returncode == 0, r.stdout + r.stderr
+        listing = lambda d: sorted(os.path.join(self.path(d), f) for f in os.listdir(self.path(d)) if f.endswith(".pcd"))
+        self.background = listing("bg")
+        self.clouds = []
+        for i, pcd in enumerate(listing("street")):
+            path = self.path("cloud_%d.bin" % i)
+            write_cloud_file(read_pcd(pcd), path)
+            self.clouds.append(path)
+        assert len(self.background) == 4 and len(self.clouds) == 4, (self.background, self.clouds)
+
+    def write_config(self, v2i_port, domain):
+        text = """rsu_id: 5
+lidar:
+  model: vlp32c
+  mount: {x: 0, y: 0, z: 2.0}
+  input:
+    dds_pointcloud2: {topic: test/points, whole_rotation: true, ring_order: channel}
+background:
+  pcd_files: [%s]
+v2i:
+  listen_address: 127.0.0.1
+  port: %d
+dds:
+  enabled: true
+  domain_id: %d
+  cyclone_config: %s
+  pose_topic: test/vehicles/{vehicle_id}/pose
+  frame_id: %s
+logging:
+  level: info
+  stats_interval_s: 0.5
+  stats_file: %s
+""" % (", ".join(self.background), v2i_port, domain, self.args.cyclone_config, FRAME_ID, self.path("stats"))
+        with open(self.path("rsud.yaml"), "w") as f:
+            f.write(text)
+
+    def stats(self):
+        values = {}
+        with open(self.path("stats")) as f:
+            for line in f:
+                k, v = line.split()
+                values[k] = float(v)
+        return values
+
+
+def parse_participant(text):
+    published, poses = [], []
+    for line in text.splitlines():
+        w = line.split()
+        if w and w[0] == "published":
+            published.append({"stamp": int(w[2]), "sent": int(w[3])})
+        elif w and w[0] == "pose" and len(w) == 47:
+            poses.append({"recv": int(w[1]), "stamp": int(w[2]), "frame_id": w[3],
+                          "x": float(w[4]), "y": float(w[5]), "z": float(w[6]),
+                          "q": [float(v) for v in w[7:11]], "cov": [float(v) for v in w[11:47]]})
+    return published, poses
+
+
+def run(h):
+    h.simulate()
+    v2i_port = free_udp_port()
+    domain = 100 + v2i_port % 100  # its own DDS domain: no crosstalk with tests running beside it
+    h.write_config(v2i_port, domain)
+    rsud = h.spawn([h.args.rsud, "--config", h.path("rsud.yaml")], "rsud.log")
+    h.wait_for(lambda: "ready: serving" in h.read("rsud.log"), 15, "rsud to become ready", rsud, "rsud.log")
+
+    seconds = 4.0
+    pose = "%f,%f,%f" % (TRUTH[0] + 0.4, TRUTH[1] - 0.3, TRUTH[2] + 0.05)  # the vehicle's own estimate is off
+    h.spawn([h.args.announcer, "--rsu", "127.0.0.1:%d" % v2i_port, "--bind", "127.0.0.1", "--id", "1", "--pose",
+             pose, "--seconds", str(seconds + 3)], "vehicle.out")
+    env = dict(os.environ, CYCLONEDDS_URI="file://" + os.path.abspath(h.args.cyclone_config))
+    participant = h.spawn([h.args.participant, "--domain", str(domain), "--cloud-topic", "rt/test/points",
+                           "--pose-topic", "rt/test/vehicles/1/pose", "--rotation-s", str(ROTATION_S),
+                           "--seconds", str(seconds), "--linger-s", "1.0"] + h.clouds, "participant.out", env)
+    rc = participant.wait(timeout=seconds + 20)
+    out = h.read("participant.out")
+    assert rc == 0, "participant exited with %d:\n%s" % (rc, out)
+    published, poses = parse_participant(out)
+    assert len(published) >= int(seconds * 10) - 1, "published %d clouds" % len(published)
+    assert len(poses) >= 10, "only %d poses received:\n%s\n%s" % (len(poses), out[-2000:], h.read("rsud.log")[-3000:])
+
+    stamps = sorted(p["stamp"] for p in published)
+    worst = 0.0
+    for p in poses:
+        err = math.hypot(p["x"] - TRUTH[0], p["y"] - TRUTH[1])
+        worst = max(worst, err)
+        assert err < TOLERANCE_M, "pose %s is %.3f m from the truth" % (p, err)
+        qx, qy, qz, qw = p["q"]
+        assert abs(qx * qx + qy * qy + qz * qz + qw * qw - 1.0) < 1e-9 and abs(qx) < 1e-12 and abs(qy) < 1e-12, p["q"]
+        yaw = 2.0 * math.atan2(qz, qw)
+        dyaw = abs((yaw - TRUTH[2] + math.pi) % (2 * math.pi) - math.pi)
+        assert dyaw < TOLERANCE_YAW, "yaw %.4f vs truth %.4f" % (yaw, TRUTH[2])
+        assert p["frame_id"] == FRAME_ID, p["frame_id"]
+        cov = p["cov"]
+        assert all(math.isfinite(v) for v in cov), cov
+        assert symmetric_psd(cov), "covariance not symmetric PSD: %s" % cov
+        assert 0.0 < cov[35] < 1.0, "yaw variance %g" % cov[35]
+        assert 0.0 < cov[0] < 1.0 and 0.0 < cov[7] < 1.0, cov
+        # The sweep time lies within the rotation of one cloud that was published.
+        assert any(s <= p["stamp"] <= s + int(ROTATION_S * 1e9) for s in stamps), \
+            "pose stamp %d is in no published rotation" % p["stamp"]
+        assert p["recv"] >= p["stamp"], p
+
+    h.wait_for(lambda: os.path.exists(h.path("stats")) and h.stats().get("dds.poses_published", 0) >= len(poses), 5,
+               "the stats file to count the poses")
+    s = h.stats()
+    rejected = sum(v for k, v in s.items() if k.startswith("dds.clouds_rejected."))
+    assert rejected == 0, s
+    assert s["dds.clouds_received"] >= len(published) - 2, (s["dds.clouds_received"], len(published))
+    assert s["dds.points_accepted"] > 20000 * s["dds.clouds_received"], s
+    print("ok: %d clouds published, %d taken by rsud, %d poses back, worst error %.3f m" % (
+        len(published), s["dds.clouds_received"], len(poses), worst))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--rsud", required=True)
+    ap.add_argument("--rsu-sim", required=True)
+    ap.add_argument("--announcer", required=True)
+    ap.add_argument("--participant", required=True)
+    ap.add_argument("--cyclone-config", required=True)
+    ap.add_argument("--work", required=True)
+    args = ap.parse_args()
+    h = Harness(args)
+    try:
+        run(h)
+    finally:
+        h.kill_all()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
