@@ -13,7 +13,6 @@ Every wait is bounded; every child is killed on the way out.
 import argparse
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -22,18 +21,14 @@ import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-
-
-def free_udp_port():
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+sys.path.insert(0, os.path.join(ROOT, "tools", "python"))
+from rsu_processes import ChildExited, Children, free_udp_port, wait_for_line  # noqa: E402
 
 
 class Run:
     def __init__(self, args):
         self.args = args
-        self.children = []
+        self.children = Children()
 
     def tool(self, name):
         path = os.path.join(self.args.build, name)
@@ -42,32 +37,16 @@ class Run:
         return path
 
     def spawn(self, cmd, stdout_path, stdin_path=None):
-        stdin = open(stdin_path) if stdin_path else subprocess.DEVNULL
-        out = open(stdout_path, "w")
-        p = subprocess.Popen(cmd, stdin=stdin, stdout=out, stderr=subprocess.STDOUT if stdout_path.endswith(".log")
-                             else open(stdout_path + ".err", "w"))
-        self.children.append(p)
-        return p
-
-    def kill_all(self):
-        for p in self.children:
-            if p.poll() is None:
-                p.kill()
-                try:
-                    p.wait(timeout=5)
-                except subprocess.TimeoutExpired:
-                    pass
+        # A .log gets stderr too; any other output file (a CSV) keeps stderr beside it in <file>.err.
+        return self.children.spawn(cmd, stdout_path, stdin_path=stdin_path,
+                                   stderr_path=None if stdout_path.endswith(".log") else stdout_path + ".err")
 
 
-def wait_for_line(path, text, seconds, proc):
-    deadline = time.time() + seconds
-    while time.time() < deadline:
-        if os.path.exists(path) and text in open(path).read():
-            return
-        if proc.poll() is not None:
-            sys.exit("run_experiment: rsud exited (%s) before it was ready:\n%s" % (proc.returncode, open(path).read()))
-        time.sleep(0.05)
-    sys.exit("run_experiment: rsud not ready after %d s:\n%s" % (seconds, open(path).read()))
+def wait_until_ready(log, rsud):
+    try:
+        wait_for_line(log, "ready: serving", 60, watch=rsud)
+    except (TimeoutError, ChildExited) as e:
+        sys.exit("run_experiment: rsud not ready: %s" % e)
 
 
 def live_run(run, exp, scenario_path, scenario, model, out):
@@ -106,7 +85,7 @@ logging:
             os.path.join(out, "rsud_%s.stats" % model)))
     log = os.path.join(out, "rsud_%s.log" % model)
     rsud = run.spawn([run.tool("daemon/rsud"), "--config", config], log)
-    wait_for_line(log, "ready: serving", 60, rsud)
+    wait_until_ready(log, rsud)
 
     # One clock: scenario time 0 is `epoch` on the host clock, for the packets and the announcements.
     epoch = time.time_ns() + 1_500_000_000
@@ -193,7 +172,7 @@ def main():
     except subprocess.CalledProcessError as e:
         sys.exit("run_experiment: %s failed with %d" % (" ".join(e.cmd[:2]), e.returncode))
     finally:
-        run.kill_all()
+        run.children.kill_all()
 
 
 if __name__ == "__main__":

@@ -22,15 +22,10 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "python"))
+from rsu_processes import ChildExited, Children, free_udp_port, wait_for  # noqa: E402
+
 TRUTH = (15.0, 4.0, math.radians(20.0))  # the vehicle's footprint centre and yaw (static)
-
-
-def free_udp_port(ip="127.0.0.1"):
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind((ip, 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 # ---- a hand-written protobuf encoder for V2iMessage{announcement} (proto/v2i.proto) ------------------
@@ -74,7 +69,7 @@ class Harness:
         self.work = args.work
         shutil.rmtree(self.work, ignore_errors=True)
         os.makedirs(self.work)
-        self.children = []
+        self.children = Children()
         self.lidar_port = free_udp_port()
         self.v2i_port = free_udp_port()
         self.rsud = None
@@ -85,19 +80,7 @@ class Harness:
         return os.path.join(self.work, name)
 
     def spawn(self, cmd, out_name):
-        out = open(self.path(out_name), "w")
-        p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT)
-        self.children.append(p)
-        return p
-
-    def kill_all(self):
-        for p in self.children:
-            if p.poll() is None:
-                p.kill()
-                try:
-                    p.wait(timeout=5)
-                except subprocess.TimeoutExpired:
-                    pass
+        return self.children.spawn(cmd, self.path(out_name))
 
     def write_scenarios(self):
         scene = """lidar:
@@ -192,15 +175,7 @@ logging:
         return values
 
     def wait_for(self, condition, seconds, what):
-        deadline = time.time() + seconds
-        while time.time() < deadline:
-            if condition():
-                return
-            if self.rsud is not None and self.rsud.poll() is not None:
-                raise AssertionError("rsud exited (code %s) while waiting for %s:\n%s" % (
-                    self.rsud.returncode, what, self.log()))
-            time.sleep(0.02)
-        raise AssertionError("timed out after %.1f s waiting for %s" % (seconds, what))
+        wait_for(condition, seconds, what, watch=self.rsud, watch_log=self.log_path)
 
     def stop_rsud(self):
         self.rsud.send_signal(signal.SIGTERM)
@@ -337,13 +312,13 @@ def main():
         h.write_config()
         {"corrections": case_corrections, "bad_input": case_bad_input,
          "restart_and_reload": case_restart_and_reload}[args.case](h)
-    except AssertionError as e:
+    except (AssertionError, TimeoutError, ChildExited) as e:
         print("FAIL: %s" % e)
         if h.log_path and os.path.exists(h.log_path):
             print("---- rsud log (tail) ----\n" + h.log()[-4000:])
         return 1
     finally:
-        h.kill_all()
+        h.children.kill_all()
     return 0
 
 
