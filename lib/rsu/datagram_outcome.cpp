@@ -18,6 +18,10 @@ const char* to_string(DatagramStage stage) {
       return "reply_to_mismatch";
     case DatagramStage::kRegistry:
       return "registry";
+    case DatagramStage::kFromSelf:
+      return "from_self";
+    case DatagramStage::kNotFresher:
+      return "not_fresher";
     case DatagramStage::kCount:
       break;
   }

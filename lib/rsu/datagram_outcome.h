@@ -1,4 +1,5 @@
-// What became of one datagram received on the announcement port: accepted into the registry, or the
+// What became of one datagram received on the announcement port (or shared by another RSU over the data
+// bus, RsuCore::on_peer_announcement): accepted into the registry, or the
 // stage that refused it and why. Every refusal has a reason, so the daemon counts and logs instead of
 // crashing or guessing (issue #4: garbage, truncated, oversized, unknown version, absurd sizes, floods).
 #pragma once
@@ -20,6 +21,9 @@ enum class DatagramStage : std::uint8_t {
   kValidation,       // an announcement with implausible content (see `validation`)
   kReplyToMismatch,  // reply_to is not the sender's address (RsuCoreConfig::require_reply_to_source_address)
   kRegistry,         // refused by the registry: rate limit, stale sequence, full (see `upsert`)
+  // Only for announcements shared by other RSUs (RsuCore::on_peer_announcement):
+  kFromSelf,    // this RSU's own share coming back from the bus
+  kNotFresher,  // the registry already holds this announcement (same or newer sequence)
   kCount,
 };
 

@@ -138,12 +138,47 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
                  laser_offsets_rad(model_)),
       background_ready_(config.background.learning_frames == 0),
       flood_limiter_(config.datagram_flood),
+      peer_flood_limiter_(config.peers.flood),
       validator_(config.announcement_limits),
       registry_(config.registry) {}
 
 DatagramOutcome RsuCore::finish(DatagramOutcome outcome) {
   datagram_stages_.add(outcome.stage);
   return outcome;
+}
+
+DatagramOutcome RsuCore::finish_peer(DatagramOutcome outcome) {
+  peer_stages_.add(outcome.stage);
+  return outcome;
+}
+
+std::optional<v2i::VehicleAnnouncement> RsuCore::screen(std::span<const std::uint8_t> bytes,
+                                                        const std::string& sender_address, TimeNs now,
+                                                        DatagramOutcome& out) {
+  v2i::DecodedMessage decoded = v2i::decode_v2i_message(bytes);
+  decode_counts_.add(decoded.status);
+  if (decoded.status != v2i::DecodeStatus::kOk) {
+    out.stage = DatagramStage::kDecode;
+    out.decode = decoded.status;
+    return std::nullopt;
+  }
+  auto* announcement = std::get_if<v2i::VehicleAnnouncement>(&decoded.body);
+  if (announcement == nullptr) {
+    out.stage = DatagramStage::kNotAnnouncement;
+    return std::nullopt;
+  }
+  out.vehicle_id = announcement->vehicle_id;
+  out.validation = validator_.check(*announcement, now);
+  if (out.validation != v2i::AnnouncementReason::kValid) {
+    out.stage = DatagramStage::kValidation;
+    return std::nullopt;
+  }
+  if (config_.require_reply_to_source_address &&
+      !same_address(announcement->reply_to.address, sender_address)) {
+    out.stage = DatagramStage::kReplyToMismatch;
+    return std::nullopt;
+  }
+  return std::move(*announcement);
 }
 
 DatagramOutcome RsuCore::on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source,
@@ -153,32 +188,41 @@ DatagramOutcome RsuCore::on_datagram(std::span<const std::uint8_t> bytes, const 
     out.stage = DatagramStage::kFloodLimited;
     return finish(out);
   }
-  const v2i::DecodedMessage decoded = v2i::decode_v2i_message(bytes);
-  decode_counts_.add(decoded.status);
-  if (decoded.status != v2i::DecodeStatus::kOk) {
-    out.stage = DatagramStage::kDecode;
-    out.decode = decoded.status;
+  const auto announcement = screen(bytes, source.address, now, out);
+  if (!announcement)
     return finish(out);
-  }
-  const auto* announcement = std::get_if<v2i::VehicleAnnouncement>(&decoded.body);
-  if (announcement == nullptr) {
-    out.stage = DatagramStage::kNotAnnouncement;
-    return finish(out);
-  }
-  out.vehicle_id = announcement->vehicle_id;
-  out.validation = validator_.check(*announcement, now);
-  if (out.validation != v2i::AnnouncementReason::kValid) {
-    out.stage = DatagramStage::kValidation;
-    return finish(out);
-  }
-  if (config_.require_reply_to_source_address &&
-      !same_address(announcement->reply_to.address, source.address)) {
-    out.stage = DatagramStage::kReplyToMismatch;
-    return finish(out);
-  }
   out.upsert = registry_.upsert(*announcement, source.address, now);
   out.stage = v2i::is_accepted(out.upsert) ? DatagramStage::kAccepted : DatagramStage::kRegistry;
   return finish(out);
+}
+
+DatagramOutcome RsuCore::on_peer_announcement(std::span<const std::uint8_t> datagram,
+                                              const PeerProvenance& from, TimeNs now) {
+  DatagramOutcome out;
+  if (from.origin_rsu_id == config_.rsu_id) {
+    out.stage = DatagramStage::kFromSelf;  // the bus delivers an RSU's own samples back to it
+    return finish_peer(out);
+  }
+  if (peer_flood_limiter_.admit("rsu:" + std::to_string(from.origin_rsu_id), now) !=
+      v2i::RateDecision::kAllowed) {
+    out.stage = DatagramStage::kFloodLimited;
+    return finish_peer(out);
+  }
+  const auto announcement = screen(datagram, from.sender.address, now, out);
+  if (!announcement)
+    return finish_peer(out);
+  // Checked before the registry so that a vehicle announcing to several RSUs, each sharing it, is not
+  // charged twice by the registry's per-source rate limit for one announcement.
+  const v2i::RegisteredVehicle* known = registry_.find(announcement->vehicle_id, now);
+  if (known != nullptr && !v2i::sequence_newer(announcement->sequence, known->announcement.sequence)) {
+    out.stage = DatagramStage::kNotFresher;
+    return finish_peer(out);
+  }
+  // The registry's source is the vehicle's address, as for its own datagrams: its rate limit and
+  // source-change count follow the vehicle, whichever RSU heard it.
+  out.upsert = registry_.upsert(*announcement, from.sender.address, now);
+  out.stage = v2i::is_accepted(out.upsert) ? DatagramStage::kAccepted : DatagramStage::kRegistry;
+  return finish_peer(out);
 }
 
 void RsuCore::to_map_frame(std::span<const LidarPoint> in, std::vector<LidarPoint>& out) const {
@@ -482,8 +526,8 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
     // vehicles are held: a near one is not split across batches (its faces are dense and its rings close
     // together), so its fix goes as soon as the sweep clusterer releases it (latency, issue 4).
     const bool far = (hypotheses[j].centre - lidar_xy_).norm() > g.hold_beyond_m;
-    held.release_at = far ? std::max(held.release_at,
-                                     std::min(passed_time(outline), held.first_time + rotation_period_ns_ / 2))
+    held.release_at = far ? std::max(held.release_at, std::min(passed_time(outline),
+                                                               held.first_time + rotation_period_ns_ / 2))
                           : held.first_time;
   }
 }
@@ -581,6 +625,7 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
 std::size_t RsuCore::expire(TimeNs now) {
   const std::size_t n = registry_.expire(now);
   flood_limiter_.prune(now);
+  peer_flood_limiter_.prune(now);
   for (auto it = channels_.begin(); it != channels_.end();) {
     it = registry_.find(it->first, now) == nullptr ? channels_.erase(it) : std::next(it);
   }
@@ -611,6 +656,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
   }
   fresh.channels_ = std::move(channels_);
   fresh.datagram_stages_ = datagram_stages_;
+  fresh.peer_stages_ = peer_stages_;
   fresh.decode_counts_ = decode_counts_;
   *this = std::move(fresh);
   return summary;
@@ -631,6 +677,10 @@ std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
   for (std::size_t i = 0; i < static_cast<std::size_t>(DatagramStage::kCount); ++i) {
     const auto s = static_cast<DatagramStage>(i);
     out.emplace_back(std::string("datagram.") + to_string(s), datagram_stages_.count(s));
+  }
+  for (std::size_t i = 0; i < static_cast<std::size_t>(DatagramStage::kCount); ++i) {
+    const auto s = static_cast<DatagramStage>(i);
+    out.emplace_back(std::string("peer.") + to_string(s), peer_stages_.count(s));
   }
   for (std::size_t i = 1; i < static_cast<std::size_t>(v2i::DecodeStatus::kCount); ++i) {
     const auto s = static_cast<v2i::DecodeStatus>(i);

@@ -24,6 +24,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -54,6 +55,14 @@ namespace rsu::core {
 struct SourceEndpoint {
   std::string address;
   std::uint16_t port = 0;
+};
+
+// Where an announcement shared by another RSU came from (README, "Several RSUs on one bus"). The
+// announcement itself travels as the vehicle's original datagram, so that every RSU decodes and checks
+// it itself (and, once announcements are signed, verifies the vehicle's own signature).
+struct PeerProvenance {
+  std::uint64_t origin_rsu_id = 0;  // the RSU that received it from the vehicle
+  SourceEndpoint sender;            // the vehicle, as that RSU saw it (reply_to is checked against it)
 };
 
 struct OutgoingCorrection {
@@ -97,6 +106,14 @@ class RsuCore {
   // One datagram from the announcement port, received at `now`. Never throws on content.
   DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now);
 
+  // An announcement another RSU accepted from a vehicle and shared on the data bus, received at `now`.
+  // It takes the datagram path (decode, validation, reply_to against the vehicle's address, registry),
+  // is rate-limited per origin RSU, and is skipped when the registry already holds that announcement
+  // or a newer one (the vehicle also announced here, or another peer shared it first). The caller must
+  // not share it again: only what on_datagram() accepted is shared, so nothing loops. Never throws.
+  DatagramOutcome on_peer_announcement(std::span<const std::uint8_t> datagram, const PeerProvenance& from,
+                                       TimeNs now);
+
   // One Velodyne data packet (UDP payload). `now` is its receive time: it resolves the packet's hour.
   LidarStepResult on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now);
   // Points in the SENSOR frame, in firing order, from a streaming source (a part of a rotation).
@@ -127,6 +144,7 @@ class RsuCore {
   const RsuCoreConfig& config() const { return config_; }
   const v2i::VehicleRegistry& registry() const { return registry_; }
   const v2i::EnumCounter<DatagramStage>& datagram_stages() const { return datagram_stages_; }
+  const v2i::EnumCounter<DatagramStage>& peer_stages() const { return peer_stages_; }
   const v2i::EnumCounter<v2i::DecodeStatus>& decode_counts() const { return decode_counts_; }
   const v2i::EnumCounter<v2i::AnnouncementReason>& validation_counts() const { return validator_.counts(); }
   const DecodeStats& packet_stats() const { return decoder_.stats(); }
@@ -166,7 +184,13 @@ class RsuCore {
   // The firing time at which the sweep has passed every point of `outline` (map frame) far enough
   // that no cluster near them can still grow (the SweepClusterer's closing rule).
   TimeNs passed_time(const std::vector<Eigen::Vector2d>& outline) const;
+  // Decoding, validation and the reply_to check, whatever carried the datagram: the announcement, or
+  // empty with `out` saying which stage refused it.
+  std::optional<v2i::VehicleAnnouncement> screen(std::span<const std::uint8_t> bytes,
+                                                 const std::string& sender_address, TimeNs now,
+                                                 DatagramOutcome& out);
   DatagramOutcome finish(DatagramOutcome outcome);
+  DatagramOutcome finish_peer(DatagramOutcome outcome);
 
   RsuCoreConfig config_;
   SensorModel model_;
@@ -181,6 +205,7 @@ class RsuCore {
   bool background_ready_ = false;
 
   v2i::SourceRateLimiter flood_limiter_;
+  v2i::SourceRateLimiter peer_flood_limiter_;  // keyed by origin RSU
   v2i::AnnouncementValidator validator_;
   v2i::VehicleRegistry registry_;
   std::unordered_map<std::uint64_t, VehicleChannel> channels_;
@@ -189,6 +214,7 @@ class RsuCore {
   LidarPoint sweep_point_;  // the latest point of the stream: where the rotation is, and when
 
   v2i::EnumCounter<DatagramStage> datagram_stages_;
+  v2i::EnumCounter<DatagramStage> peer_stages_;
   v2i::EnumCounter<v2i::DecodeStatus> decode_counts_;
   LidarStats lidar_stats_;
 

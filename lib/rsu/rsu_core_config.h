@@ -65,6 +65,15 @@ inline perception::PerceptionConfig rsu_perception_defaults() {
   return c;
 }
 
+// Announcements other RSUs accepted from vehicles and shared on the data bus (RsuCore::
+// on_peer_announcement; README, "Several RSUs on one bus").
+struct PeerConfig {
+  // Checked per origin RSU before decoding, as `datagram_flood` is per host: one RSU shares every
+  // vehicle it hears at about 10 Hz each, so this carries ~100 vehicles per peer with a burst of one
+  // second's worth, and a runaway peer costs one table lookup per sample.
+  v2i::RateLimitConfig flood{.bucket = {.rate_per_s = 1000.0, .burst = 1000.0}, .max_sources = 256};
+};
+
 struct RsuCoreConfig {
   std::uint64_t rsu_id = 1;
 
@@ -92,6 +101,7 @@ struct RsuCoreConfig {
   // Corrections go only to the address the announcement came from: otherwise anyone could aim the
   // RSU's corrections at a third party (a reflection attack).
   bool require_reply_to_source_address = true;
+  PeerConfig peers;
 
   // For the RSU advertisement (v2i::RsuAdvertisement).
   std::uint16_t announcement_port = 0;
