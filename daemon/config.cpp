@@ -277,7 +277,7 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
     if (f.has("association"))
       read_association(f.child("association"), c);
     if (f.has("dds"))
-      c.dds = read_dds_config(f.child("dds"), base);
+      c.dds = read_dds_config(f.child("dds"), base, c.core.peers);
     if (std::holds_alternative<DdsPointCloud2Input>(c.input) && !c.dds.enabled) {
       f.child("lidar")
           .child("input")
@@ -341,6 +341,8 @@ std::string summarize(const DaemonConfig& c) {
                                                      : c.dds.participant.cyclone_config)
         << "), poses on " << (c.dds.pose_topic.empty() ? "-" : c.dds.pose_topic) << ", object list on "
         << (c.dds.object_list_topic.empty() ? "-" : c.dds.object_list_topic) << "\n";
+    if (c.dds.peers.enabled)
+      out << "announcements shared with the other RSUs on " << c.dds.peers.topic << "\n";
   }
   out << "log level " << c.logging.level << "\n";
   return out.str();

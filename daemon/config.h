@@ -48,6 +48,17 @@ struct DdsPointCloud2Input {
 
 using LidarInput = std::variant<VelodyneUdpInput, PcdInput, SimulatorInput, DdsPointCloud2Input>;
 
+// The announcements the RSUs of a road share over the bus (daemon/peer_bus.h; README, "Several RSUs on
+// one bus"). The per-origin-RSU rate limit is the core's (core::PeerConfig). Needs dds.enabled.
+struct PeerBusConfig {
+  bool enabled = false;
+  std::string topic = "rsu/peer_announcements";  // ROS name; every RSU of the road uses the same
+  // Best effort: the writer never blocks rsud's thread on a lagging peer, and a lost announcement is
+  // superseded by the vehicle's next one. Samples have no key, so the depth is shared by all vehicles:
+  // deep enough for a burst of every vehicle of a busy road.
+  dds::QosConfig qos{.reliability = dds::Reliability::kBestEffort, .history_depth = 256};
+};
+
 // The DDS data bus (Cyclone DDS, ROS 2 compatible; DESIGN.md §5). Off by default.
 struct DdsConfig {
   bool enabled = false;
@@ -61,6 +72,7 @@ struct DdsConfig {
   std::string object_list_topic = "rsu/vehicle_fixes";
   dds::QosConfig object_list_qos;
   double object_list_max_age_s = 0.3;  // a fix older than this (sweep time) is no longer current
+  PeerBusConfig peers;
 };
 
 struct AdvertisementConfig {

@@ -35,11 +35,37 @@ std::string topic_of(const YamlField& f, bool may_be_empty) {
   return t;
 }
 
+PeerBusConfig read_peers(const YamlField& f, core::PeerConfig& limits) {
+  f.expect_map({"enabled", "topic", "qos", "rate_per_s", "burst", "max_sources"});
+  PeerBusConfig c;
+  if (f.has("enabled"))
+    c.enabled = flag_of(f.child("enabled"));
+  if (f.has("topic")) {
+    c.topic = topic_of(f.child("topic"), false);
+    if (c.topic.find_first_of("{}") != std::string::npos)
+      f.child("topic").fail("must not contain { or }");
+  }
+  if (f.has("qos"))
+    c.qos = dds::read_qos_config(f.child("qos"), c.qos);
+  auto& l = limits.flood;
+  l.bucket.rate_per_s = f.positive_or("rate_per_s", l.bucket.rate_per_s);
+  l.bucket.burst = f.positive_or("burst", l.bucket.burst);
+  if (l.bucket.burst < 1)
+    f.child("burst").fail("must be >= 1");
+  if (f.has("max_sources")) {
+    const double v = f.child("max_sources").number();
+    if (v < 1 || v > 1e6 || v != std::floor(v))
+      f.child("max_sources").fail("must be a whole number within [1, 1000000]");
+    l.max_sources = static_cast<std::size_t>(v);
+  }
+  return c;
+}
+
 }  // namespace
 
-DdsConfig read_dds_config(const YamlField& f, const std::filesystem::path& base) {
+DdsConfig read_dds_config(const YamlField& f, const std::filesystem::path& base, core::PeerConfig& peers) {
   f.expect_map({"enabled", "domain_id", "cyclone_config", "pose_topic", "frame_id", "pose_qos",
-                "object_list_topic", "object_list_qos", "object_list_max_age_s"});
+                "object_list_topic", "object_list_qos", "object_list_max_age_s", "peers"});
   DdsConfig c;
   if (f.has("enabled"))
     c.enabled = flag_of(f.child("enabled"));
@@ -75,6 +101,11 @@ DdsConfig read_dds_config(const YamlField& f, const std::filesystem::path& base)
   if (f.has("object_list_qos"))
     c.object_list_qos = dds::read_qos_config(f.child("object_list_qos"), c.object_list_qos);
   c.object_list_max_age_s = f.positive_or("object_list_max_age_s", c.object_list_max_age_s);
+  if (f.has("peers")) {
+    c.peers = read_peers(f.child("peers"), peers);
+    if (c.peers.enabled && !c.enabled)
+      f.child("peers").child("enabled").fail("needs the DDS participant: set dds.enabled: true");
+  }
   return c;
 }
 

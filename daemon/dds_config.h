@@ -10,7 +10,9 @@
 namespace rsu::daemon {
 
 // Relative paths (cyclone_config) are taken relative to `base`, the configuration file's folder.
-DdsConfig read_dds_config(const io::YamlField& field, const std::filesystem::path& base);
+// `peers` receives the per-origin-RSU limit of dds.peers (the core applies it).
+DdsConfig read_dds_config(const io::YamlField& field, const std::filesystem::path& base,
+                          core::PeerConfig& peers);
 DdsPointCloud2Input read_dds_pointcloud2_input(const io::YamlField& field);
 
 // The ROS topic name of `vehicle_id`'s poses: `pattern` with "{vehicle_id}" replaced.

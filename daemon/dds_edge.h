@@ -56,6 +56,9 @@ class DdsEdge {
   // Drops the pose writers of vehicles without a fix for a minute (vehicles come and go).
   void forget_quiet_vehicles(TimeNs now);
 
+  // For the other users of the bus in rsud (daemon/peer_bus.h): one participant per process.
+  const dds::Participant& participant() const { return participant_; }
+
   // Counters as "name value" lines (stats file) and as one log line.
   void write_stats(std::ostream& out) const;
   std::string stats_line() const;

@@ -10,6 +10,7 @@
 
 #include "daemon/dds_edge.h"
 #include "daemon/host_clock.h"
+#include "daemon/peer_bus.h"
 #include "daemon/systemd_notify.h"
 #include "io/pcd_io.h"
 #include "lidar/velodyne_packet.h"
@@ -167,6 +168,13 @@ void RsuDaemon::start_dds() {
   if (!config_.dds.enabled)
     return;
   dds_ = std::make_unique<DdsEdge>(io_, config_.dds, config_.core.rsu_id, bad_input_);
+  if (config_.dds.peers.enabled) {
+    peers_ = std::make_unique<PeerBus>(
+        io_, dds_->participant(), config_.dds.peers, config_.core.rsu_id, bad_input_,
+        [this](std::span<const std::uint8_t> datagram, const core::PeerProvenance& from) {
+          on_peer_announcement(datagram, from);
+        });
+  }
   if (!config_.dds.object_list_topic.empty()) {
     // Once per rotation (issue 6: the object list each rotation).
     every(object_list_timer_, seconds(1.0 / sensor_model_.rotation_hz()), &RsuDaemon::on_object_list);
@@ -336,12 +344,16 @@ void RsuDaemon::on_v2i_datagram(std::size_t bytes) {
     address = asio::ip::make_address_v4(asio::ip::v4_mapped, address.to_v6());
   }
   const core::SourceEndpoint source{address.to_string(), v2i_sender_.port()};
-  const core::DatagramOutcome outcome =
-      core_.on_datagram(std::span<const std::uint8_t>(v2i_buffer_.data(), bytes), source, now_ns());
+  const std::span<const std::uint8_t> datagram(v2i_buffer_.data(), bytes);
+  const TimeNs now = now_ns();
+  const core::DatagramOutcome outcome = core_.on_datagram(datagram, source, now);
   if (outcome.accepted()) {
     if (outcome.upsert == v2i::UpsertOutcome::kAdded) {
       spdlog::info("vehicle {} registered from {}:{}", outcome.vehicle_id, source.address, source.port);
     }
+    // Only what came from the vehicle itself is shared: a peer's announcement never goes round again.
+    if (peers_)
+      peers_->share(datagram, source, now);
     return;
   }
   // A repeated sequence number is what a retransmitting vehicle does: counted, not warned about.
@@ -356,12 +368,44 @@ void RsuDaemon::on_v2i_datagram(std::size_t bytes) {
   bad_input_.report(outcome.reason(), detail);
 }
 
+void RsuDaemon::on_peer_announcement(std::span<const std::uint8_t> datagram,
+                                     const core::PeerProvenance& from) {
+  if (stopping_)
+    return;
+  const core::DatagramOutcome outcome = core_.on_peer_announcement(datagram, from, now_ns());
+  if (outcome.accepted()) {
+    if (outcome.upsert == v2i::UpsertOutcome::kAdded) {
+      spdlog::info("vehicle {} registered from RSU {} (it heard the vehicle at {}:{})", outcome.vehicle_id,
+                   from.origin_rsu_id, from.sender.address, from.sender.port);
+    }
+    return;
+  }
+  // Not news (the vehicle announced here too, or another peer shared it first): counted only.
+  if (outcome.stage == core::DatagramStage::kNotFresher ||
+      (outcome.stage == core::DatagramStage::kRegistry &&
+       outcome.upsert == v2i::UpsertOutcome::kDuplicateSequence)) {
+    return;
+  }
+  std::string detail = std::to_string(datagram.size()) + " bytes shared by RSU " +
+                       std::to_string(from.origin_rsu_id) + " from " + from.sender.address + ":" +
+                       std::to_string(from.sender.port);
+  if (outcome.stage == core::DatagramStage::kFromSelf)
+    detail += ": another RSU on the bus has this RSU's rsu_id (rsu_id must be unique)";
+  else if (outcome.vehicle_id != 0)
+    detail += ", vehicle " + std::to_string(outcome.vehicle_id);
+  bad_input_.report("peer:" + outcome.reason(), detail);
+}
+
 // ---- timers ---------------------------------------------------------------------------------------
 
 void RsuDaemon::on_housekeeping() {
   const std::size_t expired = core_.expire(now_ns());
   if (dds_)
     dds_->forget_quiet_vehicles(now_ns());
+  if (peers_ && peers_->peers() != peers_seen_) {
+    peers_seen_ = peers_->peers();
+    spdlog::info("peer bus: {} other RSU(s) share announcements", peers_seen_);
+  }
   if (expired > 0)
     spdlog::info("{} silent vehicle(s) expired from the registry", expired);
   bad_input_.maybe_summarize(steady::now());
@@ -397,6 +441,8 @@ void RsuDaemon::log_counters(bool only_nonzero) const {
                correction_sends_failed_, line);
   if (dds_)
     spdlog::info("stats: {}", dds_->stats_line());
+  if (peers_)
+    spdlog::info("stats: {}", peers_->stats_line());
 }
 
 void RsuDaemon::write_stats_file() const {
@@ -416,6 +462,8 @@ void RsuDaemon::write_stats_file() const {
       out << name << " " << value << "\n";
     if (dds_)
       dds_->write_stats(out);
+    if (peers_)
+      peers_->write_stats(out);
   }
   std::error_code ec;
   std::filesystem::rename(tmp, config_.stats_file, ec);

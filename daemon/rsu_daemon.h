@@ -29,6 +29,7 @@ struct Scenario;
 namespace rsu::daemon {
 
 class DdsEdge;
+class PeerBus;
 
 class RsuDaemon {
  public:
@@ -48,6 +49,7 @@ class RsuDaemon {
   void receive_v2i();
   void receive_lidar();
   void on_v2i_datagram(std::size_t bytes);
+  void on_peer_announcement(std::span<const std::uint8_t> datagram, const core::PeerProvenance& from);
   void handle_lidar_result(const core::LidarStepResult& result);
   void send_corrections(const std::vector<core::OutgoingCorrection>& corrections);
   void become_ready_if_possible();
@@ -93,7 +95,9 @@ class RsuDaemon {
   boost::asio::steady_timer object_list_timer_;
 
   SensorModel sensor_model_;
-  std::unique_ptr<DdsEdge> dds_;  // when dds.enabled (after bad_input_: it reports there)
+  std::unique_ptr<DdsEdge> dds_;    // when dds.enabled (after bad_input_: it reports there)
+  std::unique_ptr<PeerBus> peers_;  // when dds.peers.enabled (after dds_: it uses its participant)
+  std::uint32_t peers_seen_ = 0;    // other RSUs on the peer bus at the last housekeeping
 
   // PCD replay
   std::vector<std::vector<LidarPoint>> pcd_frames_;

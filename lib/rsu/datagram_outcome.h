@@ -22,7 +22,7 @@ enum class DatagramStage : std::uint8_t {
   kReplyToMismatch,  // reply_to is not the sender's address (RsuCoreConfig::require_reply_to_source_address)
   kRegistry,         // refused by the registry: rate limit, stale sequence, full (see `upsert`)
   // Only for announcements shared by other RSUs (RsuCore::on_peer_announcement):
-  kFromSelf,    // this RSU's own share coming back from the bus
+  kFromSelf,    // carries this RSU's own id: its own share echoed back, or another RSU with the same id
   kNotFresher,  // the registry already holds this announcement (same or newer sequence)
   kCount,
 };

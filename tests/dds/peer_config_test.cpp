@@ -1,0 +1,80 @@
+// rsud.yaml's dds.peers section (announcements shared between RSUs): defaults, every key, located errors.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "daemon/config.h"
+
+namespace rsu::daemon {
+namespace {
+
+DaemonConfig parse(const std::string& dds_section) {
+  return parse_config(
+      "rsu_id: 1\n"
+      "lidar:\n"
+      "  model: vlp16\n"
+      "  mount: {x: 0, y: 0, z: 2}\n"
+      "  input: {velodyne_udp: {}}\n" +
+          dds_section,
+      "/etc/rsud/rsud.yaml");
+}
+
+std::string refusal(const std::string& dds_section) {
+  try {
+    parse(dds_section);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(PeerConfig, OffByDefaultBestEffortAndTheCoreLimits) {
+  const DaemonConfig c = parse("dds: {enabled: true}\n");
+  EXPECT_FALSE(c.dds.peers.enabled);
+  EXPECT_EQ(c.dds.peers.topic, "rsu/peer_announcements");
+  EXPECT_EQ(c.dds.peers.qos.reliability, dds::Reliability::kBestEffort);
+  const core::PeerConfig defaults;
+  EXPECT_EQ(c.core.peers.flood.bucket.rate_per_s, defaults.flood.bucket.rate_per_s);
+  EXPECT_EQ(c.core.peers.flood.bucket.burst, defaults.flood.bucket.burst);
+}
+
+TEST(PeerConfig, ReadsEveryKeyIntoTheBusAndTheCore) {
+  const DaemonConfig c = parse(
+      "dds:\n"
+      "  enabled: true\n"
+      "  peers:\n"
+      "    enabled: true\n"
+      "    topic: road7/announcements\n"
+      "    qos: {reliability: reliable, history_depth: 32}\n"
+      "    rate_per_s: 50\n"
+      "    burst: 20\n"
+      "    max_sources: 8\n");
+  EXPECT_TRUE(c.dds.peers.enabled);
+  EXPECT_EQ(c.dds.peers.topic, "road7/announcements");
+  EXPECT_EQ(c.dds.peers.qos.reliability, dds::Reliability::kReliable);
+  EXPECT_EQ(c.dds.peers.qos.history_depth, 32U);
+  EXPECT_EQ(c.core.peers.flood.bucket.rate_per_s, 50.0);
+  EXPECT_EQ(c.core.peers.flood.bucket.burst, 20.0);
+  EXPECT_EQ(c.core.peers.flood.max_sources, 8U);
+}
+
+TEST(PeerConfig, ErrorsNameFileLineAndField) {
+  EXPECT_EQ(refusal("dds:\n  peers: {enabled: true}\n"),
+            "/etc/rsud/rsud.yaml:7: dds.peers.enabled: needs the DDS participant: set dds.enabled: true");
+  EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {enabled: true, topci: x}\n")
+                .find("/etc/rsud/rsud.yaml:8: dds.peers.topci: unknown field"),
+            std::string::npos);
+  EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {topic: \"a b\"}\n")
+                .find("dds.peers.topic: \"a b\" is not a ROS"),
+            std::string::npos);
+  EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {burst: 0.5}\n").find("dds.peers.burst: must be >= 1"),
+            std::string::npos);
+  EXPECT_NE(
+      refusal("dds:\n  enabled: true\n  peers: {max_sources: 0}\n").find("dds.peers.max_sources: must be"),
+      std::string::npos);
+  EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {qos: {history_depth: many}}\n").find("dds.peers.qos"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace rsu::daemon
