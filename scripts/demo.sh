@@ -5,7 +5,9 @@
 #      fed with Velodyne packets by the simulator, and the real vehicle client announcing, receiving
 #      corrections and fusing them; prints the paper's table and writes the figures;
 #   2. the paper's pilot experiment (Sec. 3.1): heat maps over distance x yaw, both LiDAR models;
-#   3. one simulated frame of the street as PCD, pcap and a top-down picture.
+#   3. one simulated frame of the street as PCD, pcap and a top-down picture;
+#   4. two RSUs on one DDS bus hand a driving vehicle over: two rsud, two simulated LiDARs 40 m apart, one
+#      rsu-vehicle announcing to the first RSU only; prints corrections per RSU, gaps, jumps, errors.
 # Everything goes to out/ (override with OUT=...).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -28,6 +30,11 @@ echo "heat maps: $OUT/pilot/<model>_<metric>.png; every cell: $OUT/pilot/cells.c
 echo "== 3. one frame of the street: PCD, Velodyne pcap, top-down picture =="
 build/tools/rsu-sim simulate scenarios/corridor.yaml --out "$OUT/sim" | tail -3
 $PY eval/plots/topdown.py "$OUT/sim"
+
+echo "== 4. two RSUs on one DDS bus hand a driving vehicle over (issue 6) =="
+$PY tests/integration/handover_integration.py --rsud build/daemon/rsud --rsu-sim build/tools/rsu-sim \
+  --vehicle build/vehicle_client/rsu-vehicle --work "$OUT/handover" | tee "$OUT/handover_summary.txt"
+echo "every correction: $OUT/handover/corrections.csv; logs and stats of both rsud: $OUT/handover/"
 
 echo
 echo "== the realistic experiment's table (also $OUT/corridor/table.txt) =="
