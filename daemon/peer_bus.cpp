@@ -87,8 +87,8 @@ void PeerBus::take_samples() {
 
 void PeerBus::on_sample(const Sample& s) {
   ++received_;
-  if (s.sender_address == nullptr || s.sender_port == 0 || s.datagram._length > kMaxDatagramBytes ||
-      (s.datagram._length > 0 && s.datagram._buffer == nullptr)) {
+  if (s.sender_address == nullptr || s.sender_address[0] == '\0' || s.sender_port == 0 ||
+      s.datagram._length > kMaxDatagramBytes || (s.datagram._length > 0 && s.datagram._buffer == nullptr)) {
     ++received_malformed_;
     bad_input_.report("peer_sample", "from rsu " + std::to_string(s.origin_rsu_id) +
                                          ": no sender, or a datagram of " +
