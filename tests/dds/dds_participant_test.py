@@ -9,7 +9,10 @@ rsud publishes. Checks:
   - the covariance is symmetric, positive semi-definite, its yaw variance finite and positive;
   - header.stamp is the sweep time: inside the rotation of one published cloud (stamp .. stamp + 0.1 s);
   - header.frame_id is the configured one;
-  - rsud counted every cloud it took and rejected none, and drains and exits 0 on SIGTERM.
+  - the object list (rsu_msgs/VehicleFixArray, read through IDL written from dds/msg/*.msg) arrives
+    once per rotation with the vehicle at the same place;
+  - two broken layouts among the clouds are refused, counted by reason and logged, the rest served;
+  - rsud drains and exits 0 on SIGTERM.
 Every wait is bounded; every child is killed on the way out.
 """
 import argparse
@@ -17,25 +20,20 @@ import math
 import os
 import shutil
 import signal
-import socket
 import struct
 import subprocess
 import sys
-import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "tools", "python"))
+from rsu_processes import Children, free_udp_port, read_text, wait_for_line  # noqa: E402
 
 TRUTH = (14.0, -5.0, math.radians(25.0))  # footprint centre x, y (m), yaw (rad) of the static car
 FRAME_ID = "test_map"
 TOLERANCE_M = 0.10
 TOLERANCE_YAW = math.radians(2.0)
 ROTATION_S = 0.1
-
-
-def free_udp_port():
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
+BROKEN = {"short": "data_too_short", "overlap": "overlapping_fields"}  # cloud file kind -> rsud's reason
 
 
 SCENE = """lidar:
@@ -72,17 +70,21 @@ def read_pcd(path):
     return [dict(zip(names, struct.unpack_from(fmt, data, i * step))) for i in range(n)]
 
 
-def write_cloud_file(points, path):
+def write_cloud_file(points, path, broken=None):
     """A Velodyne-ROS-driver-like PointCloud2 (x y z _ intensity ring _ time, 32-byte points, time in
-    float32 seconds relative to the stamp = the rotation's first firing), in ros2_participant's format."""
+    float32 seconds relative to the stamp = the rotation's first firing), in ros2_participant's format.
+    broken: "short" declares more points than the data holds, "overlap" puts y over x."""
     t0 = min(p["time"] for p in points)
     layout = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 16, 7), ("ring", 20, 4), ("time", 24, 7)]
+    if broken == "overlap":
+        layout[1] = ("y", 2, 7)
     step = 32
     data = bytearray(step * len(points))
     for i, p in enumerate(points):
         struct.pack_into("<fff", data, i * step, p["x"], p["y"], p["z"])
         struct.pack_into("<fHxxf", data, i * step + 16, p["intensity"], p["ring"], p["time"] - t0)
-    out = b"PC2B" + struct.pack("<IIIIBBI", len(points), 1, step, step * len(points), 0, 1, len(layout))
+    width = len(points) + (1000 if broken == "short" else 0)
+    out = b"PC2B" + struct.pack("<IIIIBBI", width, 1, step, step * width, 0, 1, len(layout))
     for name, offset, datatype in layout:
         out += struct.pack("<B", len(name)) + name.encode() + struct.pack("<IBI", offset, datatype, 1)
     out += struct.pack("<I", len(data)) + bytes(data)
@@ -116,40 +118,16 @@ class Harness:
         self.work = args.work
         shutil.rmtree(self.work, ignore_errors=True)
         os.makedirs(self.work)
-        self.children = []
+        self.children = Children()
 
     def path(self, name):
         return os.path.join(self.work, name)
 
     def spawn(self, cmd, out_name, env=None):
-        out = open(self.path(out_name), "w")
-        p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, env=env)
-        self.children.append(p)
-        return p
-
-    def kill_all(self):
-        for p in self.children:
-            if p.poll() is None:
-                p.kill()
-                try:
-                    p.wait(timeout=5)
-                except subprocess.TimeoutExpired:
-                    pass
+        return self.children.spawn(cmd, self.path(out_name), env=env)
 
     def read(self, name):
-        with open(self.path(name)) as f:
-            return f.read()
-
-    def wait_for(self, condition, seconds, what, process=None, log=None):
-        deadline = time.time() + seconds
-        while time.time() < deadline:
-            if condition():
-                return
-            if process is not None and process.poll() is not None:
-                raise AssertionError("%s exited (code %s) while waiting for %s:\n%s" % (
-                    log, process.returncode, what, self.read(log) if log else ""))
-            time.sleep(0.02)
-        raise AssertionError("timed out after %.1f s waiting for %s" % (seconds, what))
+        return read_text(self.path(name))
 
     def simulate(self):
         with open(self.path("empty.yaml"), "w") as f:
@@ -169,11 +147,17 @@ class Harness:
         listing = lambda d: sorted(os.path.join(self.path(d), f) for f in os.listdir(self.path(d)) if f.endswith(".pcd"))
         self.background = listing("bg")
         self.clouds = []
-        for i, pcd in enumerate(listing("street")):
+        street = listing("street")
+        for i, pcd in enumerate(street):
             path = self.path("cloud_%d.bin" % i)
             write_cloud_file(read_pcd(pcd), path)
             self.clouds.append(path)
-        assert len(self.background) == 4 and len(self.clouds) == 4, (self.background, self.clouds)
+        # Two broken layouts among the good clouds: each must be refused, counted, and harm nothing.
+        for kind in BROKEN:
+            path = self.path("broken_%s.bin" % kind)
+            write_cloud_file(read_pcd(street[0]), path, broken=kind)
+            self.clouds.append(path)
+        assert len(self.background) == 4 and len(street) == 4, (self.background, street)
 
     def write_config(self, v2i_port, domain):
         text = """rsu_id: 5
@@ -192,6 +176,7 @@ dds:
   domain_id: %d
   cyclone_config: %s
   pose_topic: test/vehicles/{vehicle_id}/pose
+  object_list_topic: test/fixes
   frame_id: %s
 logging:
   level: info
@@ -211,7 +196,7 @@ logging:
 
 
 def parse_participant(text):
-    published, poses = [], []
+    published, poses, lists = [], [], []
     for line in text.splitlines():
         w = line.split()
         if w and w[0] == "published":
@@ -220,7 +205,11 @@ def parse_participant(text):
             poses.append({"recv": int(w[1]), "stamp": int(w[2]), "frame_id": w[3],
                           "x": float(w[4]), "y": float(w[5]), "z": float(w[6]),
                           "q": [float(v) for v in w[7:11]], "cov": [float(v) for v in w[11:47]]})
-    return published, poses
+        elif w and w[0] == "fixes" and len(w) == 6 + 6 * int(w[5]):
+            fixes = [{"vehicle": int(w[i]), "sweep": int(w[i + 1]), "x": float(w[i + 2]), "y": float(w[i + 3]),
+                      "yaw_var": float(w[i + 4]), "points": int(w[i + 5])} for i in range(6, len(w), 6)]
+            lists.append({"recv": int(w[1]), "stamp": int(w[2]), "frame_id": w[3], "rsu": int(w[4]), "fixes": fixes})
+    return published, poses, lists
 
 
 def run(h):
@@ -229,7 +218,7 @@ def run(h):
     domain = 100 + v2i_port % 100  # its own DDS domain: no crosstalk with tests running beside it
     h.write_config(v2i_port, domain)
     rsud = h.spawn([h.args.rsud, "--config", h.path("rsud.yaml")], "rsud.log")
-    h.wait_for(lambda: "ready: serving" in h.read("rsud.log"), 15, "rsud to become ready", rsud, "rsud.log")
+    wait_for_line(h.path("rsud.log"), "ready: serving", 15, watch=rsud)
 
     seconds = 4.0
     pose = "%f,%f,%f" % (TRUTH[0] + 0.4, TRUTH[1] - 0.3, TRUTH[2] + 0.05)  # the vehicle's own estimate is off
@@ -237,12 +226,15 @@ def run(h):
              pose, "--seconds", str(seconds + 3)], "vehicle.out")
     env = dict(os.environ, CYCLONEDDS_URI="file://" + os.path.abspath(h.args.cyclone_config))
     participant = h.spawn([h.args.participant, "--domain", str(domain), "--cloud-topic", "rt/test/points",
-                           "--pose-topic", "rt/test/vehicles/1/pose", "--rotation-s", str(ROTATION_S),
-                           "--seconds", str(seconds), "--linger-s", "1.0"] + h.clouds, "participant.out", env)
+                           "--pose-topic", "rt/test/vehicles/1/pose", "--fixes-topic", "rt/test/fixes",
+                           "--rotation-s", str(ROTATION_S), "--seconds", str(seconds), "--linger-s", "1.0"] + h.clouds,
+                          "participant.out", env)
     rc = participant.wait(timeout=seconds + 20)
     out = h.read("participant.out")
     assert rc == 0, "participant exited with %d:\n%s" % (rc, out)
-    published, poses = parse_participant(out)
+    published, poses, lists = parse_participant(out)
+    n_files = len(h.clouds)
+    broken_sent = sum(1 for i in range(len(published)) if i % n_files >= n_files - len(BROKEN))
     assert len(published) >= int(seconds * 10) - 1, "published %d clouds" % len(published)
     assert len(poses) >= 10, "only %d poses received:\n%s\n%s" % (len(poses), out[-2000:], h.read("rsud.log")[-3000:])
 
@@ -268,19 +260,35 @@ def run(h):
             "pose stamp %d is in no published rotation" % p["stamp"]
         assert p["recv"] >= p["stamp"], p
 
-    h.wait_for(lambda: os.path.exists(h.path("stats")) and h.stats().get("dds.poses_published", 0) >= len(poses), 5,
-               "the stats file to count the poses")
-    s = h.stats()
-    rejected = sum(v for k, v in s.items() if k.startswith("dds.clouds_rejected."))
-    assert rejected == 0, s
-    assert s["dds.clouds_received"] >= len(published) - 2, (s["dds.clouds_received"], len(published))
-    assert s["dds.points_accepted"] > 20000 * s["dds.clouds_received"], s
+    # The object list: once per rotation, from rsu 5, in the configured frame, holding the vehicle while
+    # its fixes are current, at the same place as its poses.
+    assert len(lists) >= int(seconds * 10) // 2, "only %d object lists" % len(lists)
+    with_vehicle = [l for l in lists if any(f["vehicle"] == 1 for f in l["fixes"])]
+    assert len(with_vehicle) >= len(lists) // 2, "the vehicle is in %d of %d lists" % (len(with_vehicle), len(lists))
+    for l in lists:
+        assert l["rsu"] == 5 and l["frame_id"] == FRAME_ID, l
+        for f in l["fixes"]:
+            assert f["vehicle"] == 1 and math.hypot(f["x"] - TRUTH[0], f["y"] - TRUTH[1]) < TOLERANCE_M, f
+            assert 0 <= l["stamp"] - f["sweep"] <= 0.3e9 + 1e6, (l["stamp"], f)  # object_list_max_age_s
+            assert 0.0 < f["yaw_var"] < 1.0 and f["points"] > 0, f
+
     # A clean drain (and, under ASan, no leak report): SIGTERM, exit 0.
     rsud.send_signal(signal.SIGTERM)
     rc = rsud.wait(timeout=15)
     assert rc == 0 and "stopped:" in h.read("rsud.log"), "rsud exited with %d:\n%s" % (rc, h.read("rsud.log")[-3000:])
-    print("ok: %d clouds published, %d taken by rsud, %d poses back, worst error %.3f m" % (
-        len(published), s["dds.clouds_received"], len(poses), worst))
+    s = h.stats()
+    for kind, reason in BROKEN.items():
+        n = s["dds.clouds_rejected." + reason]
+        assert 1 <= n <= broken_sent, "%s: %d rejected of %d broken sent" % (reason, n, broken_sent)
+        assert ("dds_pointcloud2." + reason) in h.read("rsud.log"), "no log line for " + reason
+    rejected = sum(v for k, v in s.items() if k.startswith("dds.clouds_rejected."))
+    assert s["dds.clouds_received"] >= len(published) - 2, (s["dds.clouds_received"], len(published))
+    assert s["dds.clouds_accepted"] == s["dds.clouds_received"] - rejected, s
+    assert s["dds.points_accepted"] > 20000 * s["dds.clouds_accepted"], s
+    assert s["dds.poses_published"] >= len(poses), s
+    print("ok: %d clouds published (%d broken), %d taken by rsud (%d refused), %d poses and %d object lists back, "
+          "worst error %.3f m" % (len(published), broken_sent, s["dds.clouds_received"], rejected, len(poses),
+                                  len(lists), worst))
 
 
 def main():
@@ -296,7 +304,7 @@ def main():
     try:
         run(h)
     finally:
-        h.kill_all()
+        h.children.kill_all()
 
 
 if __name__ == "__main__":

@@ -32,12 +32,13 @@ class Children:
     def __init__(self):
         self.procs = []
 
-    def spawn(self, cmd, stdout_path, stdin_path=None, stderr_path=None):
-        """Starts cmd with stdout to stdout_path and stderr to stderr_path (default: into stdout)."""
+    def spawn(self, cmd, stdout_path, stdin_path=None, stderr_path=None, env=None):
+        """Starts cmd with stdout to stdout_path and stderr to stderr_path (default: into stdout); env
+        replaces the environment when given."""
         stdin = open(stdin_path) if stdin_path else subprocess.DEVNULL
         out = open(stdout_path, "w")
         err = open(stderr_path, "w") if stderr_path else subprocess.STDOUT
-        p = subprocess.Popen(cmd, stdin=stdin, stdout=out, stderr=err)
+        p = subprocess.Popen(cmd, stdin=stdin, stdout=out, stderr=err, env=env)
         self.procs.append(p)
         return p
 

@@ -5,9 +5,12 @@
  * It publishes sensor_msgs/msg/PointCloud2 on --cloud-topic at --rate-hz for --seconds, cycling
  * through the cloud files given (prepared by the test driver, format below), stamped one rotation
  * (--rotation-s) before the moment of publication, as a LiDAR driver stamps a rotation with its start.
- * Meanwhile it reads geometry_msgs/msg/PoseWithCovarianceStamped on --pose-topic. It prints, flushed:
+ * Meanwhile it reads geometry_msgs/msg/PoseWithCovarianceStamped on --pose-topic and, with
+ * --fixes-topic, rsud's object list (rsu_msgs/msg/VehicleFixArray, IDL from its .msg). It prints, flushed:
  *   published <index> <header stamp ns> <publication time ns>
  *   pose <receive time ns> <stamp ns> <frame_id> <x> <y> <z> <qx> <qy> <qz> <qw> <36 covariance values>
+ *   fixes <receive time ns> <stamp ns> <frame_id> <rsu_id> <count> then per fix:
+ *         <vehicle_id> <sweep time ns> <x> <y> <yaw variance> <points used>
  *   matched <cloud readers>
  * Cloud file (little endian): "PC2B", u32 width, u32 height, u32 point_step, u32 row_step,
  * u8 is_bigendian, u8 is_dense, u32 field count, per field {u8 name length, name, u32 offset,
@@ -132,8 +135,39 @@ static void print_poses(dds_entity_t reader) {
   }
 }
 
+static void print_fixes(dds_entity_t reader) {
+  void* samples[8] = {NULL};
+  dds_sample_info_t infos[8];
+  for (;;) {
+    samples[0] = NULL;
+    const dds_return_t n = dds_take(reader, samples, infos, 8, 8);
+    check(n, "taking object lists");
+    if (n == 0)
+      return;
+    const int64_t now = wall_ns();
+    for (int i = 0; i < n; ++i) {
+      if (!infos[i].valid_data)
+        continue;
+      const rsu_msgs_msg_dds__VehicleFixArray_* m = samples[i];
+      const int64_t stamp = (int64_t)m->header.stamp.sec * 1000000000LL + m->header.stamp.nanosec;
+      printf("fixes %lld %lld %s %llu %u", (long long)now, (long long)stamp,
+             m->header.frame_id[0] ? m->header.frame_id : "-", (unsigned long long)m->rsu_id,
+             m->fixes._length);
+      for (uint32_t k = 0; k < m->fixes._length; ++k) {
+        const rsu_msgs_msg_dds__VehicleFix_* f = &m->fixes._buffer[k];
+        const int64_t sweep = (int64_t)f->sweep_time.sec * 1000000000LL + f->sweep_time.nanosec;
+        printf(" %llu %lld %.6f %.6f %.9g %u", (unsigned long long)f->vehicle_id, (long long)sweep,
+               f->pose.pose.position.x, f->pose.pose.position.y, f->pose.covariance[35], f->points_used);
+      }
+      printf("\n");
+    }
+    dds_return_loan(reader, samples, n);
+    fflush(stdout);
+  }
+}
+
 int main(int argc, char** argv) {
-  const char *cloud_topic = "rt/points", *pose_topic = NULL, *frame_id = "lidar";
+  const char *cloud_topic = "rt/points", *pose_topic = NULL, *fixes_topic = NULL, *frame_id = "lidar";
   int domain = -1; /* -1: Cyclone's default domain (0, or what CYCLONEDDS_URI says) */
   double rate_hz = 10.0, seconds = 3.0, rotation_s = 0.1, linger_s = 1.0;
   const char* files[MAX_CLOUDS];
@@ -144,6 +178,8 @@ int main(int argc, char** argv) {
       cloud_topic = argv[++i];
     else if (!strcmp(argv[i], "--pose-topic") && more)
       pose_topic = argv[++i];
+    else if (!strcmp(argv[i], "--fixes-topic") && more)
+      fixes_topic = argv[++i];
     else if (!strcmp(argv[i], "--frame-id") && more)
       frame_id = argv[++i];
     else if (!strcmp(argv[i], "--domain") && more)
@@ -193,6 +229,14 @@ int main(int argc, char** argv) {
     pose_reader = dds_create_reader(participant, pt, qos, NULL);
     check(pose_reader, "creating the pose reader");
   }
+  dds_entity_t fixes_reader = 0;
+  if (fixes_topic != NULL) {
+    const dds_entity_t ft =
+        dds_create_topic(participant, &rsu_msgs_msg_dds__VehicleFixArray__desc, fixes_topic, NULL, NULL);
+    check(ft, "creating the object list topic");
+    fixes_reader = dds_create_reader(participant, ft, qos, NULL);
+    check(fixes_reader, "creating the object list reader");
+  }
   dds_delete_qos(qos);
 
   /* Discovery is asynchronous: wait (bounded) until the cloud reader is matched. */
@@ -237,10 +281,15 @@ int main(int argc, char** argv) {
     fflush(stdout);
     if (pose_reader)
       print_poses(pose_reader);
+    if (fixes_reader)
+      print_fixes(fixes_reader);
   }
   const int64_t linger_end = wall_ns() + (int64_t)(linger_s * 1e9);
-  while (pose_reader && wall_ns() < linger_end) {
-    print_poses(pose_reader);
+  while ((pose_reader || fixes_reader) && wall_ns() < linger_end) {
+    if (pose_reader)
+      print_poses(pose_reader);
+    if (fixes_reader)
+      print_fixes(fixes_reader);
     sleep_until(wall_ns() + 10000000LL);
   }
   for (int i = 0; i < nfiles; ++i) {
