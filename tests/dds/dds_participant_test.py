@@ -4,10 +4,11 @@ with its dds_pointcloud2 input, the real Cyclone DDS on loopback (deploy/cyclone
 to the participant through CYCLONEDDS_URI as a ROS 2 user would), `rsu-sim simulate` for the scene, the
 test announcer for the vehicle's V2I announcements, and tests/dds/participant/ros2_participant (plain C,
 its own IDL) publishing sensor_msgs/PointCloud2 and reading the geometry_msgs/PoseWithCovarianceStamped
-rsud publishes. Checks:
+rsud publishes, each message one rotation (or, with --parts N, each rotation in N messages and rsud's
+input set to whole_rotation: false). Checks:
   - poses arrive for the announced vehicle, each within 0.10 m and 2 deg of the simulated truth;
   - the covariance is symmetric, positive semi-definite, its yaw variance finite and positive;
-  - header.stamp is the sweep time: inside the rotation of one published cloud (stamp .. stamp + 0.1 s);
+  - header.stamp is the sweep time: inside the span of one published cloud (stamp .. stamp + 0.1 s / N);
   - header.frame_id is the configured one;
   - the object list (rsu_msgs/VehicleFixArray, read through IDL written from dds/msg/*.msg) arrives
     once per rotation with the vehicle at the same place;
@@ -148,10 +149,15 @@ class Harness:
         self.background = listing("bg")
         self.clouds = []
         street = listing("street")
+        parts = self.args.parts
         for i, pcd in enumerate(street):
-            path = self.path("cloud_%d.bin" % i)
-            write_cloud_file(read_pcd(pcd), path)
-            self.clouds.append(path)
+            points = read_pcd(pcd)
+            t0 = min(p["time"] for p in points)
+            for k in range(parts):  # parts of the rotation by firing time, in order
+                part = [p for p in points if k == min(parts - 1, int((p["time"] - t0) / ROTATION_S * parts))]
+                path = self.path("cloud_%d_%d.bin" % (i, k))
+                write_cloud_file(part, path)
+                self.clouds.append(path)
         # Two broken layouts among the good clouds: each must be refused, counted, and harm nothing.
         for kind in BROKEN:
             path = self.path("broken_%s.bin" % kind)
@@ -165,7 +171,7 @@ lidar:
   model: vlp32c
   mount: {x: 0, y: 0, z: 2.0}
   input:
-    dds_pointcloud2: {topic: test/points, whole_rotation: true, ring_order: channel}
+    dds_pointcloud2: {topic: test/points, whole_rotation: %s, ring_order: channel, qos: {history_depth: 8}}
 background:
   pcd_files: [%s]
 v2i:
@@ -182,7 +188,7 @@ logging:
   level: info
   stats_interval_s: 0.5
   stats_file: %s
-""" % (", ".join(self.background), v2i_port, domain, self.args.cyclone_config, FRAME_ID, self.path("stats"))
+""" % ("true" if self.args.parts == 1 else "false", ", ".join(self.background), v2i_port, domain, self.args.cyclone_config, FRAME_ID, self.path("stats"))
         with open(self.path("rsud.yaml"), "w") as f:
             f.write(text)
 
@@ -227,7 +233,8 @@ def run(h):
     env = dict(os.environ, CYCLONEDDS_URI="file://" + os.path.abspath(h.args.cyclone_config))
     participant = h.spawn([h.args.participant, "--domain", str(domain), "--cloud-topic", "rt/test/points",
                            "--pose-topic", "rt/test/vehicles/1/pose", "--fixes-topic", "rt/test/fixes",
-                           "--rotation-s", str(ROTATION_S), "--seconds", str(seconds), "--linger-s", "1.0"] + h.clouds,
+                           "--rate-hz", str(10 * h.args.parts), "--rotation-s", str(ROTATION_S / h.args.parts),
+                           "--seconds", str(seconds), "--linger-s", "1.0"] + h.clouds,
                           "participant.out", env)
     rc = participant.wait(timeout=seconds + 20)
     out = h.read("participant.out")
@@ -235,7 +242,7 @@ def run(h):
     published, poses, lists = parse_participant(out)
     n_files = len(h.clouds)
     broken_sent = sum(1 for i in range(len(published)) if i % n_files >= n_files - len(BROKEN))
-    assert len(published) >= int(seconds * 10) - 1, "published %d clouds" % len(published)
+    assert len(published) >= int(seconds * 10 * h.args.parts) - 1, "published %d clouds" % len(published)
     assert len(poses) >= 10, "only %d poses received:\n%s\n%s" % (len(poses), out[-2000:], h.read("rsud.log")[-3000:])
 
     stamps = sorted(p["stamp"] for p in published)
@@ -256,7 +263,7 @@ def run(h):
         assert 0.0 < cov[35] < 1.0, "yaw variance %g" % cov[35]
         assert 0.0 < cov[0] < 1.0 and 0.0 < cov[7] < 1.0, cov
         # The sweep time lies within the rotation of one cloud that was published.
-        assert any(s <= p["stamp"] <= s + int(ROTATION_S * 1e9) for s in stamps), \
+        assert any(s <= p["stamp"] <= s + int(ROTATION_S / h.args.parts * 1e9) for s in stamps), \
             "pose stamp %d is in no published rotation" % p["stamp"]
         assert p["recv"] >= p["stamp"], p
 
@@ -284,7 +291,7 @@ def run(h):
     rejected = sum(v for k, v in s.items() if k.startswith("dds.clouds_rejected."))
     assert s["dds.clouds_received"] >= len(published) - 2, (s["dds.clouds_received"], len(published))
     assert s["dds.clouds_accepted"] == s["dds.clouds_received"] - rejected, s
-    assert s["dds.points_accepted"] > 20000 * s["dds.clouds_accepted"], s
+    assert s["dds.points_accepted"] > 20000 / h.args.parts * s["dds.clouds_accepted"], s
     assert s["dds.poses_published"] >= len(poses), s
     print("ok: %d clouds published (%d broken), %d taken by rsud (%d refused), %d poses and %d object lists back, "
           "worst error %.3f m" % (len(published), broken_sent, s["dds.clouds_received"], rejected, len(poses),
@@ -299,6 +306,7 @@ def main():
     ap.add_argument("--participant", required=True)
     ap.add_argument("--cyclone-config", required=True)
     ap.add_argument("--work", required=True)
+    ap.add_argument("--parts", type=int, default=1, help="publish each rotation in this many messages")
     args = ap.parse_args()
     h = Harness(args)
     try:

@@ -107,60 +107,49 @@ static void check(dds_return_t rc, const char* what) {
   }
 }
 
-static void print_poses(dds_entity_t reader) {
-  void* samples[8] = {NULL};
-  dds_sample_info_t infos[8];
-  for (;;) {
-    samples[0] = NULL;
-    const dds_return_t n = dds_take(reader, samples, infos, 8, 8);
-    check(n, "taking poses");
-    if (n == 0)
-      return;
-    const int64_t now = wall_ns();
-    for (int i = 0; i < n; ++i) {
-      if (!infos[i].valid_data)
-        continue;
-      const geometry_msgs_msg_dds__PoseWithCovarianceStamped_* m = samples[i];
-      const int64_t stamp = (int64_t)m->header.stamp.sec * 1000000000LL + m->header.stamp.nanosec;
-      const geometry_msgs_msg_dds__Pose_* p = &m->pose.pose;
-      printf("pose %lld %lld %s %.6f %.6f %.6f %.9f %.9f %.9f %.9f", (long long)now, (long long)stamp,
-             m->header.frame_id[0] ? m->header.frame_id : "-", p->position.x, p->position.y, p->position.z,
-             p->orientation.x, p->orientation.y, p->orientation.z, p->orientation.w);
-      for (int k = 0; k < 36; ++k)
-        printf(" %.9g", m->pose.covariance[k]);
-      printf("\n");
-    }
-    dds_return_loan(reader, samples, n);
-    fflush(stdout);
-  }
+static int64_t stamp_ns(const builtin_interfaces_msg_dds__Time_* t) {
+  return (int64_t)t->sec * 1000000000LL + t->nanosec;
 }
 
-static void print_fixes(dds_entity_t reader) {
+static void print_pose(const void* sample, int64_t now) {
+  const geometry_msgs_msg_dds__PoseWithCovarianceStamped_* m = sample;
+  const geometry_msgs_msg_dds__Pose_* p = &m->pose.pose;
+  printf("pose %lld %lld %s %.6f %.6f %.6f %.9f %.9f %.9f %.9f", (long long)now,
+         (long long)stamp_ns(&m->header.stamp), m->header.frame_id[0] ? m->header.frame_id : "-",
+         p->position.x, p->position.y, p->position.z, p->orientation.x, p->orientation.y, p->orientation.z,
+         p->orientation.w);
+  for (int k = 0; k < 36; ++k)
+    printf(" %.9g", m->pose.covariance[k]);
+  printf("\n");
+}
+
+static void print_fix_list(const void* sample, int64_t now) {
+  const rsu_msgs_msg_dds__VehicleFixArray_* m = sample;
+  printf("fixes %lld %lld %s %llu %u", (long long)now, (long long)stamp_ns(&m->header.stamp),
+         m->header.frame_id[0] ? m->header.frame_id : "-", (unsigned long long)m->rsu_id, m->fixes._length);
+  for (uint32_t k = 0; k < m->fixes._length; ++k) {
+    const rsu_msgs_msg_dds__VehicleFix_* f = &m->fixes._buffer[k];
+    printf(" %llu %lld %.6f %.6f %.9g %u", (unsigned long long)f->vehicle_id,
+           (long long)stamp_ns(&f->sweep_time), f->pose.pose.position.x, f->pose.pose.position.y,
+           f->pose.covariance[35], f->points_used);
+  }
+  printf("\n");
+}
+
+/* Takes every sample waiting on `reader` and prints each valid one with `print`. */
+static void print_all(dds_entity_t reader, void (*print)(const void*, int64_t)) {
   void* samples[8] = {NULL};
   dds_sample_info_t infos[8];
   for (;;) {
     samples[0] = NULL;
     const dds_return_t n = dds_take(reader, samples, infos, 8, 8);
-    check(n, "taking object lists");
+    check(n, "taking samples");
     if (n == 0)
       return;
     const int64_t now = wall_ns();
-    for (int i = 0; i < n; ++i) {
-      if (!infos[i].valid_data)
-        continue;
-      const rsu_msgs_msg_dds__VehicleFixArray_* m = samples[i];
-      const int64_t stamp = (int64_t)m->header.stamp.sec * 1000000000LL + m->header.stamp.nanosec;
-      printf("fixes %lld %lld %s %llu %u", (long long)now, (long long)stamp,
-             m->header.frame_id[0] ? m->header.frame_id : "-", (unsigned long long)m->rsu_id,
-             m->fixes._length);
-      for (uint32_t k = 0; k < m->fixes._length; ++k) {
-        const rsu_msgs_msg_dds__VehicleFix_* f = &m->fixes._buffer[k];
-        const int64_t sweep = (int64_t)f->sweep_time.sec * 1000000000LL + f->sweep_time.nanosec;
-        printf(" %llu %lld %.6f %.6f %.9g %u", (unsigned long long)f->vehicle_id, (long long)sweep,
-               f->pose.pose.position.x, f->pose.pose.position.y, f->pose.covariance[35], f->points_used);
-      }
-      printf("\n");
-    }
+    for (int i = 0; i < n; ++i)
+      if (infos[i].valid_data)
+        print(samples[i], now);
     dds_return_loan(reader, samples, n);
     fflush(stdout);
   }
@@ -280,16 +269,16 @@ int main(int argc, char** argv) {
     printf("published %lld %lld %lld\n", (long long)i, (long long)stamp, (long long)published);
     fflush(stdout);
     if (pose_reader)
-      print_poses(pose_reader);
+      print_all(pose_reader, print_pose);
     if (fixes_reader)
-      print_fixes(fixes_reader);
+      print_all(fixes_reader, print_fix_list);
   }
   const int64_t linger_end = wall_ns() + (int64_t)(linger_s * 1e9);
   while ((pose_reader || fixes_reader) && wall_ns() < linger_end) {
     if (pose_reader)
-      print_poses(pose_reader);
+      print_all(pose_reader, print_pose);
     if (fixes_reader)
-      print_fixes(fixes_reader);
+      print_all(fixes_reader, print_fix_list);
     sleep_until(wall_ns() + 10000000LL);
   }
   for (int i = 0; i < nfiles; ++i) {
