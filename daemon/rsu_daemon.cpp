@@ -496,6 +496,8 @@ void RsuDaemon::reload() {
     const bool inputs_changed =
         next.v2i_listen_address != config_.v2i_listen_address || next.v2i_port != config_.v2i_port ||
         next.input.index() != config_.input.index() || next.dds.enabled != config_.dds.enabled ||
+        next.dds.peers.enabled != config_.dds.peers.enabled ||
+        next.dds.peers.topic != config_.dds.peers.topic ||
         (std::holds_alternative<VelodyneUdpInput>(next.input) &&
          (std::get<VelodyneUdpInput>(next.input).port != std::get<VelodyneUdpInput>(config_.input).port ||
           std::get<VelodyneUdpInput>(next.input).bind_address !=
