@@ -8,6 +8,7 @@
 #include "daemon/dds_config.h"
 #include "io/yaml_field.h"
 #include "lidar/sensor_model.h"
+#include "v2i/security/key_text.h"
 
 namespace rsu::daemon {
 
@@ -229,6 +230,36 @@ void read_association(const YamlField& f, DaemonConfig& c) {
   a.size_absolute_tolerance_m = f.non_negative_or("size_absolute_tolerance_m", a.size_absolute_tolerance_m);
 }
 
+// security: mode, key files, replay window (lib/v2i/message_authenticator.h).
+void read_security(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
+  f.expect_map({"mode", "key_file", "trust_list_file", "max_age_s", "max_future_s", "max_signers"});
+  auto& s = c.core.security;
+  if (f.has("mode")) {
+    const YamlField m = f.child("mode");
+    const std::string v = m.text();
+    if (v == "signed")
+      s.mode = v2i::SecurityMode::kSigned;
+    else if (v == "insecure")
+      s.mode = v2i::SecurityMode::kInsecure;
+    else
+      m.fail("expected signed or insecure, got \"" + v + "\"");
+  }
+  if (f.has("key_file"))
+    c.security.key_file = path_of(f.child("key_file"), base);
+  if (f.has("trust_list_file"))
+    c.security.trust_list_file = path_of(f.child("trust_list_file"), base);
+  s.replay.max_age = from_seconds(f.positive_or("max_age_s", to_seconds(s.replay.max_age)));
+  s.replay.max_future = from_seconds(f.positive_or("max_future_s", to_seconds(s.replay.max_future)));
+  if (s.replay.max_age > 60 * kNsPerSecond)
+    f.child("max_age_s").fail("must be <= 60 s (a longer window lets captured messages be replayed)");
+  if (s.replay.max_future > 60 * kNsPerSecond)
+    f.child("max_future_s").fail("must be <= 60 s");
+  if (f.has("max_signers"))
+    s.replay.max_signers = unsigned_of(f.child("max_signers"), 1e7);
+  if (s.replay.max_signers == 0)
+    f.child("max_signers").fail("must be >= 1");
+}
+
 void read_logging(const YamlField& f, DaemonConfig& c) {
   f.expect_map({"level", "bad_input_log_first", "summary_interval_s", "stats_interval_s", "stats_file"});
   if (f.has("level")) {
@@ -256,7 +287,7 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
   try {
     const YAML::Node root = io::parse_yaml(yaml_text, source_name);
     const YamlField f(root, "", c.source, 1);
-    f.expect_map({"rsu_id", "lidar", "background", "perception", "v2i", "registry", "flood_limit",
+    f.expect_map({"rsu_id", "lidar", "background", "perception", "v2i", "security", "registry", "flood_limit",
                   "association", "dds", "logging"});
     c.core.rsu_id = unsigned_of(f.required("rsu_id"), 9.007e15);
     if (c.core.rsu_id == 0)
@@ -270,6 +301,9 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
       read_v2i(f.child("v2i"), c);
     else
       c.core.announcement_port = c.core.correction_port = c.v2i_port;
+    // Signed is the default: without a security section the keys are read from /etc/rsud/keys/.
+    if (f.has("security"))
+      read_security(f.child("security"), c, base);
     if (f.has("registry"))
       read_registry(f.child("registry"), c);
     if (f.has("flood_limit"))
@@ -294,6 +328,26 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
   return c;
 }
 
+void load_security(DaemonConfig& c) {
+  if (c.core.security.mode != v2i::SecurityMode::kSigned)
+    return;
+  const auto read = [&](const std::string& path, const char* field) {
+    try {
+      return io::read_text_file(path);
+    } catch (const io::YamlError& e) {
+      throw ConfigError(c.source + ": security." + field + ": " + e.what());
+    }
+  };
+  try {
+    c.core.signing_key =
+        v2i::security::parse_secret_key_text(read(c.security.key_file, "key_file"), c.security.key_file);
+    c.core.trust_list = v2i::security::parse_trust_list_text(
+        read(c.security.trust_list_file, "trust_list_file"), c.security.trust_list_file);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(e.what());  // "<file>:<line>: ..."
+  }
+}
+
 DaemonConfig load_config(const std::string& path) {
   std::string text;
   try {
@@ -301,7 +355,9 @@ DaemonConfig load_config(const std::string& path) {
   } catch (const io::YamlError& e) {
     throw ConfigError(e.what());
   }
-  return parse_config(text, path);
+  DaemonConfig config = parse_config(text, path);
+  load_security(config);
+  return config;
 }
 
 std::string summarize(const DaemonConfig& c) {
@@ -343,6 +399,21 @@ std::string summarize(const DaemonConfig& c) {
         << (c.dds.object_list_topic.empty() ? "-" : c.dds.object_list_topic) << "\n";
     if (c.dds.peers.enabled)
       out << "announcements shared with the other RSUs on " << c.dds.peers.topic << "\n";
+  }
+  const auto& s = c.core.security;
+  if (s.mode == v2i::SecurityMode::kSigned) {
+    out << "security signed: key ";
+    if (c.core.signing_key)
+      out << v2i::security::to_hex(c.core.signing_key->key_id()) << " (" << c.security.key_file << ")";
+    else
+      out << c.security.key_file << " (not read)";
+    out << ", trust list " << c.security.trust_list_file << ": "
+        << c.core.trust_list.count(v2i::security::SignerRole::kVehicle) << " vehicle key(s), "
+        << c.core.trust_list.count(v2i::security::SignerRole::kRsu) << " RSU key(s); window -"
+        << to_seconds(s.replay.max_age) << " s / +" << to_seconds(s.replay.max_future)
+        << " s, sequence window 64\n";
+  } else {
+    out << "security INSECURE: nothing is signed or verified (local development only)\n";
   }
   out << "log level " << c.logging.level << "\n";
   return out.str();

@@ -91,9 +91,18 @@ struct LoggingConfig {
   double stats_interval_s = 60.0;  // all counters at info level; 0 disables
 };
 
+// Where the RSU's keys come from (security: section). The mode and replay limits go to
+// core.security; load_security() reads the files into core.signing_key and core.trust_list.
+// Signed is the default, also when the file has no security: section; the files then are these.
+struct SecurityFiles {
+  std::string key_file = "/etc/rsud/keys/rsu.key";            // the RSU's Ed25519 secret key (rsu-keygen)
+  std::string trust_list_file = "/etc/rsud/keys/trust.list";  // keys accepted (v2i/security/trust_list.h)
+};
+
 struct DaemonConfig {
   std::string source;  // the file it was read from
   core::RsuCoreConfig core;
+  SecurityFiles security;
   LidarInput input;
   std::vector<std::string> background_pcd_files;  // when set: the background, instead of learning
   std::string v2i_listen_address = "0.0.0.0";
@@ -111,9 +120,15 @@ class ConfigError : public std::runtime_error {
 };
 
 // Throws ConfigError "<source>:<line>: <field>: <what is wrong>" (or the core's complaint about an
-// unusable combination, e.g. an unknown LiDAR model). Relative paths in the file (PCD files, scenario)
-// are taken relative to the file's folder.
+// unusable combination, e.g. an unknown LiDAR model). Relative paths in the file (PCD files, scenario,
+// key files) are taken relative to the file's folder. parse_config reads no other file: the key files
+// are read by load_security().
 DaemonConfig parse_config(const std::string& yaml_text, const std::string& source_name);
+// Reads the key file and the trust list named in config.security into config.core (signed mode; in
+// insecure mode nothing is read). Throws ConfigError naming the file (and line) when one is missing,
+// unreadable or malformed.
+void load_security(DaemonConfig& config);
+// parse_config + load_security.
 DaemonConfig load_config(const std::string& path);
 
 // A few lines describing the configuration (for --check-config and the start-up log).

@@ -77,6 +77,7 @@ void RsuDaemon::start() {
   if (config_.advertisement.enabled)
     v2i_socket_.set_option(asio::socket_base::broadcast(true), ignored);
   spdlog::info("listening for V2I announcements on {}:{}", v2i.address().to_string(), v2i.port());
+  warn_if_insecure();
 
   if (!config_.background_pcd_files.empty())
     load_background_pcd();
@@ -409,6 +410,18 @@ void RsuDaemon::on_housekeeping() {
   if (expired > 0)
     spdlog::info("{} silent vehicle(s) expired from the registry", expired);
   bad_input_.maybe_summarize(steady::now());
+  if (steady::now() - last_insecure_warning_ >= std::chrono::minutes(1))
+    warn_if_insecure();
+}
+
+void RsuDaemon::warn_if_insecure() {
+  if (config_.core.security.mode != v2i::SecurityMode::kInsecure)
+    return;
+  last_insecure_warning_ = steady::now();
+  spdlog::warn(
+      "*** INSECURE MODE: announcements are NOT verified and corrections are NOT signed; anyone "
+      "can register any vehicle id and forge or replay messages. For local development only: set "
+      "security.mode: signed with key_file and trust_list_file. ***");
 }
 
 void RsuDaemon::on_watchdog() {
@@ -416,7 +429,7 @@ void RsuDaemon::on_watchdog() {
 }
 
 void RsuDaemon::on_advertise() {
-  const std::vector<std::uint8_t> bytes = core_.advertisement();
+  const std::vector<std::uint8_t> bytes = core_.advertisement(now_ns());
   boost::system::error_code ec;
   const auto address = asio::ip::make_address(config_.advertisement.address, ec);
   if (!ec)
@@ -493,6 +506,8 @@ void RsuDaemon::reload() {
     spdlog::info("configuration reloaded: {} of {} registered vehicle(s) kept, background {}",
                  summary.vehicles_after, summary.vehicles_before,
                  summary.background_kept ? "kept" : "to be learned again");
+    spdlog::info("security {}: trust list of {} key(s) in effect", v2i::to_string(next.core.security.mode),
+                 next.core.trust_list.size());
     const bool inputs_changed =
         next.v2i_listen_address != config_.v2i_listen_address || next.v2i_port != config_.v2i_port ||
         next.input.index() != config_.input.index() || next.dds.enabled != config_.dds.enabled ||
@@ -512,6 +527,7 @@ void RsuDaemon::reload() {
     config_ = std::move(next);
     spdlog::set_level(spdlog::level::from_str(config_.logging.level));
     bad_input_.set_limits(config_.logging.bad_input_log_first, seconds(config_.logging.summary_interval_s));
+    warn_if_insecure();
     if (!summary.background_kept && !config_.background_pcd_files.empty())
       load_background_pcd();
     if (!core_.background_ready()) {

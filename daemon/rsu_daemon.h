@@ -72,6 +72,8 @@ class RsuDaemon {
   void drain_and_stop();
   void write_stats_file() const;
   void log_counters(bool only_nonzero) const;
+  // Insecure mode is for local development only: said loudly at start-up and every minute after.
+  void warn_if_insecure();
 
   boost::asio::io_context& io_;
   DaemonConfig config_;
@@ -115,6 +117,7 @@ class RsuDaemon {
   std::uint64_t correction_sends_failed_ = 0;
   std::uint64_t lidar_packets_rejected_ = 0;
   steady::time_point started_ = steady::now();
+  steady::time_point last_insecure_warning_{};
 };
 
 }  // namespace rsu::daemon

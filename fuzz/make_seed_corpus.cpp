@@ -1,5 +1,6 @@
 // Writes the seed corpora of the fuzz harnesses into <dir>/<harness>/ (fuzz/corpus/ in the repository):
-// valid V2I datagrams from encode_v2i_message, valid VLP-16 and VLP-32C packets from the encoder,
+// valid V2I datagrams signed with fuzz_keys.h's keys (plus one unsigned), valid VLP-16 and VLP-32C
+// packets from the encoder,
 // a small capture and a small PCD. The configuration and scenario seeds are the shipped files
 // (deploy/rsud.yaml, scenarios/*.yaml), copied by hand. Usage: fuzz_seed_corpus <dir>.
 #include <cstdint>
@@ -11,10 +12,12 @@
 #include <vector>
 
 #include "common/time.h"
+#include "fuzz_keys.h"
 #include "io/pcd_io.h"
 #include "lidar/firing_schedule.h"
 #include "lidar/pcap.h"
 #include "lidar/velodyne_packet.h"
+#include "v2i/message_signer.h"
 #include "v2i/wire_codec.h"
 
 namespace {
@@ -52,12 +55,15 @@ rsu::v2i::VehicleAnnouncement announcement(std::uint64_t id, std::uint32_t seque
 }
 
 void write_v2i(const fs::path& dir) {
-  write_file(dir / "announcement", rsu::v2i::encode_v2i_message(announcement(7, 1, kNow)));
+  rsu::v2i::MessageSigner vehicle(rsu::fuzz::fuzz_vehicle_key());
+  rsu::v2i::MessageSigner rsu_signer(rsu::fuzz::fuzz_rsu_key());
+  write_file(dir / "announcement", vehicle.encode(announcement(7, 1, kNow), kNow));
+  write_file(dir / "announcement_unsigned", rsu::v2i::encode_v2i_message(announcement(7, 1, kNow)));
   rsu::v2i::VehicleAnnouncement minimal = announcement(8, 2, kNow);
   minimal.speed_mps.reset();
   minimal.yaw_rate_rps.reset();
   minimal.reply_to = {"2001:db8::17", 47003};
-  write_file(dir / "announcement_minimal", rsu::v2i::encode_v2i_message(minimal));
+  write_file(dir / "announcement_minimal", vehicle.encode(minimal, kNow));
 
   rsu::v2i::Correction c;
   c.rsu_id = 3;
@@ -72,7 +78,7 @@ void write_v2i(const fs::path& dir) {
                .yaw_resolution = rsu::v2i::YawResolution::kGeometry,
                .confidence = 0.9};
   c.announcement_sequence = 1;
-  write_file(dir / "correction", rsu::v2i::encode_v2i_message(c));
+  write_file(dir / "correction", rsu_signer.encode(c, kNow));
 
   rsu::v2i::RsuAdvertisement ad;
   ad.rsu_id = 3;
@@ -80,7 +86,7 @@ void write_v2i(const fs::path& dir) {
   ad.coverage_radius_m = 50.0;
   ad.correction_port = 4500;
   ad.announcement_port = 4500;
-  write_file(dir / "advertisement", rsu::v2i::encode_v2i_message(ad));
+  write_file(dir / "advertisement", rsu_signer.encode(ad, kNow));
 }
 
 // rsu_datagram framing: { u8 source, u16 ms since the previous, u16 length, bytes }.
@@ -93,18 +99,28 @@ void add_record(Bytes& out, std::uint8_t source, std::uint32_t dt_ms, const Byte
 
 void write_rsu(const fs::path& dir) {
   Bytes one;
-  add_record(one, 0, 0, rsu::v2i::encode_v2i_message(announcement(7, 1, kNow)));
+  rsu::v2i::MessageSigner first(rsu::fuzz::fuzz_vehicle_key());
+  add_record(one, 0, 0, first.encode(announcement(7, 1, kNow), kNow));
   write_file(dir / "one_announcement", one);
 
-  // Two vehicles at 10 Hz, a repeated sequence, then silence long enough to expire them.
+  // Two vehicles at 10 Hz (signed by one key), a repeated sequence, a replayed datagram, the same
+  // datagram relayed as by a peer (selector bit 7), an unsigned one, then silence long enough to expire.
   Bytes stream;
+  rsu::v2i::MessageSigner signer(rsu::fuzz::fuzz_vehicle_key());
+  Bytes last;
   for (std::uint32_t k = 0; k < 5; ++k) {
     const rsu::TimeNs t = kNow + static_cast<rsu::TimeNs>(k) * 100 * rsu::kNsPerMs;
-    add_record(stream, 0, k == 0 ? 0 : 50, rsu::v2i::encode_v2i_message(announcement(7, k + 1, t)));
-    add_record(stream, 0, 50, rsu::v2i::encode_v2i_message(announcement(9, k + 1, t + 50 * rsu::kNsPerMs)));
+    add_record(stream, 0, k == 0 ? 0 : 50, signer.encode(announcement(7, k + 1, t), t));
+    last = signer.encode(announcement(9, k + 1, t + 50 * rsu::kNsPerMs), t + 50 * rsu::kNsPerMs);
+    add_record(stream, 0, 50, last);
   }
-  add_record(stream, 0, 0, rsu::v2i::encode_v2i_message(announcement(9, 5, kNow + 450 * rsu::kNsPerMs)));
-  add_record(stream, 1, 3000, rsu::v2i::encode_v2i_message(announcement(7, 6, kNow + 3450 * rsu::kNsPerMs)));
+  const rsu::TimeNs t5 = kNow + 450 * rsu::kNsPerMs;
+  add_record(stream, 0, 0, signer.encode(announcement(9, 5, t5), t5));
+  add_record(stream, 0, 0, last);     // replayed
+  add_record(stream, 0x80, 0, last);  // relayed by a peer as well
+  add_record(stream, 0, 0, rsu::v2i::encode_v2i_message(announcement(9, 6, t5)));  // unsigned
+  const rsu::TimeNs t6 = kNow + 3450 * rsu::kNsPerMs;
+  add_record(stream, 1, 3000, signer.encode(announcement(7, 6, t6), t6));
   write_file(dir / "two_vehicles", stream);
 }
 

@@ -1,6 +1,8 @@
-// Fuzzes the V2I datagram parser (wire_codec.h) and the announcement checks behind it
+// Fuzzes the V2I datagram parser (wire_codec.h), the message authenticator (signature, signer's
+// rights, time and sequence windows; message_authenticator.h) and the announcement checks behind it
 // (announcement_validation.h): whatever arrives on the announcement port must decode to a status,
-// validate to a reason, and never crash. A decoded message re-encodes to bytes that decode again.
+// authenticate to a verdict, validate to a reason, and never crash. A decoded message re-encodes to
+// bytes that decode again. The seeds are signed with fuzz_keys.h's keys.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -8,7 +10,9 @@
 #include <variant>
 
 #include "common/time.h"
+#include "fuzz_keys.h"
 #include "v2i/announcement_validation.h"
+#include "v2i/message_authenticator.h"
 #include "v2i/wire_codec.h"
 
 namespace {
@@ -35,6 +39,16 @@ void check_reencodes(const Message& message, std::size_t body_index) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  // Signed mode, twice: a replay of the same bytes must never be accepted again.
+  MessageAuthenticator authenticator(SecurityConfig{}, rsu::fuzz::fuzz_trust_list());
+  const AuthenticatedMessage first =
+      authenticator.authenticate(std::span<const std::uint8_t>(data, size), kNow);
+  const AuthenticatedMessage again =
+      authenticator.authenticate(std::span<const std::uint8_t>(data, size), kNow);
+  (void)to_string(first.verdict);
+  if (again.verdict == AuthVerdict::kAccepted) {
+    std::abort();
+  }
   const DecodedMessage decoded = decode_v2i_message(std::span<const std::uint8_t>(data, size));
   (void)to_string(decoded.status);
   if (decoded.status != DecodeStatus::kOk) {

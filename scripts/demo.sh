@@ -3,7 +3,8 @@
 #   1. the paper's realistic experiment (Sec. 4) in the corridor street, through the real processes on
 #      loopback: the vehicle's NDT self-localization, then for the VLP-16 and the VLP-32C the real rsud
 #      fed with Velodyne packets by the simulator, and the real vehicle client announcing, receiving
-#      corrections and fusing them; prints the paper's table and writes the figures;
+#      corrections and fusing them, every V2I message signed (Ed25519) with keys rsu-keygen makes into
+#      out/corridor/keys/; prints the paper's table and writes the figures;
 #   2. the paper's pilot experiment (Sec. 3.1): heat maps over distance x yaw, both LiDAR models;
 #   3. one simulated frame of the street as PCD, pcap and a top-down picture;
 #   4. two RSUs on one DDS bus hand a driving vehicle over: two rsud, two simulated LiDARs 40 m apart, one
@@ -17,7 +18,7 @@ PY=/usr/bin/python3  # Debian's python3, which has python3-matplotlib and python
 scripts/install-deps.sh
 echo "== building (Release) =="
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle
+cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle rsu-keygen
 
 echo "== 1. realistic experiment: corridor street, NDT vs RSU vs fused (paper Sec. 4) =="
 $PY eval/corridor/run_experiment.py --build build --out "$OUT/corridor"

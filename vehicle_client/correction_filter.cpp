@@ -16,6 +16,8 @@ const char* to_string(CorrectionVerdict verdict) {
       return "garbage";
     case CorrectionVerdict::kNotACorrection:
       return "not_a_correction";
+    case CorrectionVerdict::kNotAuthentic:
+      return "not_authentic";
     case CorrectionVerdict::kUnknownVersion:
       return "unknown_version";
     case CorrectionVerdict::kWrongVehicleId:
@@ -32,9 +34,10 @@ const char* to_string(CorrectionVerdict verdict) {
   return "unknown";
 }
 
-CorrectionVerdict CorrectionFilter::check(std::span<const std::uint8_t> datagram, v2i::Correction& out) {
+CorrectionVerdict CorrectionFilter::check(std::span<const std::uint8_t> datagram, TimeNs now,
+                                          v2i::Correction& out) {
   ++checks_;
-  const CorrectionVerdict verdict = classify(datagram, out);
+  const CorrectionVerdict verdict = classify(datagram, now, out);
   counts_.add(verdict);
   if (verdict == CorrectionVerdict::kAccepted) {
     remember(out);
@@ -42,17 +45,20 @@ CorrectionVerdict CorrectionFilter::check(std::span<const std::uint8_t> datagram
   return verdict;
 }
 
-CorrectionVerdict CorrectionFilter::classify(std::span<const std::uint8_t> datagram, v2i::Correction& out) {
-  v2i::DecodedMessage decoded = v2i::decode_v2i_message(datagram);
-  if (decoded.status != v2i::DecodeStatus::kOk) {
-    return CorrectionVerdict::kGarbage;
+CorrectionVerdict CorrectionFilter::classify(std::span<const std::uint8_t> datagram, TimeNs now,
+                                             v2i::Correction& out) {
+  v2i::AuthenticatedMessage authenticated = authenticator_.authenticate(datagram, now);
+  if (authenticated.verdict == v2i::AuthVerdict::kMalformed) {
+    return authenticated.message.status == v2i::DecodeStatus::kUnsupportedVersion
+               ? CorrectionVerdict::kUnknownVersion
+               : CorrectionVerdict::kGarbage;
   }
-  auto* correction = std::get_if<v2i::Correction>(&decoded.body);
+  if (!authenticated.accepted()) {
+    return CorrectionVerdict::kNotAuthentic;
+  }
+  auto* correction = std::get_if<v2i::Correction>(&authenticated.message.body);
   if (correction == nullptr) {
     return CorrectionVerdict::kNotACorrection;
-  }
-  if (correction->protocol_version != v2i::kProtocolVersion) {
-    return CorrectionVerdict::kUnknownVersion;
   }
   if (correction->vehicle_id != config_.vehicle_id) {
     return CorrectionVerdict::kWrongVehicleId;

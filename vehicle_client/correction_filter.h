@@ -1,6 +1,9 @@
 // Decides whether a datagram received on the vehicle's correction port is a correction this vehicle
-// should use, and counts every refusal by reason. Pure computation (no socket): the VehicleClient
-// feeds it the bytes, the tests feed it crafted ones.
+// should use, and counts every refusal by reason. Pure computation (no socket, time passed in): the
+// VehicleClient feeds it the bytes, the tests feed it crafted ones. In signed mode the RSU's signature
+// is verified against the trust list (an RSU key listed for that rsu_id), and its generation time and
+// the RSU's sequence number are checked against the replay windows, BEFORE anything is fused
+// (v2i/message_authenticator.h; the details of a refusal are in authentication_counts()).
 #pragma once
 
 #include <cstddef>
@@ -10,15 +13,18 @@
 
 #include "common/time.h"
 #include "v2i/enum_counter.h"
+#include "v2i/message_authenticator.h"
 #include "v2i/messages.h"
+#include "v2i/security/trust_list.h"
 
 namespace rsu::vehicle_client {
 
 enum class CorrectionVerdict : std::uint8_t {
   kAccepted,
-  kGarbage,         // not a decodable V2iMessage (empty, too large, not protobuf, no body, bad covariance)
-  kNotACorrection,  // a valid message of another kind (an announcement or advertisement)
+  kGarbage,         // not a decodable datagram (empty, too large, not protobuf, no body, bad covariance)
   kUnknownVersion,  // protocol_version this client does not speak
+  kNotAuthentic,    // signed mode: unsigned, unknown or unentitled signer, bad signature, stale, replayed
+  kNotACorrection,  // a valid message of another kind (an announcement or advertisement)
   kWrongVehicleId,  // meant for another vehicle
   kInvalidContent,  // NaN/inf pose, or a covariance that is not symmetric positive definite
   kDuplicate,       // the same RSU sequence and sweep time as the last one accepted from that RSU
@@ -33,16 +39,25 @@ struct CorrectionFilterConfig {
   // Per-RSU ordering state is kept for at most this many RSU ids, so that a flood of forged ids cannot
   // grow memory; the least recently heard one is forgotten first.
   std::size_t max_tracked_rsus = 64;
+  // Signed (the default): only corrections signed by an RSU key of the trust list, fresh, not replayed.
+  v2i::SecurityConfig security;
+  v2i::security::TrustList trust_list;  // the RSU keys, each bound to its rsu_ids
 };
 
 class CorrectionFilter {
  public:
-  explicit CorrectionFilter(const CorrectionFilterConfig& config) : config_(config) {}
+  explicit CorrectionFilter(const CorrectionFilterConfig& config)
+      : config_(config), authenticator_(config.security, config.trust_list) {}
 
-  // Decodes and checks one datagram; on kAccepted `out` holds the correction.
-  CorrectionVerdict check(std::span<const std::uint8_t> datagram, v2i::Correction& out);
+  // Authenticates, decodes and checks one datagram received at `now` (the vehicle's clock, which the
+  // RSU's generation time is compared with); on kAccepted `out` holds the correction.
+  CorrectionVerdict check(std::span<const std::uint8_t> datagram, TimeNs now, v2i::Correction& out);
 
   const v2i::EnumCounter<CorrectionVerdict>& counts() const { return counts_; }
+  // Every datagram's authentication verdict (accepted, or refused by reason).
+  const v2i::EnumCounter<v2i::AuthVerdict>& authentication_counts() const { return authenticator_.counts(); }
+  // Forgets silent RSUs' replay state (call now and then).
+  void expire(TimeNs now) { authenticator_.expire(now); }
   // Accepted corrections whose sequence went backwards while the sweep time moved on: the RSU daemon
   // restarted (its per-vehicle counter starts again), which must not lock the vehicle out.
   std::uint64_t sequence_restarts() const { return sequence_restarts_; }
@@ -54,10 +69,11 @@ class CorrectionFilter {
     std::uint64_t last_heard = 0;  // check() call count, for least-recently-heard eviction
   };
 
-  CorrectionVerdict classify(std::span<const std::uint8_t> datagram, v2i::Correction& out);
+  CorrectionVerdict classify(std::span<const std::uint8_t> datagram, TimeNs now, v2i::Correction& out);
   void remember(const v2i::Correction& correction);
 
   CorrectionFilterConfig config_;
+  v2i::MessageAuthenticator authenticator_;
   v2i::EnumCounter<CorrectionVerdict> counts_;
   std::map<std::uint64_t, RsuOrder> order_by_rsu_;
   std::uint64_t checks_ = 0;

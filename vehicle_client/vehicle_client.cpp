@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "v2i/message_signer.h"
 #include "v2i/wire_codec.h"
 #include "vehicle_client/udp_endpoint_text.h"
 
@@ -40,7 +41,8 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
         keepalive_(strand_),
         config_(config),
         clock_(std::move(clock)),
-        filter_({config.vehicle_id, config.max_tracked_rsus}) {
+        filter_({config.vehicle_id, config.max_tracked_rsus, config.security, config.trust_list}),
+        signer_(config.security.mode == v2i::SecurityMode::kSigned ? config.signing_key : std::nullopt) {
     if (config_.vehicle_id == 0) {
       throw std::invalid_argument("vehicle id must be non-zero");
     }
@@ -56,6 +58,9 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
         throw std::invalid_argument("RSU endpoints mix IPv4 and IPv6: " + config_.rsu_endpoints.front() +
                                     ", " + text);
       }
+    }
+    if (config_.security.mode == v2i::SecurityMode::kSigned && !config_.signing_key) {
+      throw std::invalid_argument("signed mode needs the vehicle's signing key");
     }
     udp::endpoint bind_to(rsus_.front().protocol(), config_.bind_port);
     if (!config_.bind_address.empty()) {
@@ -142,6 +147,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
     VehicleClientStats out = stats_;
     out.corrections = filter_.counts();
     out.sequence_restarts = filter_.sequence_restarts();
+    out.authentication = filter_.authentication_counts();
     return out;
   }
 
@@ -194,9 +200,11 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
     if (reason != v2i::AnnouncementReason::kValid) {
       return reason;
     }
+    const TimeNs now = clock_();
     for (std::size_t i = 0; i < rsus_.size(); ++i) {
       a.reply_to.address = reply_addresses_[i];
-      std::vector<std::uint8_t> bytes = v2i::encode_v2i_message(a);
+      // One signed datagram per RSU (its own reply_to), each with the next signer sequence number.
+      std::vector<std::uint8_t> bytes = signer_.encode(a, now);
       if (!bytes.empty()) {
         out.push_back({rsus_[i], std::move(bytes)});
       }
@@ -243,6 +251,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
         if (self->stopped_) {
           return;
         }
+        self->filter_.expire(self->clock_());
         const auto quiet = std::chrono::steady_clock::now() - self->last_sent_;
         if (self->latest_ && quiet >= std::chrono::nanoseconds(self->config_.announce_period) &&
             self->clock_() - self->latest_->time <= self->config_.max_resend_age) {
@@ -279,7 +288,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
       } else {
         ++stats_.datagrams_received;
         v2i::Correction correction;
-        if (filter_.check({buffer_.data(), bytes}, correction) == CorrectionVerdict::kAccepted) {
+        if (filter_.check({buffer_.data(), bytes}, clock_(), correction) == CorrectionVerdict::kAccepted) {
           received = ReceivedCorrection{std::move(correction), clock_(), to_text(sender_)};
           pending_.push_back(*received);
           while (pending_.size() > std::max<std::size_t>(config_.max_pending_corrections, 1)) {
@@ -312,6 +321,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
   mutable std::mutex mutex_;  // guards everything below
   bool stopped_ = false;
   CorrectionFilter filter_;
+  v2i::MessageSigner signer_;
   std::uint32_t next_sequence_ = 0;
   std::optional<VehicleState> latest_;
   std::chrono::steady_clock::time_point last_sent_{};

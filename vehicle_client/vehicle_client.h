@@ -49,9 +49,10 @@ struct VehicleClientStats {
   std::uint64_t announcements_refused = 0;  // announce() refused the state (see announce())
   std::uint64_t datagrams_received = 0;
   std::uint64_t receive_errors = 0;
-  v2i::EnumCounter<CorrectionVerdict> corrections;  // accepted, and rejected by reason
-  std::uint64_t sequence_restarts = 0;              // an RSU restarted (CorrectionFilter)
-  std::uint64_t dropped_unpolled = 0;               // over max_pending_corrections
+  v2i::EnumCounter<CorrectionVerdict> corrections;    // accepted, and rejected by reason
+  v2i::EnumCounter<v2i::AuthVerdict> authentication;  // every datagram's signature/replay verdict
+  std::uint64_t sequence_restarts = 0;                // an RSU restarted (CorrectionFilter)
+  std::uint64_t dropped_unpolled = 0;                 // over max_pending_corrections
 
   std::uint64_t accepted() const { return corrections.count(CorrectionVerdict::kAccepted); }
   std::uint64_t rejected() const { return corrections.total() - accepted(); }
@@ -62,8 +63,8 @@ class VehicleClient {
   using CorrectionCallback = std::function<void(const ReceivedCorrection&)>;
 
   // Opens and binds the socket and starts receiving. Throws std::invalid_argument for a bad config
-  // (no RSU, vehicle id 0, unparsable endpoint, mixed address families) and boost::system::system_error
-  // when the socket cannot be bound.
+  // (no RSU, vehicle id 0, unparsable endpoint, mixed address families, signed mode without a key)
+  // and boost::system::system_error when the socket cannot be bound.
   VehicleClient(boost::asio::io_context& io, const VehicleClientConfig& config,
                 Clock clock = system_clock_now);
   ~VehicleClient();  // stops; the callback is not called after it returns

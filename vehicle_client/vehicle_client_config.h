@@ -5,11 +5,15 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "common/time.h"
+#include "v2i/message_authenticator.h"
 #include "v2i/messages.h"
+#include "v2i/security/ed25519.h"
+#include "v2i/security/trust_list.h"
 
 namespace rsu::vehicle_client {
 
@@ -45,6 +49,13 @@ struct VehicleClientConfig {
   std::size_t max_pending_corrections = 1024;
   // Per-RSU ordering state (see CorrectionFilterConfig).
   std::size_t max_tracked_rsus = 64;
+
+  // Message security (proto/v2i.proto). Signed (the default): announcements are signed with
+  // signing_key (a vehicle key the RSUs' trust lists bind to vehicle_id), and only corrections signed
+  // by an RSU key of trust_list, fresh and not replayed, are used. Insecure: local development only.
+  v2i::SecurityConfig security;
+  std::optional<v2i::security::SigningKey> signing_key;  // required in signed mode
+  v2i::security::TrustList trust_list;                   // the RSU keys
 };
 
 }  // namespace rsu::vehicle_client

@@ -5,7 +5,8 @@
   2. For each RSU LiDAR model: the RSU's background recorded without vehicles (rsu-sim simulate); then the
      real rsud, the real simulator streaming Velodyne packets over UDP (rsu-sim stream) and the real vehicle
      client (rsu-vehicle, announcing its NDT poses, receiving corrections, fusing) run together on one clock:
-     the host clock, scenario time 0 mapped to a shared epoch.
+     the host clock, scenario time 0 mapped to a shared epoch. Every V2I message is signed (Ed25519) with
+     keys rsu-keygen writes into <out>/keys/, and verified by the receiver, as deployed.
   3. Scoring against the truth (rsu-corridor report): the paper's table, summary.json, frames.csv, figures.
 
 Every wait is bounded; every child is killed on the way out.
@@ -49,6 +50,22 @@ def wait_until_ready(log, rsud):
         sys.exit("run_experiment: rsud not ready: %s" % e)
 
 
+def make_keys(run, out, vehicle_id):
+    """Signed V2I as deployed: rsu-keygen makes the RSU's and the vehicle's keys into out/keys/ and the two
+    trust lists (rsud trusts the vehicle's key for its id; the vehicle trusts the RSU's key for rsu id 1)."""
+    keys = os.path.join(out, "keys")
+    os.makedirs(keys, exist_ok=True)
+    for name in ("rsud_trust.list", "vehicle_trust.list"):
+        if os.path.exists(os.path.join(keys, name)):
+            os.remove(os.path.join(keys, name))
+    for name, trust, role, ids in (("rsu", "vehicle_trust.list", "rsu", "1"),
+                                   ("vehicle", "rsud_trust.list", "vehicle", str(vehicle_id))):
+        subprocess.run([run.tool("tools/rsu-keygen"), os.path.join(keys, name), "--force", "--trust-list",
+                        os.path.join(keys, trust), "--role", role, "--ids", ids], check=True,
+                       stdout=subprocess.DEVNULL, timeout=30)
+    return keys
+
+
 def live_run(run, exp, scenario_path, scenario, model, out):
     """One RSU LiDAR model: rsud + rsu-sim stream + rsu-vehicle, on the host clock."""
     mount = scenario["lidar"].get("mount", {})
@@ -62,6 +79,7 @@ def live_run(run, exp, scenario_path, scenario, model, out):
                     "--frames", "5", "--out", bg_dir], check=True, stdout=subprocess.DEVNULL, timeout=120)
     pcds = sorted(os.path.join(bg_dir, f) for f in os.listdir(bg_dir) if f.endswith(".pcd"))
 
+    keys = make_keys(run, out, vehicle["id"])
     lidar_port, v2i_port = free_udp_port(), free_udp_port()
     config = os.path.join(out, "rsud_%s.yaml" % model)
     with open(config, "w") as f:
@@ -76,12 +94,17 @@ background:
 v2i:
   listen_address: 127.0.0.1
   port: %d
+security:
+  mode: signed
+  key_file: %s
+  trust_list_file: %s
 logging:
   level: info
   stats_interval_s: 1.0
   stats_file: %s
 """ % (model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
             mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_port, ", ".join(pcds), v2i_port,
+            os.path.join(keys, "rsu.key"), os.path.join(keys, "rsud_trust.list"),
             os.path.join(out, "rsud_%s.stats" % model)))
     log = os.path.join(out, "rsud_%s.log" % model)
     rsud = run.spawn([run.tool("daemon/rsud"), "--config", config], log)
@@ -113,6 +136,8 @@ logging:
                               "--length", str(shape.get("length", 4.89)), "--width", str(shape.get("width", 1.92)),
                               "--height", str(shape.get("height", 1.70)), "--rsu", "127.0.0.1:%d" % v2i_port,
                               "--bind", "127.0.0.1:0", "--realtime", "--drain-ms", "500",
+                              "--key", os.path.join(keys, "vehicle.key"),
+                              "--trust-list", os.path.join(keys, "vehicle_trust.list"),
                               "--corrections", os.path.join(out, "corrections_%s.csv" % model)],
                              os.path.join(out, "fused_%s.csv" % model), stdin_path=shifted)
     deadline = time.time() + duration + 30
@@ -136,6 +161,12 @@ logging:
         sys.exit("run_experiment: rsud did not stop on SIGTERM")
     if rsud.returncode != 0:
         sys.exit("run_experiment: rsud exited with %d; see %s" % (rsud.returncode, log))
+    with open(os.path.join(out, "rsud_%s.stats" % model)) as f:
+        stats = dict(line.split() for line in f)
+    refused = {k: v for k, v in stats.items() if k.startswith("auth.") and v != "0" and k not in (
+        "auth.accepted", "auth.signers_tracked", "auth.trusted_keys")}
+    print("  %-7s rsud verified %s signed announcements (refused: %s)" % (model, stats.get("auth.accepted"),
+                                                                          refused or "none"))
 
 
 def main():

@@ -10,6 +10,8 @@ const char* to_string(DatagramStage stage) {
       return "flood_limited";
     case DatagramStage::kDecode:
       return "decode";
+    case DatagramStage::kAuthentication:
+      return "auth";
     case DatagramStage::kNotAnnouncement:
       return "not_announcement";
     case DatagramStage::kValidation:
@@ -33,6 +35,8 @@ std::string DatagramOutcome::reason() const {
   switch (stage) {
     case DatagramStage::kDecode:
       return out + ":" + v2i::to_string(decode);
+    case DatagramStage::kAuthentication:
+      return out + ":" + v2i::to_string(auth);
     case DatagramStage::kValidation:
       return out + ":" + v2i::to_string(validation);
     case DatagramStage::kAccepted:

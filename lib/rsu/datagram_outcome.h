@@ -8,6 +8,7 @@
 #include <string>
 
 #include "v2i/announcement_validation.h"
+#include "v2i/message_authenticator.h"
 #include "v2i/vehicle_registry.h"
 #include "v2i/wire_codec.h"
 
@@ -16,7 +17,8 @@ namespace rsu::core {
 enum class DatagramStage : std::uint8_t {
   kAccepted,         // the registry took it (upsert says added / updated)
   kFloodLimited,     // the source host exceeded the pre-decode datagram rate
-  kDecode,           // not a well-formed V2iMessage (see `decode`)
+  kDecode,           // not a well-formed version-2 datagram (see `decode`)
+  kAuthentication,   // unsigned, unknown signer, bad signature, not its to sign, stale, replayed (`auth`)
   kNotAnnouncement,  // a well-formed correction or advertisement sent to the announcement port
   kValidation,       // an announcement with implausible content (see `validation`)
   kReplyToMismatch,  // reply_to is not the sender's address (RsuCoreConfig::require_reply_to_source_address)
@@ -32,13 +34,14 @@ const char* to_string(DatagramStage stage);
 struct DatagramOutcome {
   DatagramStage stage = DatagramStage::kDecode;
   v2i::DecodeStatus decode = v2i::DecodeStatus::kOk;
+  v2i::AuthVerdict auth = v2i::AuthVerdict::kAccepted;
   v2i::AnnouncementReason validation = v2i::AnnouncementReason::kValid;
   v2i::UpsertOutcome upsert = v2i::UpsertOutcome::kCount;  // kCount: the registry was not reached
   std::uint64_t vehicle_id = 0;                            // when decoded as an announcement
 
   bool accepted() const { return stage == DatagramStage::kAccepted; }
-  // "stage" or "stage:detail", e.g. "decode:parse_error", "validation:length_out_of_range": a stable
-  // key for counting and rate-limited logging.
+  // "stage" or "stage:detail", e.g. "decode:parse_error", "auth:bad_signature",
+  // "validation:length_out_of_range": a stable key for counting and rate-limited logging.
   std::string reason() const;
 };
 

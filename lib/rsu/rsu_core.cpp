@@ -40,6 +40,8 @@ SensorModel resolve_model(const RsuCoreConfig& config) {
     throw std::invalid_argument("coverage radius must be > 0");
   if (config.background.learning_frames < 0)
     throw std::invalid_argument("learning frames must be >= 0");
+  if (config.security.mode == v2i::SecurityMode::kSigned && !config.signing_key)
+    throw std::invalid_argument("signed mode needs the RSU's signing key (security.key_file)");
   return *model;
 }
 
@@ -139,6 +141,8 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       background_ready_(config.background.learning_frames == 0),
       flood_limiter_(config.datagram_flood),
       peer_flood_limiter_(config.peers.flood),
+      authenticator_(config.security, config.trust_list),
+      signer_(config.security.mode == v2i::SecurityMode::kSigned ? config.signing_key : std::nullopt),
       validator_(config.announcement_limits),
       registry_(config.registry) {}
 
@@ -155,14 +159,19 @@ DatagramOutcome RsuCore::finish_peer(DatagramOutcome outcome) {
 std::optional<v2i::VehicleAnnouncement> RsuCore::screen(std::span<const std::uint8_t> bytes,
                                                         const std::string& sender_address, TimeNs now,
                                                         DatagramOutcome& out) {
-  v2i::DecodedMessage decoded = v2i::decode_v2i_message(bytes);
-  decode_counts_.add(decoded.status);
-  if (decoded.status != v2i::DecodeStatus::kOk) {
+  v2i::AuthenticatedMessage authenticated = authenticator_.authenticate(bytes, now);
+  out.auth = authenticated.verdict;
+  if (authenticated.verdict == v2i::AuthVerdict::kMalformed) {
+    decode_counts_.add(authenticated.message.status);
     out.stage = DatagramStage::kDecode;
-    out.decode = decoded.status;
+    out.decode = authenticated.message.status;
     return std::nullopt;
   }
-  auto* announcement = std::get_if<v2i::VehicleAnnouncement>(&decoded.body);
+  if (!authenticated.accepted()) {
+    out.stage = DatagramStage::kAuthentication;
+    return std::nullopt;
+  }
+  auto* announcement = std::get_if<v2i::VehicleAnnouncement>(&authenticated.message.body);
   if (announcement == nullptr) {
     out.stage = DatagramStage::kNotAnnouncement;
     return std::nullopt;
@@ -609,7 +618,7 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
   inputs.points_used = points.size();
   OutgoingCorrection out;
   out.correction = make_correction(inputs, fix, fit, lidar_xy_);
-  out.bytes = v2i::encode_v2i_message(out.correction);
+  out.bytes = signer_.encode(out.correction, now);
   if (out.bytes.empty()) {
     ++lidar_stats_.corrections_encode_failed;
     return;
@@ -626,6 +635,7 @@ std::size_t RsuCore::expire(TimeNs now) {
   const std::size_t n = registry_.expire(now);
   flood_limiter_.prune(now);
   peer_flood_limiter_.prune(now);
+  authenticator_.expire(now);
   for (auto it = channels_.begin(); it != channels_.end();) {
     it = registry_.find(it->first, now) == nullptr ? channels_.erase(it) : std::next(it);
   }
@@ -655,6 +665,11 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }
   fresh.channels_ = std::move(channels_);
+  fresh.authenticator_ = std::move(authenticator_);
+  fresh.authenticator_.reconfigure(next.security, next.trust_list);
+  fresh.signer_ =
+      v2i::MessageSigner(next.security.mode == v2i::SecurityMode::kSigned ? next.signing_key : std::nullopt,
+                         signer_.next_sequence());
   fresh.datagram_stages_ = datagram_stages_;
   fresh.peer_stages_ = peer_stages_;
   fresh.decode_counts_ = decode_counts_;
@@ -662,14 +677,14 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
   return summary;
 }
 
-std::vector<std::uint8_t> RsuCore::advertisement() const {
+std::vector<std::uint8_t> RsuCore::advertisement(TimeNs now) {
   v2i::RsuAdvertisement ad;
   ad.rsu_id = config_.rsu_id;
   ad.lidar_pose = config_.mount;
   ad.coverage_radius_m = config_.coverage_radius_m;
   ad.correction_port = config_.correction_port;
   ad.announcement_port = config_.announcement_port;
-  return v2i::encode_v2i_message(ad);
+  return signer_.encode(ad, now);
 }
 
 std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
@@ -686,6 +701,16 @@ std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
     const auto s = static_cast<v2i::DecodeStatus>(i);
     out.emplace_back(std::string("decode.") + v2i::to_string(s), decode_counts_.count(s));
   }
+  for (std::size_t i = 0; i < static_cast<std::size_t>(v2i::AuthVerdict::kCount); ++i) {
+    const auto v = static_cast<v2i::AuthVerdict>(i);
+    out.emplace_back(std::string("auth.") + v2i::to_string(v), authenticator_.counts().count(v));
+  }
+  out.emplace_back("auth.signers_tracked", authenticator_.replay().tracked());
+  out.emplace_back("auth.sequence_restarts", authenticator_.replay().stats().restarts);
+  out.emplace_back("auth.signers_evicted", authenticator_.replay().stats().evictions);
+  out.emplace_back("auth.trusted_keys", authenticator_.trust_list().size());
+  // 1 while running without signatures: local development only (the daemon also warns).
+  out.emplace_back("security.insecure_mode", authenticator_.mode() == v2i::SecurityMode::kInsecure ? 1 : 0);
   for (std::size_t i = 1; i < static_cast<std::size_t>(v2i::AnnouncementReason::kCount); ++i) {
     const auto r = static_cast<v2i::AnnouncementReason>(i);
     out.emplace_back(std::string("validation.") + v2i::to_string(r), validator_.counts().count(r));

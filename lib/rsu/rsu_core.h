@@ -44,6 +44,8 @@
 #include "rsu/sweep_clusterer.h"
 #include "v2i/announcement_validation.h"
 #include "v2i/enum_counter.h"
+#include "v2i/message_authenticator.h"
+#include "v2i/message_signer.h"
 #include "v2i/messages.h"
 #include "v2i/source_rate_limiter.h"
 #include "v2i/vehicle_registry.h"
@@ -67,7 +69,7 @@ struct PeerProvenance {
 
 struct OutgoingCorrection {
   v2i::UdpEndpoint destination;     // the vehicle's announced reply_to
-  std::vector<std::uint8_t> bytes;  // the encoded V2iMessage
+  std::vector<std::uint8_t> bytes;  // the encoded datagram, signed in signed mode
   v2i::Correction correction;       // what the bytes say (vehicle id, sweep time, pose, quality)
 };
 
@@ -100,14 +102,18 @@ struct ReloadSummary {
 class RsuCore {
  public:
   // Throws std::invalid_argument for an unusable configuration (unknown sensor model, a model without
-  // a packet format, non-finite mount, ...), with a message naming what is wrong.
+  // a packet format, non-finite mount, signed mode without a signing key, ...), with a message naming
+  // what is wrong.
   explicit RsuCore(const RsuCoreConfig& config);
 
-  // One datagram from the announcement port, received at `now`. Never throws on content.
+  // One datagram from the announcement port, received at `now`. Never throws on content. In signed mode
+  // it is authenticated first (v2i/message_authenticator.h): dropped and counted unless a trusted
+  // vehicle key signed it for that vehicle id, fresh and not replayed.
   DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now);
 
   // An announcement another RSU accepted from a vehicle and shared on the data bus, received at `now`.
-  // It takes the datagram path (decode, validation, reply_to against the vehicle's address, registry),
+  // It takes the datagram path (authentication: the vehicle's own signature over its original bytes,
+  // fresh, not replayed; decode, validation, reply_to against the vehicle's address, registry),
   // is rate-limited per origin RSU, and is skipped when the registry already holds that announcement
   // or a newer one (the vehicle also announced here, or another peer shared it first). The caller must
   // not share it again: only what on_datagram() accepted is shared, so nothing loops. Never throws.
@@ -130,13 +136,14 @@ class RsuCore {
   // Forgets silent vehicles (call about once a second); returns how many.
   std::size_t expire(TimeNs now);
 
-  // Applies a new configuration, keeping the registered vehicles and, when the LiDAR and background
-  // setup are unchanged, the learned background. Throws std::invalid_argument (and changes nothing)
-  // if `next` is unusable.
+  // Applies a new configuration, keeping the registered vehicles, the signers' replay state, the
+  // signing sequence and, when the LiDAR and background setup are unchanged, the learned background.
+  // The new trust list and key take effect (SIGHUP). Throws std::invalid_argument (and changes
+  // nothing) if `next` is unusable.
   ReloadSummary reload(const RsuCoreConfig& next, TimeNs now);
 
-  // The encoded RsuAdvertisement (empty if encoding failed).
-  std::vector<std::uint8_t> advertisement() const;
+  // The encoded RsuAdvertisement, signed in signed mode, generated at `now` (empty if encoding failed).
+  std::vector<std::uint8_t> advertisement(TimeNs now);
 
   // Every counter as ("area.reason", value), zeros included, in a stable order: for logs and stats.
   std::vector<std::pair<std::string, std::uint64_t>> counters() const;
@@ -147,6 +154,7 @@ class RsuCore {
   const v2i::EnumCounter<DatagramStage>& peer_stages() const { return peer_stages_; }
   const v2i::EnumCounter<v2i::DecodeStatus>& decode_counts() const { return decode_counts_; }
   const v2i::EnumCounter<v2i::AnnouncementReason>& validation_counts() const { return validator_.counts(); }
+  const v2i::MessageAuthenticator& authenticator() const { return authenticator_; }
   const DecodeStats& packet_stats() const { return decoder_.stats(); }
   const SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
   const LidarStats& lidar_stats() const { return lidar_stats_; }
@@ -184,8 +192,9 @@ class RsuCore {
   // The firing time at which the sweep has passed every point of `outline` (map frame) far enough
   // that no cluster near them can still grow (the SweepClusterer's closing rule).
   TimeNs passed_time(const std::vector<Eigen::Vector2d>& outline) const;
-  // Decoding, validation and the reply_to check, whatever carried the datagram: the announcement, or
-  // empty with `out` saying which stage refused it.
+  // Authentication (signature, signer's rights, time and sequence windows), decoding, validation and
+  // the reply_to check, whatever carried the datagram: the announcement, or empty with `out` saying which
+  // stage refused it.
   std::optional<v2i::VehicleAnnouncement> screen(std::span<const std::uint8_t> bytes,
                                                  const std::string& sender_address, TimeNs now,
                                                  DatagramOutcome& out);
@@ -206,6 +215,8 @@ class RsuCore {
 
   v2i::SourceRateLimiter flood_limiter_;
   v2i::SourceRateLimiter peer_flood_limiter_;  // keyed by origin RSU
+  v2i::MessageAuthenticator authenticator_;
+  v2i::MessageSigner signer_;
   v2i::AnnouncementValidator validator_;
   v2i::VehicleRegistry registry_;
   std::unordered_map<std::uint64_t, VehicleChannel> channels_;

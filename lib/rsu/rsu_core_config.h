@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "common/pose.h"
@@ -11,6 +12,9 @@
 #include "perception/pipeline.h"
 #include "v2i/announcement_validation.h"
 #include "v2i/association.h"
+#include "v2i/message_authenticator.h"
+#include "v2i/security/ed25519.h"
+#include "v2i/security/trust_list.h"
 #include "v2i/source_rate_limiter.h"
 #include "v2i/vehicle_hypothesis.h"
 #include "v2i/vehicle_registry.h"
@@ -102,6 +106,14 @@ struct RsuCoreConfig {
   // RSU's corrections at a third party (a reflection attack).
   bool require_reply_to_source_address = true;
   PeerConfig peers;
+
+  // Message security (proto/v2i.proto): signed mode verifies every announcement against the trust list
+  // (vehicle keys bound to their vehicle ids) and signs corrections and advertisements with the RSU's
+  // key; insecure mode (local development only) neither signs nor verifies. The daemon reads the key
+  // and the trust list from files (daemon/config.h).
+  v2i::SecurityConfig security;
+  std::optional<v2i::security::SigningKey> signing_key;  // required in signed mode
+  v2i::security::TrustList trust_list;
 
   // For the RSU advertisement (v2i::RsuAdvertisement).
   std::uint16_t announcement_port = 0;

@@ -13,8 +13,8 @@
 
 namespace rsu::v2i {
 
-// The wire format version this code speaks (V2iMessage.protocol_version).
-inline constexpr std::uint32_t kProtocolVersion = 1;
+// The wire format version this code speaks (SignedV2iMessage.protocol_version, proto/v2i.proto).
+inline constexpr std::uint32_t kProtocolVersion = 2;
 
 struct BoxSize {
   double length_m = 0.0;  // along vehicle x

@@ -1,11 +1,13 @@
 #include "v2i/wire_codec.h"
 
+#include <cstring>
+
 #include "proto/v2i.pb.h"
 
 namespace rsu::v2i {
 namespace {
 
-namespace pb = ::rsu::v2i::v1;
+namespace pb = ::rsu::v2i::v2;
 
 bool read_covariance(const pb::Covariance3& in, Eigen::Matrix3d& out) {
   if (in.row_major_size() != 9) {
@@ -111,7 +113,72 @@ void read_advertisement(const pb::RsuAdvertisement& in, RsuAdvertisement& out) {
   out.announcement_port = in.announcement_port();
 }
 
-std::vector<std::uint8_t> serialise(const pb::V2iMessage& message) {
+void write_announcement(const VehicleAnnouncement& a, pb::VehicleAnnouncement& out) {
+  out.set_vehicle_id(a.vehicle_id);
+  out.set_sequence(a.sequence);
+  out.set_generation_time_ns(a.generation_time);
+  out.set_length_m(a.size.length_m);
+  out.set_width_m(a.size.width_m);
+  out.set_height_m(a.size.height_m);
+  out.set_reference_offset_x_m(a.reference_offset.x());
+  out.set_reference_offset_y_m(a.reference_offset.y());
+  write_pose(a.pose, *out.mutable_pose());
+  write_covariance(a.pose_covariance, *out.mutable_pose_covariance());
+  if (a.speed_mps) {
+    out.set_speed_mps(*a.speed_mps);
+  }
+  if (a.yaw_rate_rps) {
+    out.set_yaw_rate_rps(*a.yaw_rate_rps);
+  }
+  out.mutable_reply_to()->set_address(a.reply_to.address);
+  out.mutable_reply_to()->set_port(a.reply_to.port);
+}
+
+void write_correction(const Correction& c, pb::Correction& out) {
+  out.set_rsu_id(c.rsu_id);
+  out.set_vehicle_id(c.vehicle_id);
+  out.set_sequence(c.sequence);
+  out.set_sweep_time_ns(c.sweep_time);
+  write_pose(c.pose, *out.mutable_pose());
+  write_covariance(c.pose_covariance, *out.mutable_pose_covariance());
+  auto& q = *out.mutable_quality();
+  q.set_points_used(c.quality.points_used);
+  q.set_faces_seen(c.quality.faces_seen);
+  q.set_range_m(c.quality.range_m);
+  q.set_yaw_resolution(write_yaw_resolution(c.quality.yaw_resolution));
+  q.set_confidence(c.quality.confidence);
+  out.set_announcement_sequence(c.announcement_sequence);
+}
+
+void write_advertisement(const RsuAdvertisement& r, pb::RsuAdvertisement& out) {
+  out.set_rsu_id(r.rsu_id);
+  auto& p = *out.mutable_lidar_pose();
+  p.set_x(r.lidar_pose.x);
+  p.set_y(r.lidar_pose.y);
+  p.set_z(r.lidar_pose.z);
+  p.set_roll(r.lidar_pose.roll);
+  p.set_pitch(r.lidar_pose.pitch);
+  p.set_yaw(r.lidar_pose.yaw);
+  out.set_coverage_radius_m(r.coverage_radius_m);
+  out.set_correction_port(r.correction_port);
+  out.set_announcement_port(r.announcement_port);
+}
+
+// Wraps a filled payload in the envelope, signing the payload's serialized bytes as they go out.
+std::vector<std::uint8_t> seal(pb::V2iPayload& payload, std::uint32_t protocol_version,
+                               const MessageHeader& header, const security::SigningKey* signer) {
+  payload.set_generation_time_ns(header.generation_time);
+  payload.set_sequence(header.sequence);
+  pb::SignedV2iMessage message;
+  message.set_protocol_version(protocol_version);
+  if (!payload.SerializeToString(message.mutable_payload())) {
+    return {};
+  }
+  if (signer != nullptr) {
+    const security::Signature signature = signer->sign(signing_input(message.payload()));
+    message.set_signer_key_id(signer->key_id().data(), signer->key_id().size());
+    message.set_signature(signature.data(), signature.size());
+  }
   const std::size_t size = message.ByteSizeLong();
   if (size > kMaxDatagramBytes) {
     return {};
@@ -135,6 +202,8 @@ const char* to_string(DecodeStatus status) {
       return "too_large";
     case DecodeStatus::kParseError:
       return "parse_error";
+    case DecodeStatus::kUnsupportedVersion:
+      return "unsupported_version";
     case DecodeStatus::kNoBody:
       return "no_body";
     case DecodeStatus::kMalformedCovariance:
@@ -145,8 +214,8 @@ const char* to_string(DecodeStatus status) {
   return "unknown";
 }
 
-DecodedMessage decode_v2i_message(std::span<const std::uint8_t> bytes) {
-  DecodedMessage out;
+DecodedEnvelope decode_envelope(std::span<const std::uint8_t> bytes) {
+  DecodedEnvelope out;
   if (bytes.empty()) {
     out.status = DecodeStatus::kEmpty;
     return out;
@@ -155,29 +224,50 @@ DecodedMessage decode_v2i_message(std::span<const std::uint8_t> bytes) {
     out.status = DecodeStatus::kTooLarge;
     return out;
   }
-  pb::V2iMessage message;
+  pb::SignedV2iMessage message;
   if (!message.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()))) {
     out.status = DecodeStatus::kParseError;
     return out;
   }
+  if (message.protocol_version() != kProtocolVersion) {
+    out.status = DecodeStatus::kUnsupportedVersion;
+    return out;
+  }
+  out.envelope.protocol_version = message.protocol_version();
+  out.envelope.payload = std::move(*message.mutable_payload());
+  out.envelope.signer_key_id = std::move(*message.mutable_signer_key_id());
+  out.envelope.signature = std::move(*message.mutable_signature());
+  out.status = DecodeStatus::kOk;
+  return out;
+}
+
+DecodedMessage decode_payload(const Envelope& envelope) {
+  DecodedMessage out;
+  pb::V2iPayload message;
+  if (!message.ParseFromString(envelope.payload)) {
+    out.status = DecodeStatus::kParseError;
+    return out;
+  }
+  out.header.generation_time = message.generation_time_ns();
+  out.header.sequence = message.sequence();
   switch (message.body_case()) {
-    case pb::V2iMessage::kAnnouncement: {
+    case pb::V2iPayload::kAnnouncement: {
       VehicleAnnouncement a;
-      a.protocol_version = message.protocol_version();
+      a.protocol_version = envelope.protocol_version;
       out.status = read_announcement(message.announcement(), a);
       out.body = std::move(a);
       break;
     }
-    case pb::V2iMessage::kCorrection: {
+    case pb::V2iPayload::kCorrection: {
       Correction c;
-      c.protocol_version = message.protocol_version();
+      c.protocol_version = envelope.protocol_version;
       out.status = read_correction(message.correction(), c);
       out.body = std::move(c);
       break;
     }
-    case pb::V2iMessage::kAdvertisement: {
+    case pb::V2iPayload::kAdvertisement: {
       RsuAdvertisement r;
-      r.protocol_version = message.protocol_version();
+      r.protocol_version = envelope.protocol_version;
       read_advertisement(message.advertisement(), r);
       out.status = DecodeStatus::kOk;
       out.body = std::move(r);
@@ -193,67 +283,58 @@ DecodedMessage decode_v2i_message(std::span<const std::uint8_t> bytes) {
   return out;
 }
 
+DecodedMessage decode_v2i_message(std::span<const std::uint8_t> bytes) {
+  const DecodedEnvelope envelope = decode_envelope(bytes);
+  if (envelope.status != DecodeStatus::kOk) {
+    DecodedMessage out;
+    out.status = envelope.status;
+    return out;
+  }
+  return decode_payload(envelope.envelope);
+}
+
+std::vector<std::uint8_t> signing_input(std::string_view payload) {
+  // Sized once and filled with memcpy (GCC 12 warns falsely about vector::insert growing here).
+  std::vector<std::uint8_t> out(kSigningContext.size() + 1 + payload.size());
+  std::memcpy(out.data(), kSigningContext.data(), kSigningContext.size());
+  out[kSigningContext.size()] = 0;
+  if (!payload.empty()) {
+    std::memcpy(out.data() + kSigningContext.size() + 1, payload.data(), payload.size());
+  }
+  return out;
+}
+
+std::vector<std::uint8_t> encode_v2i_message(const VehicleAnnouncement& a, const MessageHeader& header,
+                                             const security::SigningKey* signer) {
+  pb::V2iPayload payload;
+  write_announcement(a, *payload.mutable_announcement());
+  return seal(payload, a.protocol_version, header, signer);
+}
+
+std::vector<std::uint8_t> encode_v2i_message(const Correction& c, const MessageHeader& header,
+                                             const security::SigningKey* signer) {
+  pb::V2iPayload payload;
+  write_correction(c, *payload.mutable_correction());
+  return seal(payload, c.protocol_version, header, signer);
+}
+
+std::vector<std::uint8_t> encode_v2i_message(const RsuAdvertisement& r, const MessageHeader& header,
+                                             const security::SigningKey* signer) {
+  pb::V2iPayload payload;
+  write_advertisement(r, *payload.mutable_advertisement());
+  return seal(payload, r.protocol_version, header, signer);
+}
+
 std::vector<std::uint8_t> encode_v2i_message(const VehicleAnnouncement& a) {
-  pb::V2iMessage message;
-  message.set_protocol_version(a.protocol_version);
-  auto& out = *message.mutable_announcement();
-  out.set_vehicle_id(a.vehicle_id);
-  out.set_sequence(a.sequence);
-  out.set_generation_time_ns(a.generation_time);
-  out.set_length_m(a.size.length_m);
-  out.set_width_m(a.size.width_m);
-  out.set_height_m(a.size.height_m);
-  out.set_reference_offset_x_m(a.reference_offset.x());
-  out.set_reference_offset_y_m(a.reference_offset.y());
-  write_pose(a.pose, *out.mutable_pose());
-  write_covariance(a.pose_covariance, *out.mutable_pose_covariance());
-  if (a.speed_mps) {
-    out.set_speed_mps(*a.speed_mps);
-  }
-  if (a.yaw_rate_rps) {
-    out.set_yaw_rate_rps(*a.yaw_rate_rps);
-  }
-  out.mutable_reply_to()->set_address(a.reply_to.address);
-  out.mutable_reply_to()->set_port(a.reply_to.port);
-  return serialise(message);
+  return encode_v2i_message(a, {a.generation_time, a.sequence}, nullptr);
 }
 
 std::vector<std::uint8_t> encode_v2i_message(const Correction& c) {
-  pb::V2iMessage message;
-  message.set_protocol_version(c.protocol_version);
-  auto& out = *message.mutable_correction();
-  out.set_rsu_id(c.rsu_id);
-  out.set_vehicle_id(c.vehicle_id);
-  out.set_sequence(c.sequence);
-  out.set_sweep_time_ns(c.sweep_time);
-  write_pose(c.pose, *out.mutable_pose());
-  write_covariance(c.pose_covariance, *out.mutable_pose_covariance());
-  auto& q = *out.mutable_quality();
-  q.set_points_used(c.quality.points_used);
-  q.set_faces_seen(c.quality.faces_seen);
-  q.set_range_m(c.quality.range_m);
-  q.set_yaw_resolution(write_yaw_resolution(c.quality.yaw_resolution));
-  q.set_confidence(c.quality.confidence);
-  out.set_announcement_sequence(c.announcement_sequence);
-  return serialise(message);
+  return encode_v2i_message(c, {c.sweep_time, c.sequence}, nullptr);
 }
 
 std::vector<std::uint8_t> encode_v2i_message(const RsuAdvertisement& r) {
-  pb::V2iMessage message;
-  message.set_protocol_version(r.protocol_version);
-  auto& out = *message.mutable_advertisement();
-  out.set_rsu_id(r.rsu_id);
-  auto& p = *out.mutable_lidar_pose();
-  p.set_x(r.lidar_pose.x);
-  p.set_y(r.lidar_pose.y);
-  p.set_z(r.lidar_pose.z);
-  p.set_roll(r.lidar_pose.roll);
-  p.set_pitch(r.lidar_pose.pitch);
-  p.set_yaw(r.lidar_pose.yaw);
-  out.set_coverage_radius_m(r.coverage_radius_m);
-  out.set_correction_port(r.correction_port);
-  out.set_announcement_port(r.announcement_port);
-  return serialise(message);
+  return encode_v2i_message(r, {}, nullptr);
 }
 
 }  // namespace rsu::v2i

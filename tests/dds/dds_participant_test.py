@@ -184,6 +184,8 @@ dds:
   pose_topic: test/vehicles/{vehicle_id}/pose
   object_list_topic: test/fixes
   frame_id: %s
+security:
+  mode: insecure  # this test is about DDS; signed V2I is tests/integration's security case
 logging:
   level: info
   stats_interval_s: 0.5
@@ -229,7 +231,7 @@ def run(h):
     seconds = 4.0
     pose = "%f,%f,%f" % (TRUTH[0] + 0.4, TRUTH[1] - 0.3, TRUTH[2] + 0.05)  # the vehicle's own estimate is off
     h.spawn([h.args.announcer, "--rsu", "127.0.0.1:%d" % v2i_port, "--bind", "127.0.0.1", "--id", "1", "--pose",
-             pose, "--seconds", str(seconds + 3)], "vehicle.out")
+             pose, "--seconds", str(seconds + 3), "--insecure", "1"], "vehicle.out")
     env = dict(os.environ, CYCLONEDDS_URI="file://" + os.path.abspath(h.args.cyclone_config))
     participant = h.spawn([h.args.participant, "--domain", str(domain), "--cloud-topic", "rt/test/points",
                            "--pose-topic", "rt/test/vehicles/1/pose", "--fixes-topic", "rt/test/fixes",

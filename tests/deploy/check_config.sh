@@ -1,10 +1,16 @@
 #!/bin/sh
 # rsud --check-config accepts the shipped configuration and refuses broken ones with an error that
-# names the file, the line and the field. Usage: check_config.sh RSUD CONFIG WORK_DIR
+# names the file, the line and the field. The shipped file's keys (/etc/rsud/keys/...) are made here by
+# rsu-keygen and the paths pointed at them. Usage: check_config.sh RSUD CONFIG WORK_DIR RSU_KEYGEN
 set -u
-rsud=$1 config=$2 work=$3
-mkdir -p "$work"
-"$rsud" --check-config --config "$config" || { echo "FAIL: the shipped configuration is refused"; exit 1; }
+rsud=$1 shipped=$2 work=$3 keygen=$4
+rm -rf "$work" && mkdir -p "$work/keys"
+"$keygen" "$work/keys/rsu" >/dev/null || { echo "FAIL: rsu-keygen"; exit 1; }
+"$keygen" "$work/keys/car" --trust-list "$work/keys/trust.list" --role vehicle --ids 7 >/dev/null || exit 1
+config=$work/rsud.yaml
+sed "s|/etc/rsud/keys/|$work/keys/|" "$shipped" > "$config"
+out=$("$rsud" --check-config --config "$config") || { echo "FAIL: the shipped configuration is refused"; exit 1; }
+case "$out" in *"security signed: key "*"1 vehicle key(s)"*) ;; *) echo "FAIL: no security summary in: $out"; exit 1 ;; esac
 
 expect_refused() {  # NAME EXPECTED_TEXT: the file $work/NAME.yaml must be refused with EXPECTED_TEXT
   out=$("$rsud" --check-config --config "$work/$1.yaml" 2>&1); rc=$?
@@ -22,4 +28,17 @@ sed 's/^  port: 4500/  port: 70000/' "$config" > "$work/bad_port.yaml"
 expect_refused bad_port "v2i.port: must be a port number"
 printf 'rsu_id: 1\nlidar: [1, 2\n' > "$work/syntax.yaml"
 expect_refused syntax "syntax.yaml:"
+# Security: a missing key file, a malformed key, a malformed trust list, no security section at all.
+sed "s|$work/keys/rsu.key|$work/keys/missing.key|" "$config" > "$work/no_key.yaml"
+expect_refused no_key "security.key_file: $work/keys/missing.key"
+printf 'ed25519-secret-key 12345\n' > "$work/keys/short.key"
+sed "s|$work/keys/rsu.key|$work/keys/short.key|" "$config" > "$work/short_key.yaml"
+expect_refused short_key "short.key:1: key must be exactly 64 hex digits"
+{ cat "$work/keys/trust.list"; echo "vehicle 00 7"; } > "$work/keys/bad.list"
+sed "s|$work/keys/trust.list|$work/keys/bad.list|" "$config" > "$work/bad_list.yaml"
+expect_refused bad_list "bad.list:3: public key must be exactly 64 hex digits"
+sed '/^security:/,/^$/d' "$config" > "$work/no_security.yaml"  # signed by default, keys in /etc/rsud/keys
+if [ ! -e /etc/rsud/keys/rsu.key ]; then
+  expect_refused no_security "security.key_file: /etc/rsud/keys/rsu.key"
+fi
 echo "OK"

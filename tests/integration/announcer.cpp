@@ -1,9 +1,12 @@
 // Test helper for the integration tests: a minimal connected vehicle. Announces a fixed pose at 10 Hz
-// to rsud (wire_codec) from a UDP socket on --bind, and prints every correction it receives on that
-// socket, one line each, flushed:
+// to rsud from a UDP socket on --bind, signed with --key (or unsigned with --insecure), and prints
+// every correction it accepts on that socket (signed mode: verified against --trust-list, fresh, not
+// replayed; v2i/message_authenticator.h), one line each, flushed:
 //   correction <receive time ns> <vehicle id> <sequence> <sweep time ns> <x> <y> <yaw> <points> <faces> <rsu
 //   id>
-// Runs for --seconds and exits 0. Plain POSIX sockets: no dependence on the vehicle client.
+// and every datagram it refuses as "refused <verdict>". With --dump-bytes it also prints the bytes of
+// each announcement sent ("announced <hex>") and of each correction accepted ("received <hex>"), for
+// replay tests. Runs for --seconds and exits 0. Plain POSIX sockets: no dependence on the vehicle client.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -14,11 +17,17 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include "helper_io.h"
+#include "v2i/message_authenticator.h"
+#include "v2i/message_signer.h"
 #include "v2i/messages.h"
+#include "v2i/security/key_text.h"
+#include "v2i/security/trust_list.h"
 #include "v2i/wire_codec.h"
 
 namespace {
@@ -30,19 +39,25 @@ rsu::TimeNs wall_ns() {
 }
 
 [[noreturn]] void usage(const char* why) {
-  std::fprintf(
-      stderr, "announcer: %s\nusage: announcer --rsu IP:PORT --bind IP --id N --pose X,Y,YAW [--seconds S]\n",
-      why);
+  std::fprintf(stderr,
+               "announcer: %s\nusage: announcer --rsu IP:PORT --bind IP --id N --pose X,Y,YAW [--seconds S]\n"
+               "                 (--key FILE --trust-list FILE | --insecure 1) [--dump-bytes 1]\n",
+               why);
   std::exit(2);
 }
 
 sockaddr_in ipv4(const std::string& ip, int port) {
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (inet_pton(AF_INET, ip.c_str(), &a.sin_addr) != 1)
+  const auto a = rsu::integration::ipv4_endpoint(ip, port);
+  if (!a)
     usage("not an IPv4 address");
-  return a;
+  return *a;
+}
+
+std::string read_file(const std::string& path) {
+  const auto text = rsu::integration::file_text(path);
+  if (!text)
+    usage(("cannot read " + path).c_str());
+  return *text;
 }
 
 }  // namespace
@@ -51,6 +66,8 @@ int main(int argc, char** argv) {
   std::string rsu, bind_ip = "127.0.0.1";
   std::uint64_t id = 1;
   double x = 0, y = 0, yaw = 0, seconds = 10;
+  std::string key_path, trust_path;
+  bool insecure = false, dump = false;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--rsu")
@@ -59,6 +76,14 @@ int main(int argc, char** argv) {
       bind_ip = v;
     else if (k == "--id")
       id = std::strtoull(v.c_str(), nullptr, 10);
+    else if (k == "--key")
+      key_path = v;
+    else if (k == "--trust-list")
+      trust_path = v;
+    else if (k == "--insecure")
+      insecure = v == "1";
+    else if (k == "--dump-bytes")
+      dump = v == "1";
     else if (k == "--seconds")
       seconds = std::strtod(v.c_str(), nullptr);
     else if (k == "--pose") {
@@ -71,6 +96,22 @@ int main(int argc, char** argv) {
   if (colon == std::string::npos)
     usage("--rsu IP:PORT is required");
   const sockaddr_in to = ipv4(rsu.substr(0, colon), std::atoi(rsu.substr(colon + 1).c_str()));
+  if (!insecure && (key_path.empty() || trust_path.empty()))
+    usage("--key and --trust-list are required (or --insecure 1)");
+  rsu::v2i::SecurityConfig security;
+  security.mode = insecure ? rsu::v2i::SecurityMode::kInsecure : rsu::v2i::SecurityMode::kSigned;
+  std::optional<rsu::v2i::security::SigningKey> key;
+  rsu::v2i::security::TrustList trust;
+  try {
+    if (!insecure) {
+      key = rsu::v2i::security::parse_secret_key_text(read_file(key_path), key_path);
+      trust = rsu::v2i::security::parse_trust_list_text(read_file(trust_path), trust_path);
+    }
+  } catch (const std::exception& e) {
+    usage(e.what());
+  }
+  rsu::v2i::MessageSigner signer(key);
+  rsu::v2i::MessageAuthenticator authenticator(security, trust);
 
   const int fd = socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in local = ipv4(bind_ip, 0);
@@ -78,6 +119,8 @@ int main(int argc, char** argv) {
     usage("cannot bind");
   socklen_t len = sizeof local;
   getsockname(fd, reinterpret_cast<sockaddr*>(&local), &len);
+  std::printf("bound %d\n", ntohs(local.sin_port));
+  std::fflush(stdout);
 
   rsu::v2i::VehicleAnnouncement a;
   a.vehicle_id = id;
@@ -95,8 +138,12 @@ int main(int argc, char** argv) {
     if (now >= next_announce) {
       a.sequence += 1;
       a.generation_time = now;
-      const auto bytes = rsu::v2i::encode_v2i_message(a);
+      const auto bytes = signer.encode(a, now);
       sendto(fd, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
+      if (dump) {
+        std::printf("announced %s\n", rsu::v2i::security::to_hex(bytes).c_str());
+        std::fflush(stdout);
+      }
       next_announce += 100'000'000;
     }
     pollfd p{fd, POLLIN, 0};
@@ -106,10 +153,16 @@ int main(int argc, char** argv) {
     const ssize_t n = recv(fd, buffer.data(), buffer.size(), 0);
     if (n <= 0)
       continue;
-    const auto decoded = rsu::v2i::decode_v2i_message(std::span(buffer.data(), static_cast<std::size_t>(n)));
-    const auto* c = std::get_if<rsu::v2i::Correction>(&decoded.body);
-    if (c == nullptr)
+    const std::span<const std::uint8_t> datagram(buffer.data(), static_cast<std::size_t>(n));
+    const rsu::v2i::AuthenticatedMessage heard = authenticator.authenticate(datagram, wall_ns());
+    const auto* c = std::get_if<rsu::v2i::Correction>(&heard.message.body);
+    if (!heard.accepted() || c == nullptr || c->vehicle_id != id) {
+      std::printf("refused %s\n", heard.accepted() ? "not_mine" : rsu::v2i::to_string(heard.verdict));
+      std::fflush(stdout);
       continue;
+    }
+    if (dump)
+      std::printf("received %s\n", rsu::v2i::security::to_hex(datagram).c_str());
     std::printf("correction %lld %llu %u %lld %.4f %.4f %.5f %u %u %llu\n", static_cast<long long>(wall_ns()),
                 static_cast<unsigned long long>(c->vehicle_id), c->sequence,
                 static_cast<long long>(c->sweep_time), c->pose.x, c->pose.y, c->pose.yaw,

@@ -75,6 +75,19 @@ class Run:
         os.makedirs(self.work)
         self.children = Children()
         self.rsud = {}
+        self.make_keys()
+
+    def make_keys(self):
+        """Signed V2I, as deployed: rsu-keygen makes each RSU's key (the vehicle trusts RSU n for rsu id n)
+        and the car's (both RSUs trust it for vehicle 1): the east RSU verifies the car's own signature on
+        the datagram the west RSU shares."""
+        keys = self.path("keys")
+        os.makedirs(keys)
+        for name, trust, role, ids in (("rsu1", "vehicle_trust.list", "rsu", "1"),
+                                       ("rsu2", "vehicle_trust.list", "rsu", "2"),
+                                       ("car", "rsu_trust.list", "vehicle", "1")):
+            subprocess.run([self.args.keygen, os.path.join(keys, name), "--trust-list", os.path.join(keys, trust),
+                            "--role", role, "--ids", ids], check=True, stdout=subprocess.DEVNULL, timeout=30)
 
     def path(self, name):
         return os.path.join(self.work, name)
@@ -104,6 +117,8 @@ perception:
 v2i:
   listen_address: 127.0.0.1
   port: %d
+security:
+%s
 dds:
   enabled: true
   domain_id: %d
@@ -116,7 +131,10 @@ logging:
   summary_interval_s: 1.0
   stats_interval_s: 0.5
   stats_file: %s
-""" % (rsu, x, y, lidar_port, ", ".join(self.background(rsu)), COVERAGE_M, v2i_port, domain,
+""" % (rsu, x, y, lidar_port, ", ".join(self.background(rsu)), COVERAGE_M, v2i_port,
+                # bad_peers publishes unsigned announcements: it is about the bus, not signatures.
+                "  mode: insecure" if self.args.case == "bad_peers" else
+                "  key_file: keys/rsu%d.key\n  trust_list_file: keys/rsu_trust.list" % rsu, domain,
                 os.path.join(ROOT, "deploy", "cyclonedds-loopback.xml"), self.path("stats_%d" % rsu)))
         log = self.path("rsud_%d.log" % rsu)
         proc = self.children.spawn([self.args.rsud, "--config", config], log)
@@ -178,7 +196,8 @@ def drive(run):
     time.sleep(max(0.0, epoch / 1e9 - time.time()))
     vehicle = run.children.spawn([run.args.vehicle, "--vehicle-id", "1", "--rsu",
                                   "127.0.0.1:%d" % run.rsud[1]["v2i_port"], "--bind", "127.0.0.1:0", "--realtime",
-                                  "--drain-ms", "300", "--corrections", run.path("corrections.csv")],
+                                  "--drain-ms", "300", "--corrections", run.path("corrections.csv"),
+                                  "--key", run.path("keys/car.key"), "--trust-list", run.path("keys/vehicle_trust.list")],
                                  run.path("fused.csv"), stdin_path=ndt, stderr_path=run.path("vehicle.err"))
     for p in streams + [vehicle]:
         wait_for(lambda: p.poll() is not None, DRIVE_S + 15, "the drive to end")
@@ -305,6 +324,7 @@ def main():
     ap.add_argument("--rsu-sim", required=True)
     ap.add_argument("--vehicle", required=True, help="rsu-vehicle")
     ap.add_argument("--peer-publisher", help="rsud_test_peer_publisher (the bad_peers case)")
+    ap.add_argument("--keygen", required=True, help="rsu-keygen")
     ap.add_argument("--work", required=True)
     args = ap.parse_args()
     # Absolute: rsud resolves the paths in its configuration relative to the configuration's folder.

@@ -1,13 +1,19 @@
 #!/usr/bin/env python3
-"""Integration tests of rsud over loopback (issue #4): the real rsud, the real `rsu-sim stream` sending
-Velodyne VLP-16 packets of a scenario, and a minimal announcing vehicle (rsud_test_announcer).
+"""Integration tests of rsud over loopback (issues #4, #7): the real rsud, the real `rsu-sim stream`
+sending Velodyne VLP-16 packets of a scenario, and a minimal announcing vehicle (rsud_test_announcer).
+Keys are made by the real rsu-keygen; messages are signed (proto/v2i.proto) unless a case says not.
 
   corrections         the vehicle 15.5 m from the LiDAR gets corrections within 0.10 m of the truth
-  bad_input           garbage / truncated / oversized / unknown version / NaN, 0 m, 100 m sizes / a flood
+  bad_input           (insecure mode: the case is about malformed input, which Python cannot sign)
+                      garbage / truncated / oversized / unknown version / NaN, 0 m, 100 m sizes / a flood
                       from one source: each counted (stats file), logged at a bounded rate, no crash,
-                      and the vehicle keeps being served
+                      and the vehicle keeps being served; insecure mode is warned about and in the stats
   restart_and_reload  SIGTERM drains and exits 0; restarted, corrections resume within 1 s without
                       restarting the vehicle; SIGHUP reloads keeping the registry, a broken file is refused
+  security            forged corrections (unknown key, a vehicle's key), a replayed correction, replayed
+                      and stale announcements, unsigned and unentitled announcements: each dropped and
+                      counted by reason at rsud or the vehicle, while the genuine flow keeps working;
+                      SIGHUP with a trust list without the vehicle's key revokes it, restoring it resumes
 
 Every wait is bounded in time; every child is killed on the way out, whatever happens.
 """
@@ -28,7 +34,8 @@ from rsu_processes import ChildExited, Children, free_udp_port, wait_for  # noqa
 TRUTH = (15.0, 4.0, math.radians(20.0))  # the vehicle's footprint centre and yaw (static)
 
 
-# ---- a hand-written protobuf encoder for V2iMessage{announcement} (proto/v2i.proto) ------------------
+# ---- a hand-written protobuf encoder for an UNSIGNED SignedV2iMessage{V2iPayload{announcement}} -----
+# (proto/v2i.proto, version 2). Python has no Ed25519 here: signed datagrams come from the C++ helpers.
 def varint(n):
     n &= (1 << 64) - 1
     out = bytearray()
@@ -52,14 +59,16 @@ def field_bytes(number, payload):
     return varint((number << 3) | 2) + varint(len(payload)) + payload
 
 
-def announcement(vehicle_id, seq, length=4.89, width=1.92, height=1.70, version=1, reply=("127.0.0.2", 9)):
+def announcement(vehicle_id, seq, length=4.89, width=1.92, height=1.70, version=2, reply=("127.0.0.2", 9)):
     pose = field_double(1, 30.0) + field_double(2, -20.0) + field_double(3, 0.1)
     cov = field_bytes(1, b"".join(struct.pack("<d", v) for v in (0.25, 0, 0, 0, 0.25, 0, 0, 0, 0.01)))
     reply_to = field_bytes(1, reply[0].encode()) + field_varint(2, reply[1])
-    body = (field_varint(1, vehicle_id) + field_varint(2, seq) + field_varint(3, time.time_ns()) +
+    now = time.time_ns()
+    body = (field_varint(1, vehicle_id) + field_varint(2, seq) + field_varint(3, now) +
             field_double(4, length) + field_double(5, width) + field_double(6, height) +
             field_bytes(9, pose) + field_bytes(10, cov) + field_bytes(13, reply_to))
-    return field_varint(1, version) + field_bytes(2, body)
+    payload = field_varint(1, now) + field_varint(2, seq) + field_bytes(3, body)
+    return field_varint(1, version) + field_bytes(2, payload)
 
 
 # ---- the harness ------------------------------------------------------------------------------------
@@ -75,6 +84,23 @@ class Harness:
         self.rsud = None
         self.rsud_runs = 0
         self.log_path = None
+        self.insecure = False
+
+    def keygen(self, *args):
+        r = subprocess.run([self.args.keygen] + list(args), capture_output=True, text=True, timeout=30)
+        assert r.returncode == 0, r.stdout + r.stderr
+        return r.stdout
+
+    def write_keys(self):
+        """rsu-keygen: the RSU's key (trusted by the vehicle for rsu ids 1 and 2, the reload's), the car's
+        (trusted by rsud for vehicle 1) and mallory's, trusted by nobody."""
+        os.makedirs(self.path("keys"))
+        self.keygen(self.path("keys/rsu"), "--trust-list", self.path("keys/vehicle_trust.list"), "--role", "rsu",
+                    "--ids", "1,2")
+        self.keygen(self.path("keys/car"), "--trust-list", self.path("keys/rsu_trust.list"), "--role", "vehicle",
+                    "--ids", "1")
+        self.keygen(self.path("keys/mallory"))
+        assert oct(os.stat(self.path("keys/car.key")).st_mode & 0o777) == "0o600"
 
     def path(self, name):
         return os.path.join(self.work, name)
@@ -131,6 +157,11 @@ logging:
   stats_interval_s: 0.5
   stats_file: %s
 """ % (rsu_id, self.lidar_port, ", ".join(self.bg), self.v2i_port, self.path("stats"))
+        if self.insecure:
+            text += "security:\n  mode: insecure\n"
+        else:
+            text += "security:\n  mode: signed\n  key_file: keys/rsu.key\n  trust_list_file: %s\n" % (
+                self.path("keys/rsu_trust.list"))
         if broken:
             text = text.replace("model: vlp16", "model: vlp16\n  bogus_key: 1")
         with open(self.path("rsud.yaml"), "w") as f:
@@ -152,8 +183,20 @@ logging:
 
     def start_vehicle(self, seconds):
         pose = "%f,%f,%f" % (TRUTH[0] + 0.4, TRUTH[1] - 0.3, TRUTH[2] + 0.05)  # its own estimate is off
+        security = (["--insecure", "1"] if self.insecure else
+                    ["--key", self.path("keys/car.key"), "--trust-list", self.path("keys/vehicle_trust.list"),
+                     "--dump-bytes", "1"])
         return self.spawn([self.args.announcer, "--rsu", "127.0.0.1:%d" % self.v2i_port, "--bind", "127.0.0.1",
-                           "--id", "1", "--pose", pose, "--seconds", str(seconds)], "vehicle.out")
+                           "--id", "1", "--pose", pose, "--seconds", str(seconds)] + security, "vehicle.out")
+
+    def vehicle_lines(self, tag):
+        """The words of the announcer's lines starting with `tag` (bound, announced, received, refused)."""
+        with open(self.path("vehicle.out")) as f:
+            return [line.split()[1:] for line in f if line.startswith(tag + " ")]
+
+    def send(self, *args):
+        r = subprocess.run([self.args.send] + list(args), capture_output=True, text=True, timeout=30)
+        assert r.returncode == 0, r.stdout + r.stderr
 
     def corrections(self):
         out = []
@@ -248,8 +291,8 @@ def case_bad_input(h):
     check_accuracy(served_after)
     h.stop_rsud()
     s = h.stats()
-    expect = {"decode.too_large": 3, "validation.unsupported_version": 3, "validation.non_finite": 3,
-              "validation.length_out_of_range": 6}
+    expect = {"decode.too_large": 3, "decode.unsupported_version": 3, "validation.non_finite": 3,
+              "validation.length_out_of_range": 6, "security.insecure_mode": 1}
     for k, v in expect.items():
         assert s.get(k) == v, "%s = %s, expected %d" % (k, s.get(k), v)
     # 3 garbage + 3 truncated, and the flood's first ~100 (the burst) before the limit cut in.
@@ -261,6 +304,7 @@ def case_bad_input(h):
         assert 1 <= n <= 3, "%d log lines for %s (at most 3 one by one)" % (n, reason)
     assert "not logged one by one since the last summary" in log, log[-3000:]
     assert log.count("\n") < 200, "the bad input flooded the log (%d lines)" % log.count("\n")
+    assert "*** INSECURE MODE" in log, "insecure mode was not warned about"
     print("ok: bad input counted %s" % {k: s[k] for k in sorted(s) if k.startswith(("decode.", "validation.", "datagram."))
                                          and s[k] > 0})
 
@@ -298,20 +342,105 @@ def case_restart_and_reload(h):
     print("ok: resumed %.3f s after the restart; reload kept the registry; broken reload refused" % resume_s)
 
 
+def hex_bytes(words):
+    return bytes.fromhex(words[0])
+
+
+def case_security(h):
+    h.start_rsud()
+    h.start_stream(9.0)
+    h.start_vehicle(8.5)
+    h.wait_for(lambda: len(h.corrections()) >= 3, 5, "first corrections")
+    vehicle_port = int(h.vehicle_lines("bound")[0][0])
+    to_vehicle = "127.0.0.1:%d" % vehicle_port
+    to_rsud = "127.0.0.1:%d" % h.v2i_port
+    attacker = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    attacker.bind(("127.0.0.1", 0))  # the vehicle's host address: reply_to checks do not stop replays
+    t_attack = time.time_ns()
+
+    # At the vehicle: forged corrections (signed by a key nobody trusts, by the car's own key, which the
+    # vehicle does not list as an RSU's, and unsigned), and a genuine correction replayed.
+    h.send("--to", to_vehicle, "--kind", "correction", "--id", "1", "--rsu-id", "1", "--key",
+           h.path("keys/mallory.key"))
+    h.send("--to", to_vehicle, "--kind", "correction", "--id", "1", "--rsu-id", "1", "--key", h.path("keys/car.key"))
+    h.send("--to", to_vehicle, "--kind", "correction", "--id", "1", "--rsu-id", "1", "--unsigned", "1")
+    attacker.sendto(hex_bytes(h.vehicle_lines("received")[0]), ("127.0.0.1", vehicle_port))
+
+    # At rsud: a genuine announcement replayed now (duplicate) and one from over a second ago (stale),
+    # unsigned ones (the Python encoder, the helper), one signed by mallory, one by the car's key for
+    # another vehicle id, one from 5 s in the future.
+    time.sleep(1.2)  # so that the first announcement is over a second old
+    announced = h.vehicle_lines("announced")
+    attacker.sendto(hex_bytes(announced[-1]), ("127.0.0.1", h.v2i_port))
+    attacker.sendto(hex_bytes(announced[0]), ("127.0.0.1", h.v2i_port))  # > 1 s old by now
+    attacker.sendto(announcement(1, 999, reply=("127.0.0.1", vehicle_port)), ("127.0.0.1", h.v2i_port))
+    h.send("--to", to_rsud, "--kind", "announcement", "--id", "1", "--unsigned", "1", "--reply-port", str(vehicle_port))
+    h.send("--to", to_rsud, "--kind", "announcement", "--id", "1", "--key", h.path("keys/mallory.key"))
+    h.send("--to", to_rsud, "--kind", "announcement", "--id", "2", "--key", h.path("keys/car.key"))
+    h.send("--to", to_rsud, "--kind", "announcement", "--id", "1", "--key", h.path("keys/car.key"), "--seq",
+           "4000000", "--age-ms", "-5000")
+    time.sleep(1.2)  # stats written, corrections flowing
+    served_after = [c for c in h.corrections() if c["recv_ns"] > t_attack]
+    assert len(served_after) >= 5, "the genuine flow stopped after the attacks: %d" % len(served_after)
+    check_accuracy(served_after)  # and no forged fix (2 m off) was taken
+    refused = [w[0] for w in h.vehicle_lines("refused")]
+    expect_vehicle = {"unknown_signer": 2, "unsigned": 1, "duplicate": 1}
+    for reason, n in expect_vehicle.items():
+        assert refused.count(reason) == n, "vehicle refused %s: %s" % (reason, refused)
+    assert len(refused) == 4, refused
+    s = h.stats()
+    expect_rsud = {"auth.duplicate": 1, "auth.stale": 1, "auth.unsigned": 2, "auth.unknown_signer": 1,
+                   "auth.wrong_subject": 1, "auth.future": 1, "auth.bad_signature": 0,
+                   "auth.accepted_unverified": 0, "security.insecure_mode": 0}
+    for k, v in expect_rsud.items():
+        assert s.get(k) == v, "%s = %s, expected %d" % (k, s.get(k), v)
+    assert s["auth.accepted"] >= 20, s["auth.accepted"]
+    assert "bad input (auth:unsigned)" in h.log(), h.log()[-3000:]
+
+    # SIGHUP with the car's key revoked: its announcements are refused, it expires, no corrections;
+    # the key restored, service resumes.
+    trust = h.path("keys/rsu_trust.list")
+    with open(trust) as f:
+        listed = f.read()
+    with open(trust, "w") as f:
+        f.write("# nobody\n")
+    h.rsud.send_signal(signal.SIGHUP)
+    h.wait_for(lambda: "trust list of 0 key(s) in effect" in h.log(), 3, "the revoking reload")
+    before = h.stats()["auth.unknown_signer"]
+    h.wait_for(lambda: h.stats()["auth.unknown_signer"] >= before + 5, 3, "the car's announcements refused")
+    with open(trust, "w") as f:
+        f.write(listed)
+    h.rsud.send_signal(signal.SIGHUP)
+    h.wait_for(lambda: "trust list of 1 key(s) in effect" in h.log(), 3, "the restoring reload")
+    t = time.time_ns()
+    h.wait_for(lambda: any(c["recv_ns"] > t for c in h.corrections()), 3, "corrections after the key was restored")
+    h.stop_rsud()
+    s = h.stats()
+    verdicts = ("malformed", "unsigned", "malformed_signature", "unknown_signer", "bad_signature", "wrong_role",
+                "wrong_subject", "stale", "future", "duplicate", "too_old")
+    tried = s["auth.accepted"] + sum(s["auth." + v] for v in verdicts)
+    print("ok: rsud: %d announcements tried, %d accepted, refused %s; vehicle refused %s" % (
+        tried, s["auth.accepted"], {v: int(s["auth." + v]) for v in verdicts if s["auth." + v] > 0}, expect_vehicle))
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("case", choices=["corrections", "bad_input", "restart_and_reload"])
+    ap.add_argument("case", choices=["corrections", "bad_input", "restart_and_reload", "security"])
     ap.add_argument("--rsud", required=True)
     ap.add_argument("--rsu-sim", required=True)
     ap.add_argument("--announcer", required=True)
+    ap.add_argument("--send", required=True)
+    ap.add_argument("--keygen", required=True)
     ap.add_argument("--work", required=True)
     args = ap.parse_args()
     h = Harness(args)
     try:
+        h.insecure = args.case == "bad_input"
+        h.write_keys()
         h.write_scenarios()
         h.write_config()
         {"corrections": case_corrections, "bad_input": case_bad_input,
-         "restart_and_reload": case_restart_and_reload}[args.case](h)
+         "restart_and_reload": case_restart_and_reload, "security": case_security}[args.case](h)
     except (AssertionError, TimeoutError, ChildExited) as e:
         print("FAIL: %s" % e)
         if h.log_path and os.path.exists(h.log_path):

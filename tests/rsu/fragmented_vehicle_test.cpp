@@ -32,6 +32,7 @@ TEST(RsuCoreFragments, HeadOnVehicleAtLongRangeIsFixedWholeOrNotAtAll) {
   config.sensor_model = "vlp32c";
   config.mount = scenario.lidar.mount;
   config.background.learning_frames = 3;
+  config.security.mode = v2i::SecurityMode::kInsecure;  // this test is about fragments, not signatures
   RsuCore core(config);
 
   // The vehicle announces its true pose and motion at 10 Hz (this test is about the RSU's own error),

@@ -28,6 +28,8 @@ RsuCoreConfig config_for(std::uint64_t rsu_id, const Pose3& mount) {
   c.sensor_model = "vlp16";
   c.mount = mount;
   c.background.learning_frames = 3;
+  // Unsigned: these tests are about sharing (rsu_core_security_test.cpp verifies signed shared ones).
+  c.security.mode = v2i::SecurityMode::kInsecure;
   return c;
 }
 

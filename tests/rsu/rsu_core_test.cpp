@@ -30,6 +30,8 @@ RsuCoreConfig test_config() {
   c.sensor_model = "vlp16";
   c.mount = testing::roadside_mount();
   c.background.learning_frames = 3;
+  // These tests are about everything but signatures (rsu_core_security_test.cpp covers signed mode).
+  c.security.mode = v2i::SecurityMode::kInsecure;
   return c;
 }
 
@@ -114,7 +116,7 @@ TEST(RsuCore, BadDatagramsAreCountedByReason) {
       {garbage, "decode:parse_error"},
       {truncated, "decode:parse_error"},
       {oversized, "decode:too_large"},
-      {v2i::encode_v2i_message(version), "validation:unsupported_version"},
+      {v2i::encode_v2i_message(version), "decode:unsupported_version"},
       {v2i::encode_v2i_message(nan_size), "validation:non_finite"},
       {v2i::encode_v2i_message(zero), "validation:length_out_of_range"},
       {v2i::encode_v2i_message(huge), "validation:length_out_of_range"},
@@ -128,7 +130,8 @@ TEST(RsuCore, BadDatagramsAreCountedByReason) {
   EXPECT_EQ(core.decode_counts().count(v2i::DecodeStatus::kEmpty), 1U);
   EXPECT_EQ(core.decode_counts().count(v2i::DecodeStatus::kTooLarge), 1U);
   EXPECT_EQ(core.validation_counts().count(v2i::AnnouncementReason::kLengthOutOfRange), 2U);
-  EXPECT_EQ(core.datagram_stages().count(DatagramStage::kValidation), 4U);
+  EXPECT_EQ(core.decode_counts().count(v2i::DecodeStatus::kUnsupportedVersion), 1U);
+  EXPECT_EQ(core.datagram_stages().count(DatagramStage::kValidation), 3U);
   EXPECT_EQ(core.datagram_stages().count(DatagramStage::kReplyToMismatch), 1U);
   EXPECT_EQ(core.registry().size(), 0U);
 

@@ -38,7 +38,8 @@ TEST(AnnouncementValidation, EachDefectHasItsReason) {
   using R = AnnouncementReason;
   const std::vector<Case> cases = {
       {"version 0 (absent)", [](auto& a) { a.protocol_version = 0; }, R::kUnsupportedVersion},
-      {"version 2", [](auto& a) { a.protocol_version = 2; }, R::kUnsupportedVersion},
+      {"version 1", [](auto& a) { a.protocol_version = 1; }, R::kUnsupportedVersion},
+      {"version 3", [](auto& a) { a.protocol_version = 3; }, R::kUnsupportedVersion},
       {"id 0", [](auto& a) { a.vehicle_id = 0; }, R::kMissingVehicleId},
       {"NaN x", [nan](auto& a) { a.pose.x = nan; }, R::kNonFinite},
       {"inf length", [inf](auto& a) { a.size.length_m = inf; }, R::kNonFinite},

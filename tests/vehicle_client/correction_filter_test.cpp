@@ -1,16 +1,23 @@
-// CorrectionFilter: ordering per RSU, restart of an RSU, sequence wrap-around and bounded memory.
+// CorrectionFilter: ordering per RSU, restart of an RSU, sequence wrap-around and bounded memory (in
+// insecure mode: those are about ordering), then signed mode: only genuine, fresh RSU corrections.
 #include "vehicle_client/correction_filter.h"
 
 #include <gtest/gtest.h>
 
+#include "v2i/message_signer.h"
 #include "v2i/wire_codec.h"
 
 namespace rsu::vehicle_client {
 namespace {
 
 constexpr std::uint64_t kVehicleId = 99;
+constexpr TimeNs kNow = 1'700'000'000 * kNsPerSecond;
 
-std::vector<std::uint8_t> datagram(std::uint64_t rsu_id, std::uint32_t sequence, TimeNs sweep_time) {
+CorrectionFilterConfig insecure(std::size_t max_tracked_rsus) {
+  return {kVehicleId, max_tracked_rsus, {.mode = v2i::SecurityMode::kInsecure, .replay = {}}, {}};
+}
+
+v2i::Correction correction(std::uint64_t rsu_id, std::uint32_t sequence, TimeNs sweep_time) {
   v2i::Correction c;
   c.rsu_id = rsu_id;
   c.vehicle_id = kVehicleId;
@@ -18,65 +25,112 @@ std::vector<std::uint8_t> datagram(std::uint64_t rsu_id, std::uint32_t sequence,
   c.sweep_time = sweep_time;
   c.pose = {1.0, 2.0, 0.5};
   c.pose_covariance = Eigen::Matrix3d::Identity() * 0.01;
-  return v2i::encode_v2i_message(c);
+  return c;
+}
+
+// Unsigned.
+std::vector<std::uint8_t> datagram(std::uint64_t rsu_id, std::uint32_t sequence, TimeNs sweep_time) {
+  return v2i::encode_v2i_message(correction(rsu_id, sequence, sweep_time));
+}
+
+v2i::security::SigningKey key_from(std::uint8_t fill) {
+  v2i::security::Seed seed{};
+  seed.fill(fill);
+  return v2i::security::SigningKey(seed);
 }
 
 TEST(CorrectionFilter, OrderIsKeptPerRsu) {
-  CorrectionFilter filter({kVehicleId, 64});
+  CorrectionFilter filter(insecure(64));
   v2i::Correction out;
-  EXPECT_EQ(filter.check(datagram(1, 10, 1000), out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(filter.check(datagram(1, 10, 1000), kNow, out), CorrectionVerdict::kAccepted);
   EXPECT_EQ(out.sequence, 10U);
   // Another RSU has its own counter and clock of sweeps: an earlier sweep from it is news.
-  EXPECT_EQ(filter.check(datagram(2, 3, 500), out), CorrectionVerdict::kAccepted);
-  EXPECT_EQ(filter.check(datagram(1, 10, 1000), out), CorrectionVerdict::kDuplicate);
-  EXPECT_EQ(filter.check(datagram(1, 9, 900), out), CorrectionVerdict::kStale);
-  EXPECT_EQ(filter.check(datagram(1, 11, 1100), out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(filter.check(datagram(2, 3, 500), kNow, out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(filter.check(datagram(1, 10, 1000), kNow, out), CorrectionVerdict::kDuplicate);
+  EXPECT_EQ(filter.check(datagram(1, 9, 900), kNow, out), CorrectionVerdict::kStale);
+  EXPECT_EQ(filter.check(datagram(1, 11, 1100), kNow, out), CorrectionVerdict::kAccepted);
   EXPECT_EQ(filter.counts().count(CorrectionVerdict::kAccepted), 3U);
   EXPECT_EQ(filter.counts().total(), 5U);
   EXPECT_EQ(filter.sequence_restarts(), 0U);
 }
 
 TEST(CorrectionFilter, ARestartedRsuIsHeardAgain) {
-  CorrectionFilter filter({kVehicleId, 64});
+  CorrectionFilter filter(insecure(64));
   v2i::Correction out;
-  ASSERT_EQ(filter.check(datagram(1, 500, 5000), out), CorrectionVerdict::kAccepted);
+  ASSERT_EQ(filter.check(datagram(1, 500, 5000), kNow, out), CorrectionVerdict::kAccepted);
   // The daemon restarted: its counter begins again, its sweeps are later.
-  EXPECT_EQ(filter.check(datagram(1, 0, 9000), out), CorrectionVerdict::kAccepted);
-  EXPECT_EQ(filter.check(datagram(1, 1, 9100), out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(filter.check(datagram(1, 0, 9000), kNow, out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(filter.check(datagram(1, 1, 9100), kNow, out), CorrectionVerdict::kAccepted);
   EXPECT_EQ(filter.sequence_restarts(), 1U);
 }
 
 TEST(CorrectionFilter, SequenceWrapAroundIsNotARestart) {
-  CorrectionFilter filter({kVehicleId, 64});
+  CorrectionFilter filter(insecure(64));
   v2i::Correction out;
-  ASSERT_EQ(filter.check(datagram(1, 0xFFFFFFFFU, 100), out), CorrectionVerdict::kAccepted);
-  EXPECT_EQ(filter.check(datagram(1, 0, 200), out), CorrectionVerdict::kAccepted);
+  ASSERT_EQ(filter.check(datagram(1, 0xFFFFFFFFU, 100), kNow, out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(filter.check(datagram(1, 0, 200), kNow, out), CorrectionVerdict::kAccepted);
   EXPECT_EQ(filter.sequence_restarts(), 0U);
 }
 
 TEST(CorrectionFilter, ForgetsTheLeastRecentlyHeardRsuBeyondItsCapacity) {
-  CorrectionFilter filter({kVehicleId, 2});
+  CorrectionFilter filter(insecure(2));
   v2i::Correction out;
-  ASSERT_EQ(filter.check(datagram(1, 1, 100), out), CorrectionVerdict::kAccepted);
-  ASSERT_EQ(filter.check(datagram(2, 1, 100), out), CorrectionVerdict::kAccepted);
-  ASSERT_EQ(filter.check(datagram(3, 1, 100), out), CorrectionVerdict::kAccepted);  // RSU 1 forgotten
+  ASSERT_EQ(filter.check(datagram(1, 1, 100), kNow, out), CorrectionVerdict::kAccepted);
+  ASSERT_EQ(filter.check(datagram(2, 1, 100), kNow, out), CorrectionVerdict::kAccepted);
+  ASSERT_EQ(filter.check(datagram(3, 1, 100), kNow, out), CorrectionVerdict::kAccepted);  // RSU 1 forgotten
   // RSU 1's duplicate is no longer recognised (memory stays bounded) ...
-  EXPECT_EQ(filter.check(datagram(1, 1, 100), out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(filter.check(datagram(1, 1, 100), kNow, out), CorrectionVerdict::kAccepted);
   // ... which evicted RSU 2, while RSU 3 is still remembered.
-  EXPECT_EQ(filter.check(datagram(3, 1, 100), out), CorrectionVerdict::kDuplicate);
+  EXPECT_EQ(filter.check(datagram(3, 1, 100), kNow, out), CorrectionVerdict::kDuplicate);
 }
 
 TEST(CorrectionFilter, TruncatedBytesAreGarbage) {
-  CorrectionFilter filter({kVehicleId, 64});
+  CorrectionFilter filter(insecure(64));
   v2i::Correction out;
   const std::vector<std::uint8_t> whole = datagram(1, 1, 100);
   ASSERT_GT(whole.size(), 10U);
   // The correction is one length-delimited field of the envelope: every strict prefix either cuts it
   // (a parse error) or leaves it out (no body), so every one is garbage.
   for (std::size_t n = 0; n < whole.size(); ++n) {
-    EXPECT_EQ(filter.check({whole.data(), n}, out), CorrectionVerdict::kGarbage) << n << " bytes";
+    EXPECT_EQ(filter.check({whole.data(), n}, kNow, out), CorrectionVerdict::kGarbage) << n << " bytes";
   }
-  EXPECT_EQ(filter.check(whole, out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(filter.check(whole, kNow, out), CorrectionVerdict::kAccepted);
+}
+
+// Signed mode: the RSU's signature is checked before anything else; forged, replayed, unsigned, stale
+// and mis-attributed corrections are refused and counted, and the genuine flow keeps working.
+TEST(CorrectionFilter, SignedModeTakesOnlyGenuineFreshCorrections) {
+  const v2i::security::SigningKey rsu_key = key_from(1);
+  const v2i::security::SigningKey forger = key_from(2);
+  CorrectionFilterConfig config{kVehicleId, 64, {}, {}};
+  config.trust_list.add({rsu_key.public_key(), v2i::security::SignerRole::kRsu, {1}});
+  CorrectionFilter filter(config);
+  v2i::MessageSigner rsu(rsu_key);
+  v2i::MessageSigner forged(forger);
+  v2i::Correction out;
+  const std::vector<std::uint8_t> first = rsu.encode(correction(1, 1, kNow - 30 * kNsPerMs), kNow);
+  EXPECT_EQ(filter.check(first, kNow, out), CorrectionVerdict::kAccepted);
+  EXPECT_EQ(out.sequence, 1U);
+  EXPECT_EQ(filter.check(forged.encode(correction(1, 2, kNow), kNow), kNow, out),
+            CorrectionVerdict::kNotAuthentic);
+  EXPECT_EQ(filter.check(first, kNow + 10, out), CorrectionVerdict::kNotAuthentic);            // replayed
+  EXPECT_EQ(filter.check(datagram(1, 3, kNow), kNow, out), CorrectionVerdict::kNotAuthentic);  // unsigned
+  EXPECT_EQ(filter.check(rsu.encode(correction(2, 4, kNow), kNow), kNow, out),
+            CorrectionVerdict::kNotAuthentic);  // RSU 1's key speaking for RSU 2
+  EXPECT_EQ(filter.check(rsu.encode(correction(1, 5, kNow), kNow - 2 * kNsPerSecond), kNow, out),
+            CorrectionVerdict::kNotAuthentic);  // generated 2 s ago
+  // The genuine flow goes on.
+  EXPECT_EQ(filter.check(rsu.encode(correction(1, 6, kNow + 50), kNow + 60), kNow + 70, out),
+            CorrectionVerdict::kAccepted);
+  EXPECT_EQ(out.sequence, 6U);
+  const auto& a = filter.authentication_counts();
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kAccepted), 2U);
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kUnknownSigner), 1U);
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kDuplicate), 1U);
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kUnsigned), 1U);
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kWrongSubject), 1U);
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kStale), 1U);
+  EXPECT_EQ(filter.counts().count(CorrectionVerdict::kNotAuthentic), 5U);
 }
 
 }  // namespace

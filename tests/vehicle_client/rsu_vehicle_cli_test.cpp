@@ -1,5 +1,6 @@
-// The rsu-vehicle CLI end to end: NDT poses in, a fake RSU (plain UDP socket) answering each
-// announcement with a correction from the test's own truth, fused poses and a corrections file out.
+// The rsu-vehicle CLI end to end, signed: NDT poses in, a fake RSU (plain UDP socket) that verifies each
+// announcement against the vehicle key the test generated and answers with a correction signed by its
+// RSU key, from the test's own truth; fused poses and a corrections file out.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -17,7 +18,11 @@
 #include "common/angles.h"
 #include "common/random.h"
 #include "fake_rsu.h"
+#include "v2i/message_authenticator.h"
+#include "v2i/message_signer.h"
+#include "v2i/security/key_text.h"
 #include "v2i/wire_codec.h"
+#include "vehicle_client/clock.h"
 
 namespace rsu::vehicle_client {
 namespace {
@@ -36,9 +41,23 @@ double truth_x(TimeNs t) {
 }
 constexpr double kTruthY = 3.0;
 
+v2i::security::SigningKey key_from(std::uint8_t fill) {
+  v2i::security::Seed seed{};
+  seed.fill(fill);
+  return v2i::security::SigningKey(seed);
+}
+
+// Holds the vehicle's key file and a trust list naming the fake RSU's key (rsu id 3).
 struct TempDir {
   fs::path path = fs::temp_directory_path() / ("rsu_vehicle_cli_" + std::to_string(::getpid()));
-  TempDir() { fs::create_directories(path); }
+  v2i::security::SigningKey car = key_from(11);
+  v2i::security::SigningKey rsu = key_from(12);
+  TempDir() {
+    fs::create_directories(path);
+    std::ofstream(path / "car.key") << v2i::security::secret_key_text(car);
+    std::ofstream(path / "trust.list")
+        << v2i::security::trust_entry_text({rsu.public_key(), v2i::security::SignerRole::kRsu, {3}});
+  }
   ~TempDir() { fs::remove_all(path); }
 };
 
@@ -87,6 +106,7 @@ struct CliRun {
 std::string command_line(const TempDir& dir, const test::FakeRsu& rsu, const std::string& input) {
   return std::string(RSU_VEHICLE_BIN) + " --vehicle-id " + std::to_string(kVehicleId) + " --rsu " +
          rsu.endpoint_text() + " --bind 127.0.0.1:0 --realtime --drain-ms 200 --announce-period-ms 0" +
+         " --key " + (dir.path / "car.key").string() + " --trust-list " + (dir.path / "trust.list").string() +
          " --corrections " + (dir.path / "corrections.csv").string() + " < " + (dir.path / input).string() +
          " > " + (dir.path / "fused.csv").string() + " 2> " + (dir.path / "stderr.txt").string();
 }
@@ -108,6 +128,10 @@ TEST(RsuVehicleCli, FusesTheFakeRsusCorrectionsAndBeatsNdt) {
   CliRun run(command_line(dir, rsu, "ndt.csv"));
 
   // The RSU: one correction per announcement, swept 10 ms after the announced pose, from the truth.
+  v2i::security::TrustList vehicles;
+  vehicles.add({dir.car.public_key(), v2i::security::SignerRole::kVehicle, {kVehicleId}});
+  v2i::MessageAuthenticator authenticator(v2i::SecurityConfig{}, vehicles);
+  v2i::MessageSigner signer(dir.rsu);
   int announcements = 0;
   std::uint32_t sequence = 100;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
@@ -116,8 +140,9 @@ TEST(RsuVehicleCli, FusesTheFakeRsusCorrectionsAndBeatsNdt) {
     if (!bytes) {
       continue;
     }
-    const v2i::DecodedMessage decoded = v2i::decode_v2i_message(*bytes);
-    const auto* a = std::get_if<v2i::VehicleAnnouncement>(&decoded.body);
+    const v2i::AuthenticatedMessage heard = authenticator.authenticate(*bytes, system_clock_now());
+    ASSERT_EQ(heard.verdict, v2i::AuthVerdict::kAccepted);
+    const auto* a = std::get_if<v2i::VehicleAnnouncement>(&heard.message.body);
     ASSERT_NE(a, nullptr);
     ASSERT_EQ(a->vehicle_id, kVehicleId);
     EXPECT_DOUBLE_EQ(a->size.length_m, 4.89);  // the CLI's default box
@@ -132,7 +157,7 @@ TEST(RsuVehicleCli, FusesTheFakeRsusCorrectionsAndBeatsNdt) {
     c.pose_covariance = Eigen::Vector3d(0.03 * 0.03, 0.03 * 0.03, 0.02 * 0.02).asDiagonal();
     c.quality.points_used = 200;
     c.announcement_sequence = a->sequence;
-    rsu.send_to(v2i::encode_v2i_message(c), a->reply_to.address, a->reply_to.port);
+    rsu.send_to(signer.encode(c, system_clock_now()), a->reply_to.address, a->reply_to.port);
   }
   run.thread.join();
   ASSERT_EQ(run.exit_code, 0) << slurp(dir.path / "stderr.txt");

@@ -13,6 +13,8 @@
 #include <variant>
 
 #include "fake_rsu.h"
+#include "v2i/message_authenticator.h"
+#include "v2i/message_signer.h"
 #include "v2i/wire_codec.h"
 
 namespace rsu::vehicle_client {
@@ -39,6 +41,8 @@ VehicleClientConfig config_for(const test::FakeRsu& rsu) {
   config.rsu_endpoints = {rsu.endpoint_text()};
   config.bind_address = "127.0.0.1";
   config.announce_period = 0;  // no keep-alive unless a test wants it
+  // Unsigned: these tests are about the client's mechanics (SignedMode... below covers signatures).
+  config.security.mode = v2i::SecurityMode::kInsecure;
   return config;
 }
 
@@ -116,7 +120,7 @@ TEST(VehicleClient, AnnouncementsCarryTheStateAndIncreasingSequences) {
     ASSERT_TRUE(bytes.has_value()) << "announcement " << k;
     const v2i::VehicleAnnouncement a = decode_announcement(*bytes);
     const VehicleState expected = state_at(k);
-    EXPECT_EQ(a.protocol_version, 1U);
+    EXPECT_EQ(a.protocol_version, v2i::kProtocolVersion);
     EXPECT_EQ(a.vehicle_id, kVehicleId);
     EXPECT_EQ(a.sequence, static_cast<std::uint32_t>(k));
     EXPECT_EQ(a.generation_time, expected.time);
@@ -234,7 +238,7 @@ TEST(VehicleClient, BadDatagramsAreCountedByReasonAndDropped) {
   other.vehicle_id = kVehicleId + 1;
   send(v2i::encode_v2i_message(other));  // wrong vehicle
   v2i::Correction future_version = correction(2, t0 + 100);
-  future_version.protocol_version = 2;
+  future_version.protocol_version = v2i::kProtocolVersion + 1;
   send(v2i::encode_v2i_message(future_version));  // unknown version
   v2i::Correction nan = correction(2, t0 + 100);
   nan.pose.y = std::numeric_limits<double>::quiet_NaN();
@@ -333,6 +337,7 @@ TEST(VehicleClient, NoCallbackAfterStop) {
 TEST(VehicleClient, BadConfigIsRefusedWithAReason) {
   asio::io_context io;
   VehicleClientConfig config;
+  config.security.mode = v2i::SecurityMode::kInsecure;
   config.vehicle_id = 1;
   EXPECT_THROW(VehicleClient(io, config), std::invalid_argument);  // no RSU
   config.rsu_endpoints = {"127.0.0.1"};
@@ -350,6 +355,67 @@ TEST(VehicleClient, BadConfigIsRefusedWithAReason) {
   config.reply_address.clear();
   config.vehicle_id = 0;
   EXPECT_THROW(VehicleClient(io, config), std::invalid_argument);
+  config.vehicle_id = 1;
+  EXPECT_NO_THROW(VehicleClient(io, config));
+  config.security.mode = v2i::SecurityMode::kSigned;  // without a key
+  EXPECT_THROW(VehicleClient(io, config), std::invalid_argument);
+}
+
+v2i::security::SigningKey key_from(std::uint8_t fill) {
+  v2i::security::Seed seed{};
+  seed.fill(fill);
+  return v2i::security::SigningKey(seed);
+}
+
+// Signed mode over loopback: the RSU can verify the announcements as this vehicle's, and the client
+// uses a correction only when the RSU's key signed it, fresh and not replayed.
+TEST(VehicleClient, SignedModeSignsAnnouncementsAndVerifiesCorrectionsBeforeUse) {
+  const v2i::security::SigningKey car = key_from(3);
+  const v2i::security::SigningKey rsu_key = key_from(4);
+  const v2i::security::SigningKey forger = key_from(5);
+  test::FakeRsu rsu;
+  asio::io_context io;
+  ManualClock clock;
+  VehicleClientConfig config = config_for(rsu);
+  config.security.mode = v2i::SecurityMode::kSigned;
+  config.signing_key = car;
+  config.trust_list.add({rsu_key.public_key(), v2i::security::SignerRole::kRsu, {7}});
+  VehicleClient client(io, config, clock.clock());
+
+  ASSERT_EQ(client.announce(state_at(0)), v2i::AnnouncementReason::kValid);
+  ASSERT_TRUE(run_until(io, [&] { return client.stats().announcements_sent == 1; }));
+  const auto sent = rsu.receive();
+  ASSERT_TRUE(sent.has_value());
+  v2i::security::TrustList rsu_trust;
+  rsu_trust.add({car.public_key(), v2i::security::SignerRole::kVehicle, {kVehicleId}});
+  v2i::MessageAuthenticator at_rsu(v2i::SecurityConfig{}, rsu_trust);
+  const v2i::AuthenticatedMessage heard = at_rsu.authenticate(*sent, kStart + 5 * kNsPerMs);
+  ASSERT_EQ(heard.verdict, v2i::AuthVerdict::kAccepted);
+  const auto& a = std::get<v2i::VehicleAnnouncement>(heard.message.body);
+  EXPECT_EQ(heard.message.header.generation_time, kStart);  // the client's clock when it signed
+
+  v2i::MessageSigner rsu_signer(rsu_key);
+  v2i::MessageSigner forged(forger);
+  auto send = [&](const std::vector<std::uint8_t>& bytes) {
+    rsu.send_to(bytes, a.reply_to.address, a.reply_to.port);
+  };
+  const std::vector<std::uint8_t> genuine = rsu_signer.encode(correction(1, kStart - 40 * kNsPerMs), kStart);
+  send(genuine);
+  send(forged.encode(correction(2, kStart - 30 * kNsPerMs), kStart));           // forged: wrong key
+  send(genuine);                                                                // replayed
+  send(v2i::encode_v2i_message(correction(3, kStart - 20 * kNsPerMs)));         // unsigned
+  send(rsu_signer.encode(correction(4, kStart - 10 * kNsPerMs), kStart + 10));  // genuine
+  ASSERT_TRUE(run_until(io, [&] { return client.stats().datagrams_received == 5; }));
+  const VehicleClientStats stats = client.stats();
+  EXPECT_EQ(stats.accepted(), 2U);
+  EXPECT_EQ(stats.corrections.count(CorrectionVerdict::kNotAuthentic), 3U);
+  EXPECT_EQ(stats.authentication.count(v2i::AuthVerdict::kUnknownSigner), 1U);
+  EXPECT_EQ(stats.authentication.count(v2i::AuthVerdict::kDuplicate), 1U);
+  EXPECT_EQ(stats.authentication.count(v2i::AuthVerdict::kUnsigned), 1U);
+  const auto polled = client.poll();
+  ASSERT_EQ(polled.size(), 2U);
+  EXPECT_EQ(polled[0].correction.sequence, 1U);
+  EXPECT_EQ(polled[1].correction.sequence, 4U);
 }
 
 }  // namespace

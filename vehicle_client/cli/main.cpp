@@ -7,13 +7,17 @@
 
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "v2i/security/key_text.h"
+#include "v2i/security/trust_list.h"
 #include "vehicle_client/cli/csv_writers.h"
 #include "vehicle_client/ndt_csv.h"
 #include "vehicle_client/pose_fuser.h"
@@ -30,7 +34,13 @@ constexpr const char* kAbout =
     "rsu-vehicle: announce a vehicle to roadside LiDAR units, receive their corrections and fuse them\n"
     "with the vehicle's own NDT poses.\n"
     "\n"
-    "usage: rsu-vehicle --vehicle-id ID --rsu HOST:PORT [options] < ndt.csv > fused.csv\n"
+    "usage: rsu-vehicle --vehicle-id ID --rsu HOST:PORT --key VEHICLE.key --trust-list TRUST.list\n"
+    "                   [options] < ndt.csv > fused.csv\n"
+    "\n"
+    "Security (proto/v2i.proto): announcements are signed with --key (Ed25519, made by rsu-keygen; the\n"
+    "RSUs' trust lists must bind its public key to --vehicle-id), and corrections are used only when\n"
+    "signed by an RSU key in --trust-list, generated within --max-age-ms of this host's clock and not\n"
+    "replayed. --insecure signs and verifies nothing: local development only (it warns).\n"
     "\n"
     "stdin: NDT poses, CSV with a header line, one of\n"
     "  time_ns,x,y,yaw\n"
@@ -65,6 +75,22 @@ struct Options {
   double ndt_sigma_yaw = 0.02;
 };
 
+std::string read_file(const std::string& path, const char* option) {
+  std::ifstream in(path);
+  if (!in) {
+    throw std::invalid_argument(std::string(option) + ": cannot read \"" + path + "\"");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void warn_insecure() {
+  std::fprintf(stderr,
+               "rsu-vehicle: *** INSECURE MODE: announcements are NOT signed and corrections are NOT "
+               "verified; anyone can forge or replay corrections. Local development only. ***\n");
+}
+
 // Empty when --help was given (and printed).
 std::optional<Options> parse_options(int argc, char** argv) {
   Options o;
@@ -72,6 +98,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
   double drain_ms = 300.0;
   double announce_period_ms = 100.0;
   std::uint64_t vehicle_id = 0;
+  std::string key_path;
+  std::string trust_path;
+  double max_age_ms = 1000.0;
   po::options_description d(kAbout);
   d.add_options()("help,h", "show this help")("vehicle-id", po::value<std::uint64_t>(&vehicle_id)->required(),
                                               "non-zero vehicle id (stable for the trip)")(
@@ -99,7 +128,13 @@ std::optional<Options> parse_options(int argc, char** argv) {
       "lines come")("corrections", po::value<std::string>(&o.corrections_path),
                     "write the corrections received to FILE (CSV)")(
       "drain-ms", po::value<double>(&drain_ms)->default_value(drain_ms, "300"),
-      "wait this long for corrections after EOF")(
+      "wait this long for corrections after EOF")("key", po::value<std::string>(&key_path),
+                                                  "the vehicle's Ed25519 secret key file (rsu-keygen)")(
+      "trust-list", po::value<std::string>(&trust_path),
+      "trust list file: the RSU keys whose corrections are accepted")(
+      "max-age-ms", po::value<double>(&max_age_ms)->default_value(max_age_ms, "1000"),
+      "refuse corrections generated more than this before (or after) this host's clock")(
+      "insecure", "send unsigned announcements and accept unsigned corrections (local development only)")(
       "ndt-sigma-xy", po::value<double>(&o.ndt_sigma_xy)->default_value(o.ndt_sigma_xy, "0.2"),
       "NDT position standard deviation, m, for rows without variances")(
       "ndt-sigma-yaw", po::value<double>(&o.ndt_sigma_yaw)->default_value(o.ndt_sigma_yaw, "0.02"),
@@ -134,6 +169,21 @@ std::optional<Options> parse_options(int argc, char** argv) {
     throw std::invalid_argument("--ndt-sigma-xy and --ndt-sigma-yaw must be positive");
   }
   o.drain = from_seconds(drain_ms * 1e-3);
+  if (vm.count("insecure")) {
+    o.client.security.mode = v2i::SecurityMode::kInsecure;
+  } else {
+    if (key_path.empty() || trust_path.empty()) {
+      throw std::invalid_argument(
+          "--key and --trust-list are required (or --insecure for local development)");
+    }
+    if (!(max_age_ms > 0.0 && max_age_ms <= 60'000.0)) {
+      throw std::invalid_argument("--max-age-ms must be within (0, 60000]");
+    }
+    o.client.security.replay.max_age = o.client.security.replay.max_future = from_seconds(max_age_ms * 1e-3);
+    o.client.signing_key = v2i::security::parse_secret_key_text(read_file(key_path, "--key"), key_path);
+    o.client.trust_list =
+        v2i::security::parse_trust_list_text(read_file(trust_path, "--trust-list"), trust_path);
+  }
   o.client.announce_period = from_seconds(announce_period_ms * 1e-3);
   return o;
 }
@@ -154,6 +204,11 @@ class Session {
   }
 
   void on_ndt(const NdtPoseRow& row) {
+    if (options_.client.security.mode == v2i::SecurityMode::kInsecure &&
+        Steady::now() - last_insecure_warning_ >= std::chrono::minutes(1)) {
+      warn_insecure();
+      last_insecure_warning_ = Steady::now();
+    }
     const Eigen::Matrix3d covariance =
         row.variances ? Eigen::Matrix3d(row.variances->asDiagonal())
                       : Eigen::Matrix3d(Eigen::Vector3d(options_.ndt_sigma_xy * options_.ndt_sigma_xy,
@@ -201,6 +256,13 @@ class Session {
       const auto v = static_cast<CorrectionVerdict>(i);
       if (c.corrections.count(v) > 0) {
         std::fprintf(stderr, " %s=%llu", to_string(v), ull(c.corrections.count(v)));
+      }
+    }
+    std::fprintf(stderr, "; authentication (%s)", v2i::to_string(options_.client.security.mode));
+    for (std::size_t i = 0; i < static_cast<std::size_t>(v2i::AuthVerdict::kCount); ++i) {
+      const auto v = static_cast<v2i::AuthVerdict>(i);
+      if (c.authentication.count(v) > 0) {
+        std::fprintf(stderr, " %s=%llu", v2i::to_string(v), ull(c.authentication.count(v)));
       }
     }
     std::fprintf(
@@ -254,6 +316,7 @@ class Session {
   PoseFuser fuser_;
   std::unique_ptr<std::FILE, FileCloser> corrections_;
   int refusals_logged_ = 0;
+  Steady::time_point last_insecure_warning_{};
 };
 
 // Waits until `until`, fusing corrections as they come (10 ms slices).

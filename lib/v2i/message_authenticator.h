@@ -1,0 +1,99 @@
+// The receiving side of V2I message security (proto/v2i.proto, version 2): decides whether a datagram
+// comes from a trusted signer that may say what it says, and is neither stale nor replayed. Pure: the
+// trust list is parsed elsewhere from text, time is passed in. Every verdict is counted by reason.
+//
+// Order of checks (signed mode), cheapest refusal first and nothing unauthenticated parsed beyond the
+// envelope: envelope (size, protobuf, version) -> signature present and well-formed -> signer in the
+// trust list -> Ed25519 over kSigningContext || 0 || the payload bytes as received -> payload parses
+// -> signer's role and ids allow this body -> generation-time window -> per-signer sequence window
+// (only now is the signer's replay state updated, so a forger cannot move it).
+//
+// Insecure mode (local development only; the daemon and client warn loudly): any well-formed message
+// is taken without checking signature, time or sequence, and counted as accepted_unverified.
+//
+// Forwarded datagrams (a peer RSU relaying a vehicle's original bytes) verify the same way: the
+// signature is the vehicle's, over the bytes as the vehicle sent them; a copy that arrives both
+// directly and forwarded is accepted once and then refused as a duplicate.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "common/time.h"
+#include "v2i/enum_counter.h"
+#include "v2i/security/ed25519.h"
+#include "v2i/security/replay_guard.h"
+#include "v2i/security/trust_list.h"
+#include "v2i/wire_codec.h"
+
+namespace rsu::v2i {
+
+enum class SecurityMode : std::uint8_t {
+  kSigned,    // sign everything sent, accept only verified messages (the default)
+  kInsecure,  // send unsigned, accept anything well-formed: local development only
+};
+
+const char* to_string(SecurityMode mode);
+
+struct SecurityConfig {
+  SecurityMode mode = SecurityMode::kSigned;
+  security::ReplayConfig replay;
+};
+
+enum class AuthVerdict : std::uint8_t {
+  kAccepted,            // verified signer, allowed body, fresh
+  kAcceptedUnverified,  // insecure mode: taken without checks
+  kMalformed,           // not a decodable version-2 datagram (the DecodeStatus says why)
+  kUnsigned,            // no signature, in signed mode
+  kMalformedSignature,  // key id not 8 bytes or signature not 64 bytes
+  kUnknownSigner,       // key id not in the trust list
+  kBadSignature,        // the signature does not verify over the payload bytes
+  kWrongRole,           // e.g. a vehicle key signing a correction, an RSU key an announcement
+  kWrongSubject,        // the key is not listed for this vehicle_id / rsu_id
+  kStale,               // generated more than max_age before now
+  kFuture,              // generated more than max_future after now
+  kDuplicate,           // the signer's sequence number was already accepted
+  kTooOld,              // the sequence number fell behind the window, or predates a restart
+  kCount,
+};
+
+const char* to_string(AuthVerdict verdict);
+
+struct AuthenticatedMessage {
+  AuthVerdict verdict = AuthVerdict::kMalformed;
+  DecodedMessage message;    // status kOk once decoded (also when a later check refused it)
+  security::KeyId signer{};  // when signed
+
+  bool accepted() const {
+    return verdict == AuthVerdict::kAccepted || verdict == AuthVerdict::kAcceptedUnverified;
+  }
+};
+
+class MessageAuthenticator {
+ public:
+  MessageAuthenticator(const SecurityConfig& config, security::TrustList trust);
+
+  AuthenticatedMessage authenticate(std::span<const std::uint8_t> bytes, TimeNs now);
+
+  // A new configuration and trust list (SIGHUP): the signers' replay state and the counts are kept, so
+  // nothing accepted before can be replayed after a reload.
+  void reconfigure(const SecurityConfig& config, security::TrustList trust);
+  // Forgets silent signers' replay state (call about once a second).
+  void expire(TimeNs now) { replay_.expire(now); }
+
+  SecurityMode mode() const { return config_.mode; }
+  const SecurityConfig& config() const { return config_; }
+  const security::TrustList& trust_list() const { return trust_; }
+  const security::ReplayGuard& replay() const { return replay_; }
+  const EnumCounter<AuthVerdict>& counts() const { return counts_; }
+
+ private:
+  AuthVerdict check(std::span<const std::uint8_t> bytes, TimeNs now, AuthenticatedMessage& out);
+
+  SecurityConfig config_;
+  security::TrustList trust_;
+  security::ReplayGuard replay_;
+  EnumCounter<AuthVerdict> counts_;
+};
+
+}  // namespace rsu::v2i

@@ -1,0 +1,222 @@
+// The receiving side of message security: every verdict, on datagrams the test builds and signs
+// itself, and the counts.
+#include "v2i/message_authenticator.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "proto/v2i.pb.h"
+#include "test_announcement.h"
+#include "v2i/message_signer.h"
+
+namespace rsu::v2i {
+namespace {
+
+using security::SigningKey;
+
+constexpr TimeNs kNow = 1'700'000'000 * kNsPerSecond;
+constexpr std::uint64_t kVehicle = 7;
+constexpr std::uint64_t kRsu = 1;
+
+SigningKey key_from(std::uint8_t fill) {
+  security::Seed seed{};
+  seed.fill(fill);
+  return SigningKey(seed);
+}
+
+struct Keys {
+  SigningKey rsu = key_from(1);
+  SigningKey car = key_from(2);
+  SigningKey stranger = key_from(3);
+
+  security::TrustList trust() const {
+    security::TrustList list;
+    list.add({rsu.public_key(), security::SignerRole::kRsu, {kRsu}});
+    list.add({car.public_key(), security::SignerRole::kVehicle, {kVehicle}});
+    return list;
+  }
+};
+
+Correction correction_from(std::uint64_t rsu_id) {
+  Correction c;
+  c.rsu_id = rsu_id;
+  c.vehicle_id = kVehicle;
+  c.sweep_time = kNow - 50 * kNsPerMs;
+  return c;
+}
+
+// Re-wraps a datagram's envelope after `change` edited it (tampering on the wire).
+template <typename Change>
+std::vector<std::uint8_t> tamper(const std::vector<std::uint8_t>& bytes, Change change) {
+  v2::SignedV2iMessage m;
+  EXPECT_TRUE(m.ParseFromArray(bytes.data(), static_cast<int>(bytes.size())));
+  change(m);
+  std::string out;
+  EXPECT_TRUE(m.SerializeToString(&out));
+  return {out.begin(), out.end()};
+}
+
+class MessageAuthenticatorTest : public ::testing::Test {
+ protected:
+  AuthVerdict verdict(const std::vector<std::uint8_t>& bytes, TimeNs now = kNow) {
+    return auth_.authenticate(bytes, now).verdict;
+  }
+  std::vector<std::uint8_t> announcement(const SigningKey* key, std::uint32_t seq, TimeNs t = kNow,
+                                         std::uint64_t vehicle = kVehicle) {
+    return encode_v2i_message(testing::make_announcement(vehicle, seq, t), {t, seq}, key);
+  }
+
+  Keys keys_;
+  MessageAuthenticator auth_{SecurityConfig{}, keys_.trust()};
+};
+
+TEST_F(MessageAuthenticatorTest, GenuineMessagesAreAcceptedWithTheirContent) {
+  const AuthenticatedMessage a = auth_.authenticate(announcement(&keys_.car, 10), kNow);
+  ASSERT_EQ(a.verdict, AuthVerdict::kAccepted);
+  EXPECT_TRUE(a.accepted());
+  EXPECT_EQ(a.signer, keys_.car.key_id());
+  EXPECT_EQ(a.message.header.sequence, 10U);
+  EXPECT_EQ(std::get<VehicleAnnouncement>(a.message.body).vehicle_id, kVehicle);
+  MessageSigner rsu(keys_.rsu);
+  EXPECT_EQ(verdict(rsu.encode(correction_from(kRsu), kNow)), AuthVerdict::kAccepted);
+  RsuAdvertisement ad;
+  ad.rsu_id = kRsu;
+  EXPECT_EQ(verdict(rsu.encode(ad, kNow)), AuthVerdict::kAccepted);
+}
+
+TEST_F(MessageAuthenticatorTest, EveryRefusalHasItsReason) {
+  const std::vector<std::uint8_t> good = announcement(&keys_.car, 10);
+  struct Case {
+    const char* what;
+    std::vector<std::uint8_t> bytes;
+    AuthVerdict expected;
+  };
+  const std::vector<Case> cases = {
+      {"garbage", {0xFF, 0xFF}, AuthVerdict::kMalformed},
+      {"version 1", {0x08, 0x01, 0x12, 0x02, 0x08, 0x07}, AuthVerdict::kMalformed},
+      {"unsigned", announcement(nullptr, 11), AuthVerdict::kUnsigned},
+      {"short key id", tamper(good, [](auto& m) { m.mutable_signer_key_id()->pop_back(); }),
+       AuthVerdict::kMalformedSignature},
+      {"signature only", tamper(good, [](auto& m) { m.clear_signer_key_id(); }),
+       AuthVerdict::kMalformedSignature},
+      {"short signature", tamper(good, [](auto& m) { m.mutable_signature()->pop_back(); }),
+       AuthVerdict::kMalformedSignature},
+      {"unknown signer", announcement(&keys_.stranger, 12), AuthVerdict::kUnknownSigner},
+      {"payload tampered", tamper(good, [](auto& m) { m.mutable_payload()->back() ^= 1; }),
+       AuthVerdict::kBadSignature},
+      {"signature tampered", tamper(good, [](auto& m) { m.mutable_signature()->front() ^= 1; }),
+       AuthVerdict::kBadSignature},
+      // The car's signature presented as the RSU's: key ids select the key, the signature still fails.
+      {"key id swapped",
+       tamper(good,
+              [&](auto& m) { m.set_signer_key_id(keys_.rsu.key_id().data(), keys_.rsu.key_id().size()); }),
+       AuthVerdict::kBadSignature},
+      {"RSU key announcing", announcement(&keys_.rsu, 13), AuthVerdict::kWrongRole},
+      {"vehicle key correcting", encode_v2i_message(correction_from(kRsu), {kNow, 14}, &keys_.car),
+       AuthVerdict::kWrongRole},
+      {"another vehicle's id", announcement(&keys_.car, 15, kNow, kVehicle + 1), AuthVerdict::kWrongSubject},
+      {"another RSU's id", encode_v2i_message(correction_from(kRsu + 1), {kNow, 16}, &keys_.rsu),
+       AuthVerdict::kWrongSubject},
+      {"stale", announcement(&keys_.car, 17, kNow - 1001 * kNsPerMs), AuthVerdict::kStale},
+      {"future", announcement(&keys_.car, 18, kNow + 1001 * kNsPerMs), AuthVerdict::kFuture},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(verdict(c.bytes), c.expected) << c.what;
+  }
+  // None of the refusals above touched the car's window: the genuine message is still fresh, once.
+  EXPECT_EQ(verdict(good), AuthVerdict::kAccepted);
+  EXPECT_EQ(verdict(good), AuthVerdict::kDuplicate);
+  for (std::uint32_t s = 11; s < 11 + 64; ++s)
+    ASSERT_EQ(verdict(announcement(&keys_.car, s + 100)), AuthVerdict::kAccepted);
+  EXPECT_EQ(verdict(announcement(&keys_.car, 11)), AuthVerdict::kTooOld);
+
+  const EnumCounter<AuthVerdict>& n = auth_.counts();
+  EXPECT_EQ(n.count(AuthVerdict::kMalformed), 2U);
+  EXPECT_EQ(n.count(AuthVerdict::kMalformedSignature), 3U);
+  EXPECT_EQ(n.count(AuthVerdict::kBadSignature), 3U);
+  EXPECT_EQ(n.count(AuthVerdict::kWrongRole), 2U);
+  EXPECT_EQ(n.count(AuthVerdict::kWrongSubject), 2U);
+  EXPECT_EQ(n.count(AuthVerdict::kAccepted), 65U);
+  EXPECT_EQ(n.count(AuthVerdict::kDuplicate), 1U);
+  EXPECT_EQ(n.count(AuthVerdict::kTooOld), 1U);
+  EXPECT_EQ(n.total(), cases.size() + 67U);
+}
+
+TEST_F(MessageAuthenticatorTest, SignedGarbageIsMalformedNotAccepted) {
+  std::string payload = "\xFF\xFF\xFF";
+  v2::SignedV2iMessage m;
+  m.set_protocol_version(kProtocolVersion);
+  m.set_payload(payload);
+  const security::Signature sig = keys_.car.sign(signing_input(payload));
+  m.set_signer_key_id(keys_.car.key_id().data(), keys_.car.key_id().size());
+  m.set_signature(sig.data(), sig.size());
+  std::string bytes;
+  ASSERT_TRUE(m.SerializeToString(&bytes));
+  const AuthenticatedMessage a =
+      auth_.authenticate(std::vector<std::uint8_t>(bytes.begin(), bytes.end()), kNow);
+  EXPECT_EQ(a.verdict, AuthVerdict::kMalformed);
+  EXPECT_EQ(a.message.status, DecodeStatus::kParseError);
+}
+
+// A signature without the domain-separation prefix (the bare payload signed) does not verify.
+TEST_F(MessageAuthenticatorTest, SignaturesWithoutTheContextDoNotVerify) {
+  const std::vector<std::uint8_t> good = announcement(&keys_.car, 1);
+  const std::vector<std::uint8_t> bare = tamper(good, [&](auto& m) {
+    const std::string& p = m.payload();
+    const security::Signature sig =
+        keys_.car.sign(std::span(reinterpret_cast<const std::uint8_t*>(p.data()), p.size()));
+    m.set_signature(sig.data(), sig.size());
+  });
+  EXPECT_EQ(verdict(bare), AuthVerdict::kBadSignature);
+}
+
+// A peer RSU relays a vehicle's original bytes: they verify as the vehicle's, and a copy heard both
+// directly and relayed is taken once.
+TEST_F(MessageAuthenticatorTest, ForwardedOriginalBytesVerifyOnce) {
+  const std::vector<std::uint8_t> sent = announcement(&keys_.car, 5);
+  const std::vector<std::uint8_t> relayed(sent.begin(), sent.end());
+  MessageAuthenticator peer(SecurityConfig{}, keys_.trust());
+  EXPECT_EQ(peer.authenticate(relayed, kNow + 3 * kNsPerMs).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(peer.authenticate(sent, kNow + 4 * kNsPerMs).verdict, AuthVerdict::kDuplicate);
+}
+
+TEST_F(MessageAuthenticatorTest, InsecureModeTakesWellFormedMessagesUnchecked) {
+  MessageAuthenticator insecure(SecurityConfig{.mode = SecurityMode::kInsecure, .replay = {}}, {});
+  const std::vector<std::uint8_t> unsigned_bytes = announcement(nullptr, 1, kNow - 60 * kNsPerSecond);
+  EXPECT_EQ(insecure.authenticate(unsigned_bytes, kNow).verdict, AuthVerdict::kAcceptedUnverified);
+  EXPECT_EQ(insecure.authenticate(unsigned_bytes, kNow).verdict, AuthVerdict::kAcceptedUnverified);
+  EXPECT_EQ(insecure.authenticate(announcement(&keys_.stranger, 1), kNow).verdict,
+            AuthVerdict::kAcceptedUnverified);
+  EXPECT_EQ(insecure.authenticate(std::vector<std::uint8_t>{0xFF}, kNow).verdict, AuthVerdict::kMalformed);
+  EXPECT_EQ(insecure.counts().count(AuthVerdict::kAcceptedUnverified), 3U);
+}
+
+TEST_F(MessageAuthenticatorTest, ReconfigureKeepsReplayStateAndAppliesTheNewList) {
+  const std::vector<std::uint8_t> first = announcement(&keys_.car, 1);
+  EXPECT_EQ(verdict(first), AuthVerdict::kAccepted);
+  security::TrustList only_rsu;
+  only_rsu.add({keys_.rsu.public_key(), security::SignerRole::kRsu, {kRsu}});
+  auth_.reconfigure(SecurityConfig{}, only_rsu);
+  EXPECT_EQ(verdict(announcement(&keys_.car, 2)), AuthVerdict::kUnknownSigner);  // revoked
+  auth_.reconfigure(SecurityConfig{}, keys_.trust());
+  EXPECT_EQ(verdict(first), AuthVerdict::kDuplicate);  // still remembered
+}
+
+TEST(MessageSigner, CountsItsSequenceAndStampsTheTime) {
+  MessageSigner signer(key_from(4), 0xFFFFFFFFU);
+  const DecodedMessage a = decode_v2i_message(signer.encode(correction_from(kRsu), kNow));
+  const DecodedMessage b = decode_v2i_message(signer.encode(correction_from(kRsu), kNow + 1));
+  EXPECT_EQ(a.header.sequence, 0xFFFFFFFFU);
+  EXPECT_EQ(b.header.sequence, 0U);
+  EXPECT_EQ(b.header.generation_time, kNow + 1);
+  EXPECT_TRUE(signer.signs());
+  MessageSigner unsigned_signer(std::nullopt);
+  EXPECT_FALSE(unsigned_signer.signs());
+  EXPECT_TRUE(
+      decode_envelope(unsigned_signer.encode(correction_from(kRsu), kNow)).envelope.signature.empty());
+}
+
+}  // namespace
+}  // namespace rsu::v2i

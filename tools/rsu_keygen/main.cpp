@@ -1,0 +1,166 @@
+// rsu-keygen: makes Ed25519 key pairs for signed V2I messages (proto/v2i.proto) and keeps trust lists
+// (lib/v2i/security/trust_list.h). The secret key file is created with mode 0600. Nothing is ever
+// overwritten without --force; a trust list only grows (one entry per key).
+#include <fcntl.h>
+#include <sodium.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <boost/program_options.hpp>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "v2i/security/ed25519.h"
+#include "v2i/security/key_text.h"
+#include "v2i/security/trust_list.h"
+
+namespace {
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+using namespace rsu::v2i::security;
+
+constexpr const char* kAbout =
+    "rsu-keygen: Ed25519 keys and trust lists for signed V2I messages.\n"
+    "\n"
+    "usage:\n"
+    "  rsu-keygen NAME [--force] [--trust-list FILE --role rsu|vehicle --ids ID[,ID...]]\n"
+    "      makes a key pair: NAME.key (the secret key, mode 0600: give it only to the signer) and\n"
+    "      NAME.pub (the public key); with --trust-list, also adds the public key to FILE.\n"
+    "  rsu-keygen --public-key NAME.pub --trust-list FILE --role rsu|vehicle --ids ID[,ID...]\n"
+    "      adds an existing public key to FILE.\n"
+    "\n"
+    "A trust list is created when missing and only ever appended to; a key is listed once. The ids bind\n"
+    "the key: a vehicle key may announce only the listed vehicle ids, an RSU key may sign corrections and\n"
+    "advertisements only for the listed rsu ids. rsud and rsu-vehicle re-read their trust list on\n"
+    "SIGHUP / start. The key id printed (and written in comments) is the last 8 bytes of SHA-256 over the\n"
+    "public key, as carried in each signed datagram.\n"
+    "\n"
+    "options";
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in)
+    throw std::runtime_error("cannot read " + path.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Writes `text` to `path` with `mode`; refuses an existing file unless `force`.
+void write_new_file(const fs::path& path, const std::string& text, mode_t mode, bool force) {
+  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (force ? O_TRUNC : O_EXCL);
+  const int fd = ::open(path.c_str(), flags, mode);
+  if (fd < 0) {
+    if (errno == EEXIST)
+      throw std::runtime_error(path.string() + " exists; not overwritten (use --force)");
+    throw std::runtime_error("cannot create " + path.string() + ": " + std::strerror(errno));
+  }
+  // An existing file keeps its old mode under O_TRUNC: set it, so a secret key is never left readable.
+  bool ok = ::fchmod(fd, mode) == 0;
+  std::size_t written = 0;
+  while (ok && written < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
+    ok = n > 0;
+    written += ok ? static_cast<std::size_t>(n) : 0;
+  }
+  ok = ::close(fd) == 0 && ok;
+  if (!ok)
+    throw std::runtime_error("cannot write " + path.string() + ": " + std::strerror(errno));
+}
+
+void add_to_trust_list(const fs::path& list, const TrustEntry& entry) {
+  const std::string existing = fs::exists(list) ? read_text(list) : std::string();
+  std::string updated = existing;
+  if (!updated.empty() && updated.back() != '\n')
+    updated += '\n';
+  if (existing.empty())
+    updated += "# Trust list (rsu-keygen): <rsu|vehicle> <Ed25519 public key> <ids it may sign for>\n";
+  updated += trust_entry_text(entry);
+  // The whole result must parse: a malformed list or a key listed twice is refused, nothing written.
+  parse_trust_list_text(updated, list.string());
+  std::ofstream out(list, std::ios::app);
+  if (!out || !(out << updated.substr(existing.size())) || !out.flush())
+    throw std::runtime_error("cannot append to " + list.string());
+}
+
+int run(int argc, char** argv) {
+  std::string name;
+  std::string trust_list;
+  std::string role_text;
+  std::string ids_text;
+  std::string public_key_path;
+  po::options_description visible(kAbout);
+  visible.add_options()("help,h", "show this help")("force", "overwrite existing key files")(
+      "trust-list", po::value<std::string>(&trust_list), "trust list file to add the public key to")(
+      "role", po::value<std::string>(&role_text), "rsu or vehicle (with --trust-list)")(
+      "ids", po::value<std::string>(&ids_text),
+      "the ids the key may sign for, e.g. 7 or 7,8 (with --trust-list)")(
+      "public-key", po::value<std::string>(&public_key_path), "an existing public key file to list");
+  po::options_description all;
+  all.add(visible).add_options()("name", po::value<std::string>(&name));
+  po::positional_options_description positional;
+  positional.add("name", 1);
+  po::variables_map vm;
+  po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
+  if (vm.count("help") || argc == 1) {
+    std::cout << visible << "\n";
+    return 0;
+  }
+  po::notify(vm);
+  if (name.empty() == public_key_path.empty())
+    throw std::invalid_argument("give either NAME (make a key pair) or --public-key (list an existing key)");
+  if (!public_key_path.empty() && trust_list.empty())
+    throw std::invalid_argument("--public-key needs --trust-list");
+  if (trust_list.empty() != role_text.empty() || trust_list.empty() != ids_text.empty())
+    throw std::invalid_argument("--trust-list, --role and --ids go together");
+  if (!role_text.empty() && role_text != "rsu" && role_text != "vehicle")
+    throw std::invalid_argument("--role must be rsu or vehicle, got \"" + role_text + "\"");
+
+  PublicKey public_key{};
+  if (!name.empty()) {
+    ensure_sodium_initialized();
+    Seed seed{};
+    randombytes_buf(seed.data(), seed.size());  // the OS's CSPRNG (getrandom)
+    const SigningKey key(seed);
+    sodium_memzero(seed.data(), seed.size());
+    const bool force = vm.count("force") > 0;
+    const fs::path secret_path = name + ".key";
+    const fs::path public_path = name + ".pub";
+    if (!force && (fs::exists(secret_path) || fs::exists(public_path)))
+      throw std::runtime_error(name + ".key or " + name + ".pub exists; not overwritten (use --force)");
+    write_new_file(secret_path, secret_key_text(key), 0600, force);
+    write_new_file(public_path, public_key_text(key.public_key()), 0644, force);
+    public_key = key.public_key();
+    std::cout << "key id " << to_hex(key.key_id()) << ": wrote " << secret_path.string()
+              << " (secret, mode 0600) and " << public_path.string() << "\n";
+  } else {
+    public_key = parse_public_key_text(read_text(public_key_path), public_key_path);
+  }
+  if (!trust_list.empty()) {
+    // Parse the ids with the trust list's own rules (a one-line list).
+    const TrustList one =
+        parse_trust_list_text(role_text + " " + to_hex(public_key) + " " + ids_text + "\n", "--ids");
+    add_to_trust_list(trust_list, one.entries().begin()->second);
+    std::cout << "listed key " << to_hex(key_id_of(public_key)) << " as " << role_text << " for " << ids_text
+              << " in " << trust_list << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "rsu-keygen: " << e.what() << "\n";
+    return 1;
+  }
+}
