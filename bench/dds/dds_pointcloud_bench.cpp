@@ -215,6 +215,7 @@ RunResult run(const Options& o, const std::string& name, const std::vector<Cloud
         << "    dds_pointcloud2: {topic: bench/points, whole_rotation: true}\n"
         << "background: {learning_frames: " << kLearningFrames << "}\n"
         << "v2i: {listen_address: 127.0.0.1, port: " << v2i_port << "}\n"
+        << "security: {mode: insecure}\n"  // this measures DDS; bench/v2i measures signing and verifying
         << "dds:\n  enabled: true\n  domain_id: " << domain << "\n  cyclone_config: " << o.cyclone_config
         << "\n  pose_topic: bench/vehicles/{vehicle_id}/pose\n"
         << "logging: {level: warn, stats_interval_s: 0.2, stats_file: " << stats << "}\n";
@@ -292,10 +293,10 @@ RunResult run(const Options& o, const std::string& name, const std::vector<Cloud
     char pose_arg[64];
     std::snprintf(pose_arg, sizeof pose_arg, "%.3f,%.3f,%.4f", kVehicleX + 0.3, kVehicleY - 0.2,
                   kVehicleYawDeg * std::numbers::pi / 180.0 + 0.03);
-    announcer =
-        spawn({o.announcer, "--rsu", "127.0.0.1:" + std::to_string(v2i_port), "--bind", "127.0.0.1", "--id",
-               std::to_string(kVehicleId), "--pose", pose_arg, "--seconds", std::to_string(o.seconds + 5)},
-              (work / "announcer.log").string());
+    announcer = spawn({o.announcer, "--rsu", "127.0.0.1:" + std::to_string(v2i_port), "--bind", "127.0.0.1",
+                       "--insecure", "1", "--id", std::to_string(kVehicleId), "--pose", pose_arg, "--seconds",
+                       std::to_string(o.seconds + 5)},
+                      (work / "announcer.log").string());
     std::this_thread::sleep_for(std::chrono::milliseconds(300));  // registered before the first cloud
 
     const std::size_t before = sent.size();
