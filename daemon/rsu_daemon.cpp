@@ -357,9 +357,13 @@ void RsuDaemon::on_v2i_datagram(std::size_t bytes) {
       peers_->share(datagram, source, now);
     return;
   }
-  // A repeated sequence number is what a retransmitting vehicle does: counted, not warned about.
-  if (outcome.stage == core::DatagramStage::kRegistry &&
-      outcome.upsert == v2i::UpsertOutcome::kDuplicateSequence) {
+  // A repeated sequence number is what a retransmitting vehicle does, and a signed datagram verified
+  // already is also what a vehicle announcing to several RSUs looks like once a peer shared its copy
+  // first (README, "Several RSUs on one bus"): counted, not warned about.
+  if ((outcome.stage == core::DatagramStage::kRegistry &&
+       outcome.upsert == v2i::UpsertOutcome::kDuplicateSequence) ||
+      (outcome.stage == core::DatagramStage::kAuthentication &&
+       outcome.auth == v2i::AuthVerdict::kDuplicate)) {
     return;
   }
   std::string detail =

@@ -34,7 +34,8 @@ $PY eval/plots/topdown.py "$OUT/sim"
 
 echo "== 4. two RSUs on one DDS bus hand a driving vehicle over (issue 6) =="
 $PY tests/integration/handover_integration.py --rsud build/daemon/rsud --rsu-sim build/tools/rsu-sim \
-  --vehicle build/vehicle_client/rsu-vehicle --work "$OUT/handover" | tee "$OUT/handover_summary.txt"
+  --vehicle build/vehicle_client/rsu-vehicle --keygen build/tools/rsu-keygen --work "$OUT/handover" |
+  tee "$OUT/handover_summary.txt"
 echo "every correction: $OUT/handover/corrections.csv; logs and stats of both rsud: $OUT/handover/"
 
 echo

@@ -218,6 +218,12 @@ DatagramOutcome RsuCore::on_peer_announcement(std::span<const std::uint8_t> data
     return finish_peer(out);
   }
   const auto announcement = screen(datagram, from.sender.address, now, out);
+  if (out.stage == DatagramStage::kAuthentication && out.auth == v2i::AuthVerdict::kDuplicate) {
+    // A signed datagram this RSU verified already: the vehicle announced here too, or another peer
+    // shared it first. Not news, not an attack (the bytes are the vehicle's own, signature and all).
+    out.stage = DatagramStage::kNotFresher;
+    return finish_peer(out);
+  }
   if (!announcement)
     return finish_peer(out);
   // Checked before the registry so that a vehicle announcing to several RSUs, each sharing it, is not

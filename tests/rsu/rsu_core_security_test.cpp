@@ -140,6 +140,11 @@ TEST(RsuCoreSecurity, SharedOriginalBytesVerifyAtThePeer) {
   const std::vector<std::uint8_t> original = car1.encode(announce(1, 1, kNow, {10.0, 2.0, 0.5}, host), kNow);
   EXPECT_EQ(peer.on_peer_announcement(original, shared, kNow + 2 * kNsPerMs).reason(), "accepted:added");
   EXPECT_EQ(peer.on_datagram(original, from(host), kNow + 3 * kNsPerMs).reason(), "auth:duplicate");
+  // The other way round (heard directly first, then shared by the peer): not news, not an auth failure.
+  const std::vector<std::uint8_t> heard_first =
+      car1.encode(announce(1, 4, kNow, {10.0, 2.0, 0.5}, host), kNow);
+  EXPECT_TRUE(peer.on_datagram(heard_first, from(host), kNow + 3 * kNsPerMs).accepted());
+  EXPECT_EQ(peer.on_peer_announcement(heard_first, shared, kNow + 4 * kNsPerMs).reason(), "not_fresher");
   // Tampered on the way: the vehicle's signature no longer holds.
   std::vector<std::uint8_t> tampered = car1.encode(announce(1, 2, kNow, {10.0, 2.0, 0.5}, host), kNow);
   tampered[tampered.size() / 2] ^= 0x01;
