@@ -157,16 +157,19 @@ TEST(PoseFuser, ReanchorsAtAgreeingRsuFixesWhenNdtHasDrifted) {
     const double drift = std::min(2.0, 2.0 * to_seconds(t - kStart));  // m, grows for 1 s then stays
     const Eigen::Vector2d ndt = truth_reference(t) + drift * across;
     fuser.add_ndt({ndt.x(), ndt.y(), kHeading}, ndt_cov, t);
-    if (t >= kStart + 3 * kNsPerSecond) fuser.add_rsu(rsu_fix(t + 40 * kNsPerMs, k));
+    if (t >= kStart + 3 * kNsPerSecond)
+      fuser.add_rsu(rsu_fix(t + 40 * kNsPerMs, k));
     const auto fused = fuser.pose_at(t + 40 * kNsPerMs);
     ASSERT_TRUE(fused.has_value());
     last_fused_error = (Eigen::Vector2d(fused->state(fusion::kX), fused->state(fusion::kY)) -
-                        truth_reference(t + 40 * kNsPerMs)).norm();
+                        truth_reference(t + 40 * kNsPerMs))
+                           .norm();
     last_ndt_error = drift;
   }
   const PoseFuserStats stats = fuser.stats();
-  EXPECT_GE(stats.rsu_reanchors, 1u) << "accepted " << stats.rsu_accepted << " gate " << stats.rsu_rejected_gate
-                                     << " yaw " << stats.rsu_rejected_yaw_branch << " other " << stats.rsu_rejected_other;
+  EXPECT_GE(stats.rsu_reanchors, 1u) << "accepted " << stats.rsu_accepted << " gate "
+                                     << stats.rsu_rejected_gate << " yaw " << stats.rsu_rejected_yaw_branch
+                                     << " other " << stats.rsu_rejected_other;
   EXPECT_GT(last_ndt_error, 1.9);
   EXPECT_LT(last_fused_error, 0.5);
 }
@@ -184,6 +187,58 @@ TEST(PoseFuser, ScatteredOutliersDoNotReanchor) {
   }
   EXPECT_EQ(fuser.stats().rsu_reanchors, 0u);
   EXPECT_GT(fuser.stats().rsu_rejected_gate, 20u);
+}
+
+// Two RSUs see the vehicle at once (the handover region; README, "Several RSUs on one bus") and one is
+// wrong by 0.8 m across the road (a mis-surveyed mount) while it claims 6 cm. Its fixes reach the filter
+// as independent measurements beside the good RSU's: the gate refuses them once the filter has settled,
+// they never re-anchor it (the good RSU's accepted fixes break every run), and the fused pose stays about
+// as good as with the good RSU alone.
+TEST(PoseFuser, AFaultyRsuBesideAGoodOneDoesNotTakeOverThePose) {
+  PoseFuser good_only(fuser_config());
+  PoseFuser both(fuser_config());
+  const Eigen::Vector2d across(-std::sin(kHeading), std::cos(kHeading));
+  double good_only_sq = 0.0;
+  double both_sq = 0.0;
+  int counted = 0;
+  std::uint64_t faulty_refused_late = 0;
+  constexpr int kSteps = 80;
+  for (int k = 0; k < kSteps; ++k) {
+    const TimeNs t = kStart + k * kStep;
+    const NormalPair n = standard_normal_pair(1, 0, static_cast<std::uint64_t>(k));
+    const Eigen::Vector2d truth = truth_reference(t);
+    const Pose2 ndt{truth.x() + kNdtSigma * n.a, truth.y() + kNdtSigma * n.b, kHeading};
+    for (PoseFuser* f : {&good_only, &both})
+      f->add_ndt(ndt, diagonal(kNdtSigma, kNdtYawSigma), t);
+    v2i::Correction good = rsu_fix(t + 30 * kNsPerMs, k);
+    good.rsu_id = 1;
+    v2i::Correction faulty = rsu_fix(t + 60 * kNsPerMs, k + 1000);
+    faulty.rsu_id = 2;
+    faulty.pose.x += 0.8 * across.x();
+    faulty.pose.y += 0.8 * across.y();
+    good_only.add_rsu(good);
+    both.add_rsu(good);
+    const fusion::MeasurementOutcome outcome = both.add_rsu(faulty);
+    if (k >= kSteps / 2) {
+      faulty_refused_late += outcome == fusion::MeasurementOutcome::kRejectedGate;
+      const auto a = good_only.pose_at(t + 60 * kNsPerMs);
+      const auto b = both.pose_at(t + 60 * kNsPerMs);
+      ASSERT_TRUE(a && b);
+      const Eigen::Vector2d at = truth_reference(t + 60 * kNsPerMs);
+      good_only_sq += (Eigen::Vector2d(a->state(fusion::kX), a->state(fusion::kY)) - at).squaredNorm();
+      both_sq += (Eigen::Vector2d(b->state(fusion::kX), b->state(fusion::kY)) - at).squaredNorm();
+      ++counted;
+    }
+  }
+  const double good_only_rmse = std::sqrt(good_only_sq / counted);
+  const double both_rmse = std::sqrt(both_sq / counted);
+  RecordProperty("good_only_rmse_m", std::to_string(good_only_rmse));
+  RecordProperty("with_faulty_rmse_m", std::to_string(both_rmse));
+  EXPECT_EQ(both.stats().rsu_reanchors, 0U);
+  EXPECT_EQ(faulty_refused_late, static_cast<std::uint64_t>(kSteps / 2));  // every one, once settled
+  EXPECT_LT(both_rmse, 0.8 / 4.0) << "with the faulty RSU " << both_rmse << " m, good alone "
+                                  << good_only_rmse;
+  EXPECT_LT(both_rmse, 1.5 * good_only_rmse + 0.01) << "good alone " << good_only_rmse << " m";
 }
 
 TEST(PoseFuser, NothingBeforeTheFirstNdtPoseAndNoRsuStart) {
