@@ -341,6 +341,11 @@ void load_security(DaemonConfig& c) {
   try {
     c.core.signing_key =
         v2i::security::parse_secret_key_text(read(c.security.key_file, "key_file"), c.security.key_file);
+    std::error_code ec;
+    const auto perms = std::filesystem::status(c.security.key_file, ec).permissions();
+    c.security.key_file_exposed =
+        !ec && (perms & (std::filesystem::perms::group_all | std::filesystem::perms::others_all)) !=
+                   std::filesystem::perms::none;
     c.core.trust_list = v2i::security::parse_trust_list_text(
         read(c.security.trust_list_file, "trust_list_file"), c.security.trust_list_file);
   } catch (const std::invalid_argument& e) {
@@ -404,7 +409,9 @@ std::string summarize(const DaemonConfig& c) {
   if (s.mode == v2i::SecurityMode::kSigned) {
     out << "security signed: key ";
     if (c.core.signing_key)
-      out << v2i::security::to_hex(c.core.signing_key->key_id()) << " (" << c.security.key_file << ")";
+      out << v2i::security::to_hex(c.core.signing_key->key_id()) << " (" << c.security.key_file
+          << (c.security.key_file_exposed ? ", WARNING: readable by group or others, chmod 600 it" : "")
+          << ")";
     else
       out << c.security.key_file << " (not read)";
     out << ", trust list " << c.security.trust_list_file << ": "

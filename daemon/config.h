@@ -97,6 +97,7 @@ struct LoggingConfig {
 struct SecurityFiles {
   std::string key_file = "/etc/rsud/keys/rsu.key";            // the RSU's Ed25519 secret key (rsu-keygen)
   std::string trust_list_file = "/etc/rsud/keys/trust.list";  // keys accepted (v2i/security/trust_list.h)
+  bool key_file_exposed = false;  // load_security(): the secret key is readable by group or others
 };
 
 struct DaemonConfig {

@@ -11,6 +11,12 @@ config=$work/rsud.yaml
 sed "s|/etc/rsud/keys/|$work/keys/|" "$shipped" > "$config"
 out=$("$rsud" --check-config --config "$config") || { echo "FAIL: the shipped configuration is refused"; exit 1; }
 case "$out" in *"security signed: key "*"1 vehicle key(s)"*) ;; *) echo "FAIL: no security summary in: $out"; exit 1 ;; esac
+case "$out" in *"readable by group"*) echo "FAIL: rsu-keygen's key reported readable: $out"; exit 1 ;; esac
+# A secret key others can read is reported.
+cp "$work/keys/rsu.key" "$work/keys/open.key" && chmod 644 "$work/keys/open.key"
+sed "s|$work/keys/rsu.key|$work/keys/open.key|" "$config" > "$work/open_key.yaml"
+out=$("$rsud" --check-config --config "$work/open_key.yaml") || { echo "FAIL: open_key refused"; exit 1; }
+case "$out" in *"WARNING: readable by group or others"*) ;; *) echo "FAIL: no warning in: $out"; exit 1 ;; esac
 
 expect_refused() {  # NAME EXPECTED_TEXT: the file $work/NAME.yaml must be refused with EXPECTED_TEXT
   out=$("$rsud" --check-config --config "$work/$1.yaml" 2>&1); rc=$?
