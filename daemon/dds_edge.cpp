@@ -142,6 +142,11 @@ void DdsEdge::on_cloud(const PointCloud2& cloud, const dds_sample_info_t& info) 
                                                         std::to_string(s.bad_time_skipped) +
                                                         " bad times skipped in one cloud");
   }
+  if (points_.empty()) {
+    // Nothing to see (all holes, or width 0): not a rotation for the background to learn from either.
+    ++clouds_empty_;
+    return;
+  }
   on_cloud_(points_, input_.whole_rotation);
 }
 
@@ -224,6 +229,7 @@ void DdsEdge::forget_quiet_vehicles(TimeNs now) {
 void DdsEdge::write_stats(std::ostream& out) const {
   out << "dds.clouds_received " << clouds_received_ << "\n";
   out << "dds.clouds_accepted " << clouds_accepted_ << "\n";
+  out << "dds.clouds_empty " << clouds_empty_ << "\n";
   out << "dds.clouds_rejected.bad_stamp " << clouds_bad_stamp_ << "\n";
   for (std::size_t i = 1; i < clouds_rejected_.size(); ++i)
     out << "dds.clouds_rejected." << ros::to_string(static_cast<ros::CloudReject>(i)) << " "

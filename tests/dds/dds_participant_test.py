@@ -12,7 +12,8 @@ input set to whole_rotation: false). Checks:
   - header.frame_id is the configured one;
   - the object list (rsu_msgs/VehicleFixArray, read through IDL written from dds/msg/*.msg) arrives
     once per rotation with the vehicle at the same place;
-  - two broken layouts among the clouds are refused, counted by reason and logged, the rest served;
+  - two broken layouts among the clouds are refused, counted by reason and logged, an empty cloud is
+    counted and skipped, the rest served;
   - rsud drains and exits 0 on SIGTERM.
 Every wait is bounded; every child is killed on the way out.
 """
@@ -75,7 +76,7 @@ def write_cloud_file(points, path, broken=None):
     """A Velodyne-ROS-driver-like PointCloud2 (x y z _ intensity ring _ time, 32-byte points, time in
     float32 seconds relative to the stamp = the rotation's first firing), in ros2_participant's format.
     broken: "short" declares more points than the data holds, "overlap" puts y over x."""
-    t0 = min(p["time"] for p in points)
+    t0 = min((p["time"] for p in points), default=0.0)
     layout = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 16, 7), ("ring", 20, 4), ("time", 24, 7)]
     if broken == "overlap":
         layout[1] = ("y", 2, 7)
@@ -163,6 +164,9 @@ class Harness:
             path = self.path("broken_%s.bin" % kind)
             write_cloud_file(read_pcd(street[0]), path, broken=kind)
             self.clouds.append(path)
+        # And an empty cloud (width 0): valid, but nothing for rsud to process or learn from.
+        write_cloud_file([], self.path("empty.bin"))
+        self.clouds.append(self.path("empty.bin"))
         assert len(self.background) == 4 and len(street) == 4, (self.background, street)
 
     def write_config(self, v2i_port, domain):
@@ -243,7 +247,9 @@ def run(h):
     assert rc == 0, "participant exited with %d:\n%s" % (rc, out)
     published, poses, lists = parse_participant(out)
     n_files = len(h.clouds)
-    broken_sent = sum(1 for i in range(len(published)) if i % n_files >= n_files - len(BROKEN))
+    # The file list ends with the broken ones and then the empty one.
+    broken_sent = sum(1 for i in range(len(published)) if n_files - 1 - len(BROKEN) <= i % n_files < n_files - 1)
+    empty_sent = sum(1 for i in range(len(published)) if i % n_files == n_files - 1)
     assert len(published) >= int(seconds * 10 * h.args.parts) - 1, "published %d clouds" % len(published)
     assert len(poses) >= 10, "only %d poses received:\n%s\n%s" % (len(poses), out[-2000:], h.read("rsud.log")[-3000:])
 
@@ -293,7 +299,8 @@ def run(h):
     rejected = sum(v for k, v in s.items() if k.startswith("dds.clouds_rejected."))
     assert s["dds.clouds_received"] >= len(published) - 2, (s["dds.clouds_received"], len(published))
     assert s["dds.clouds_accepted"] == s["dds.clouds_received"] - rejected, s
-    assert s["dds.points_accepted"] > 20000 / h.args.parts * s["dds.clouds_accepted"], s
+    assert 1 <= s["dds.clouds_empty"] <= empty_sent, (s["dds.clouds_empty"], empty_sent)
+    assert s["dds.points_accepted"] > 20000 / h.args.parts * (s["dds.clouds_accepted"] - s["dds.clouds_empty"]), s
     assert s["dds.poses_published"] >= len(poses), s
     print("ok: %d clouds published (%d broken), %d taken by rsud (%d refused), %d poses and %d object lists back, "
           "worst error %.3f m" % (len(published), broken_sent, s["dds.clouds_received"], rejected, len(poses),
