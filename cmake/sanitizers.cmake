@@ -1,5 +1,10 @@
-# ASan+UBSan for every target when RSU_SANITIZE is on (configure with -DRSU_SANITIZE=ON, Debug or
-# RelWithDebInfo). Errors abort so that CTest reports them as failures.
+# Sanitizers for every target (configure Debug or RelWithDebInfo). Errors abort so that CTest reports
+# them as failures.
+#   RSU_SANITIZE=ON         AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/)
+#   RSU_SANITIZE_THREAD=ON  ThreadSanitizer (build-tsan/); cannot be combined with ASan
+if(RSU_SANITIZE AND RSU_SANITIZE_THREAD)
+  message(FATAL_ERROR "RSU_SANITIZE (ASan) and RSU_SANITIZE_THREAD (TSan) cannot be combined")
+endif()
 if(RSU_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
   add_link_options(-fsanitize=address,undefined)
@@ -9,4 +14,10 @@ if(RSU_SANITIZE)
   # heap-buffer-overflow under ASan only. glibc's malloc (and ASan's) do return 16-byte-aligned blocks on
   # x86-64, so tell Eigen so and keep the same scheme as the libraries we link.
   add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)
+endif()
+if(RSU_SANITIZE_THREAD)
+  # Only our code is instrumented; reports inside the prebuilt libraries are suppressed one by one in
+  # tests/tsan.supp (scripts/test.sh passes it in TSAN_OPTIONS).
+  add_compile_options(-fsanitize=thread -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=thread)
 endif()

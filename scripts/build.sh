@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Configure and build one build tree. Usage: scripts/build.sh [release|asan] (default release).
+# Configure and build one build tree. Usage: scripts/build.sh [release|asan|tsan] (default release).
 # release -> build/      (Release, warnings are errors, benchmarks included)
 # asan    -> build-asan/ (RelWithDebInfo with AddressSanitizer + UndefinedBehaviorSanitizer, no benchmarks)
+# tsan    -> build-tsan/ (RelWithDebInfo with ThreadSanitizer, no benchmarks; only the targets of the
+#                         tests labelled `threads`, which is all scripts/test.sh runs under TSan)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kind=${1:-release}
@@ -21,5 +23,10 @@ case "$kind" in
       -DRSU_BUILD_BENCHMARKS=OFF -DRSU_WERROR=ON "${launcher[@]}" >/dev/null
     cmake --build build-asan -j "$jobs"
     ;;
-  *) echo "usage: $0 [release|asan]" >&2; exit 2 ;;
+  tsan)
+    cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE_THREAD=ON \
+      -DRSU_BUILD_BENCHMARKS=OFF -DRSU_WERROR=ON "${launcher[@]}" >/dev/null
+    cmake --build build-tsan -j "$jobs" --target rsu_threaded_tests
+    ;;
+  *) echo "usage: $0 [release|asan|tsan]" >&2; exit 2 ;;
 esac

@@ -1,18 +1,68 @@
 #!/usr/bin/env bash
 # The test command: installs what is missing, builds, and runs every test in Release and again under
-# ASan+UBSan, then runs the fuzz harnesses briefly. `scripts/test.sh --quick` runs the Release pass only.
+# ASan+UBSan, the tests that run threads under TSan, then the fuzz harnesses briefly. Prints how long
+# each phase took. `scripts/test.sh --quick` runs the Release pass only.
+#
+# What runs where, and why (budget: the whole command under 30 min on 2 cores, fresh machine):
+#   Release     every test
+#   ASan+UBSan  every test (memory errors and UB anywhere, our parsers above all)
+#   TSan        only the tests labelled `threads` (tests/CMakeLists.txt): the vehicle client (io
+#               thread), the pilot's workers, and the real processes (rsud, rsu-sim, vehicles, DDS) of
+#               the integration, fault and load-smoke tests. The rest is single-threaded computation:
+#               TSan would only slow it down. Only their targets are built (build.sh tsan).
+#   fuzz        every libFuzzer harness for 15 s (scripts/fuzz.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install-deps.sh
 
+phases=()
+phase_start=0
+begin() {
+  phase_start=$(date +%s)
+  echo "== test.sh: $1 =="
+}
+end() {
+  local took=$(($(date +%s) - phase_start))
+  phases+=("$(printf '%-28s %4d s' "$1" "$took")")
+  echo "== test.sh: $1 took ${took} s =="
+}
+summary() {
+  echo "== test.sh: phase durations =="
+  printf '  %s\n' "${phases[@]}"
+}
+trap summary EXIT
+
+begin "install dependencies"
+scripts/install-deps.sh
+end "install dependencies"
+
+begin "Release build"
 scripts/build.sh release
+end "Release build"
+begin "Release tests"
 ctest --test-dir build --output-on-failure -j "$(nproc)"
+end "Release tests"
 
 if [ "${1:-}" != "--quick" ]; then
+  begin "ASan+UBSan build"
   scripts/build.sh asan
+  end "ASan+UBSan build"
+  begin "ASan+UBSan tests"
   # Leak checking stays on; halt_on_error makes any report a test failure.
   ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
+  end "ASan+UBSan tests"
+
+  begin "TSan build"
+  scripts/build.sh tsan
+  end "TSan build"
+  begin "TSan tests"
+  # Children (rsud, rsu-sim, the vehicles) inherit TSAN_OPTIONS: a race in any of them fails its test.
+  TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp" \
+    ctest --test-dir build-tsan --output-on-failure -j "$(nproc)" -L threads
+  end "TSan tests"
+
+  begin "fuzz"
   # Every parser of outside input under libFuzzer for 15 s each (fuzz/, clang build in build-fuzz/).
   scripts/fuzz.sh 15
+  end "fuzz"
 fi
