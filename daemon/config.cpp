@@ -66,12 +66,14 @@ LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
     return read_dds_pointcloud2_input(f.child("dds_pointcloud2"));
   if (f.has("velodyne_udp")) {
     const YamlField u = f.child("velodyne_udp");
-    u.expect_map({"bind_address", "port"});
+    u.expect_map({"bind_address", "port", "reorder_packets"});
     VelodyneUdpInput in;
     if (u.has("bind_address"))
       in.bind_address = address_of(u.child("bind_address"));
     if (u.has("port"))
       in.port = port_of(u.child("port"));
+    if (u.has("reorder_packets"))
+      in.reorder_packets = unsigned_of(u.child("reorder_packets"), 64);
     return in;
   }
   if (f.has("pcd")) {
@@ -101,6 +103,8 @@ void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path
     model.fail("unknown LiDAR model \"" + c.core.sensor_model + "\" (expected vlp16 or vlp32c)");
   c.core.mount = read_mount(f.required("mount"));
   c.input = read_input(f.required("input"), base);
+  if (const auto* u = std::get_if<VelodyneUdpInput>(&c.input))
+    c.core.packet_order.depth = u->reorder_packets;
 }
 
 void read_background(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {

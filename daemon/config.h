@@ -21,6 +21,9 @@ namespace rsu::daemon {
 struct VelodyneUdpInput {
   std::string bind_address = "0.0.0.0";
   std::uint16_t port = 2368;  // DESIGN.md §2: the Velodyne data port
+  // Packets held to put reordered ones back in time order (lidar/packet_order.h); each adds one
+  // packet period of latency (VLP-32C 0.66 ms). 0: a late packet is dropped and counted.
+  std::size_t reorder_packets = 0;
 };
 
 // Whole frames read from PCD files (sensor frame, as `rsu-sim simulate` writes them), replayed in a

@@ -102,6 +102,8 @@ class PacketDecoder {
 
   const DecodeStats& stats() const { return stats_; }
   const SensorModel& model() const { return model_; }
+  // The first firing time of the last accepted packet: its place in the stream (packet_order.h).
+  TimeNs last_first_firing_ns() const { return returns_.blocks.first_firing_ns; }
 
  private:
   void count(DecodeResult result);

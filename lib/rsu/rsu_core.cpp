@@ -12,6 +12,7 @@
 #include <variant>
 
 #include "common/angles.h"
+#include "lidar/firing_schedule.h"
 #include "perception/l_shape_fitting.h"
 #include "rsu/correction_builder.h"
 #include "v2i/association.h"
@@ -117,6 +118,20 @@ bool same_registry_setup(const v2i::VehicleRegistryConfig& a, const v2i::Vehicle
          a.size_change_tolerance_m == b.size_change_tolerance_m;
 }
 
+// The packet stream's order rule: the sensor's packet period, and a silence as long as the sweep
+// clusterer's restart rule (SweepConfig::max_gap_rotations) is a restart of the stream.
+PacketOrder packet_order_for(const RsuCoreConfig& config, const SensorModel& model) {
+  const auto max_gap = static_cast<TimeNs>(config.sweep.max_gap_rotations / model.rotation_hz() * 1e9);
+  return PacketOrder(config.packet_order, FiringSchedule(model, 0).packet_period_ns(),
+                     std::max<TimeNs>(1, max_gap));
+}
+
+void append(LidarStepResult& into, LidarStepResult&& step) {
+  for (OutgoingCorrection& c : step.corrections)
+    into.corrections.push_back(std::move(c));
+  into.background_became_ready = into.background_became_ready || step.background_became_ready;
+}
+
 TimeNs mean_time(const std::vector<LidarPoint>& points) {
   const TimeNs t0 = points.front().time_ns;
   TimeNs offset_sum = 0;  // relative to t0: a cluster spans well under a second, so no overflow
@@ -134,6 +149,7 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       lidar_xy_(config.mount.x, config.mount.y),
       rotation_period_ns_(static_cast<TimeNs>(1e9 / model_.rotation_hz())),
       decoder_(model_),
+      packet_order_(packet_order_for(config, model_)),
       assembler_(assembler_config(model_)),
       background_(perception::background_model_config(config.perception), lidar_xy_),
       clusterer_(config.sweep, config.perception.clustering, lidar_xy_, model_.rotation_hz(),
@@ -278,7 +294,11 @@ LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, 
   if (decoder_.decode(payload, now, sensor_scratch_) != DecodeResult::accepted) {
     return {};  // counted by the decoder, by reason
   }
-  return on_lidar_points(sensor_scratch_, now);
+  packet_order_.push(decoder_.last_first_firing_ns(), sensor_scratch_);  // a late one is counted
+  LidarStepResult result;
+  while (packet_order_.pop(ordered_scratch_))
+    append(result, on_lidar_points(ordered_scratch_, now));
+  return result;
 }
 
 LidarStepResult RsuCore::on_lidar_points(std::span<const LidarPoint> points, TimeNs now) {
@@ -314,6 +334,8 @@ LidarStepResult RsuCore::on_lidar_frame(std::span<const LidarPoint> points, Time
 
 LidarStepResult RsuCore::flush(TimeNs now) {
   LidarStepResult result;
+  while (packet_order_.pop(ordered_scratch_, true))
+    append(result, on_lidar_points(ordered_scratch_, now));
   if (background_ready_) {
     gather(clusterer_.release_all(), now);
     release_held(true, now, result);
@@ -453,24 +475,35 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
       }
     }
   }
-  const auto inside_fraction = [&](const Candidate& c, std::size_t j) {
+  const auto fraction_inside = [&](const Candidate& c, std::size_t j, const Eigen::Vector2d& half) {
     const Eigen::Rotation2Dd to_box(-hypotheses[j].yaw);
     std::size_t inside = 0;
     for (const Eigen::Vector2d& p : c.footprint) {
       const Eigen::Vector2d q = (to_box * (p - hypotheses[j].centre)).cwiseAbs();
-      if (q.x() <= grown_half[j].x() && q.y() <= grown_half[j].y())
+      if (q.x() <= half.x() && q.y() <= half.y())
         ++inside;
     }
     return static_cast<double>(inside) / static_cast<double>(c.footprint.size());
+  };
+  const auto inside_fraction = [&](const Candidate& c, std::size_t j) {
+    return fraction_inside(c, j, grown_half[j]);
+  };
+  // Whether a cluster lies in the vehicle's predicted footprint grown by the minimum margin only.
+  const auto tightly_inside = [&](const Candidate& c, std::size_t j) {
+    const Eigen::Vector2d half(0.5 * hypotheses[j].size.length_m + g.min_margin_m,
+                               0.5 * hypotheses[j].size.width_m + g.min_margin_m);
+    return fraction_inside(c, j, half) >= g.min_inside_fraction;
   };
 
   // Members: the cluster the assignment gave each vehicle, and every other cluster mostly inside its
   // grown footprint (or, the rule before footprints, passing its gate while the vehicle got a cluster).
   std::vector<std::vector<std::size_t>> members(vehicles.size());
   std::vector<bool> taken(candidates.size(), false);
+  std::vector<double> assigned_distance(vehicles.size(), -1.0);  // the assigned cluster is members.front()
   for (const v2i::AssociatedPair& pair : association.pairs) {
     const std::size_t c = fitted_candidate[pair.cluster];
     members[pair.vehicle].push_back(c);
+    assigned_distance[pair.vehicle] = pair.distance_sq;
     taken[c] = true;
   }
   std::vector<std::size_t> fitted_index(candidates.size(), std::numeric_limits<std::size_t>::max());
@@ -525,10 +558,12 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
     std::vector<Eigen::Vector2d> outline(grown[j].begin(), grown[j].end());
     for (const std::size_t c : members[j]) {
       const Candidate& part = candidates[c];
-      if (part.footprint.size() > held.largest_part_size) {
-        held.largest_part_begin = held.footprint.size();
-        held.largest_part_size = part.footprint.size();
-        held.largest_part_time = part.sweep_time;
+      const bool assigned = c == members[j].front() && assigned_distance[j] >= 0.0;
+      if (assigned && (held.assigned_part_size == 0 || assigned_distance[j] < held.assigned_distance_sq)) {
+        held.assigned_part_begin = held.footprint.size();
+        held.assigned_part_size = part.footprint.size();
+        held.assigned_part_time = part.sweep_time;
+        held.assigned_distance_sq = assigned_distance[j];
       }
       held.footprint.insert(held.footprint.end(), part.footprint.begin(), part.footprint.end());
       held.weighted_offset +=
@@ -537,13 +572,24 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
       outline.insert(outline.end(), part.footprint.begin(), part.footprint.end());
     }
     // Hold until the sweep has passed the grown footprint and the gathered clusters (a vehicle whose
-    // estimate is off may extend beyond its footprint), never longer than half a rotation. Only far
-    // vehicles are held: a near one is not split across batches (its faces are dense and its rings close
-    // together), so its fix goes as soon as the sweep clusterer releases it (latency, issue 4).
+    // estimate is off may extend beyond its footprint), never longer than half a rotation. Far vehicles
+    // are held (fragments). A near one is not split across batches (its faces are dense and its rings
+    // close together), so its fix goes as soon as the sweep clusterer releases it (latency, issue 4) -
+    // if the cluster the assignment gave it lies in its footprint grown by the minimum margin only. If
+    // not, that cluster may be a neighbour's released first (an unconnected car beside it, farther from
+    // the LiDAR, whose visible face falls inside the vehicle's gate): the vehicle is held until the
+    // sweep has passed its grown footprint, so that its own cluster, released later, is assigned too and
+    // wins as the nearer (issue 7, mis-association).
     const bool far = (hypotheses[j].centre - lidar_xy_).norm() > g.hold_beyond_m;
-    held.release_at = far ? std::max(held.release_at, std::min(passed_time(outline),
-                                                               held.first_time + rotation_period_ns_ / 2))
-                          : held.first_time;
+    const bool own = assigned_distance[j] >= 0.0 && tightly_inside(candidates[members[j].front()], j);
+    held.release_at =
+        far || !own
+            ? std::max(
+                  held.release_at,
+                  std::min(passed_time(far ? outline
+                                           : std::vector<Eigen::Vector2d>(grown[j].begin(), grown[j].end())),
+                           held.first_time + rotation_period_ns_ / 2))
+            : held.first_time;
   }
 }
 
@@ -579,10 +625,16 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
       lidar_stats_.fragments_merged += held.parts - 1;
     } else {
       // The union is not one vehicle of this size (something else was inside the footprint): the
-      // largest cluster alone; the consistency check of the correction guards it.
+      // cluster the assignment chose, alone; the correction's consistency check guards it. Without
+      // one, every part was only gathered (inside the grown footprint): none is known to be this
+      // vehicle's rather than a neighbour's, so no fix.
       lidar_stats_.clusters_unmatched += held.parts - 1;
-      points = points.subspan(held.largest_part_begin, held.largest_part_size);
-      sweep_time = held.largest_part_time;
+      if (held.assigned_part_size == 0) {
+        ++lidar_stats_.corrections_failed;
+        return;
+      }
+      points = points.subspan(held.assigned_part_begin, held.assigned_part_size);
+      sweep_time = held.assigned_part_time;
       fit = perception::fit_rectangle(points, lidar_xy_, config_.perception.fit);
     }
   }
@@ -736,6 +788,12 @@ std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
   out.emplace_back("packet.bad_block_flag", p.bad_block_flag);
   out.emplace_back("packet.azimuth_out_of_range", p.azimuth_out_of_range);
   out.emplace_back("packet.timestamp_out_of_range", p.timestamp_out_of_range);
+  const PacketOrderStats& o = packet_order_.stats();
+  out.emplace_back("packet.lost", o.lost);
+  out.emplace_back("packet.reordered", o.reordered);
+  out.emplace_back("packet.late_dropped", o.late);
+  out.emplace_back("packet.duplicate", o.duplicate);
+  out.emplace_back("packet.stream_gaps", o.stream_gaps);
   const SweepClustererStats& s = clusterer_.stats();
   out.emplace_back("sweep.foreground_points", s.foreground_points);
   out.emplace_back("sweep.clusters_released", s.clusters_released);

@@ -36,6 +36,7 @@
 
 #include "common/time.h"
 #include "lidar/frame_assembler.h"
+#include "lidar/packet_order.h"
 #include "lidar/point.h"
 #include "lidar/velodyne_packet.h"
 #include "perception/background_model.h"
@@ -121,6 +122,7 @@ class RsuCore {
                                        TimeNs now);
 
   // One Velodyne data packet (UDP payload). `now` is its receive time: it resolves the packet's hour.
+  // Packets pass a reorder stage first (RsuCoreConfig::packet_order): held ones are processed later.
   LidarStepResult on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now);
   // Points in the SENSOR frame, in firing order, from a streaming source (a part of a rotation).
   LidarStepResult on_lidar_points(std::span<const LidarPoint> points_in_sensor_frame, TimeNs now);
@@ -156,6 +158,7 @@ class RsuCore {
   const v2i::EnumCounter<v2i::AnnouncementReason>& validation_counts() const { return validator_.counts(); }
   const v2i::MessageAuthenticator& authenticator() const { return authenticator_; }
   const DecodeStats& packet_stats() const { return decoder_.stats(); }
+  const PacketOrderStats& packet_order_stats() const { return packet_order_.stats(); }
   const SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
   const LidarStats& lidar_stats() const { return lidar_stats_; }
   const Eigen::Vector2d& lidar_xy() const { return lidar_xy_; }
@@ -178,9 +181,14 @@ class RsuCore {
     TimeNs first_time = 0;                   // sweep time of the first gathered cluster
     TimeNs weighted_offset = 0;              // sum over points of (point's cluster time - first_time)
     std::size_t parts = 0;                   // clusters gathered
-    std::size_t largest_part_begin = 0;      // the largest cluster's range in `footprint`
-    std::size_t largest_part_size = 0;
-    TimeNs largest_part_time = 0;
+    // The cluster the global assignment gave this vehicle (the nearest in Mahalanobis distance if it
+    // was given one in several batches), its range in `footprint`: what it is fixed from when the
+    // gathered union is not one vehicle. The other parts may be a neighbour's (a car beside it, a van
+    // behind it) lying inside the grown footprint: the largest of them is no better a guess.
+    std::size_t assigned_part_begin = 0;
+    std::size_t assigned_part_size = 0;  // 0: no cluster was assigned, only gathered
+    TimeNs assigned_part_time = 0;
+    double assigned_distance_sq = 0.0;
     TimeNs release_at = 0;  // firing time when the sweep has passed the footprint and its clusters
   };
 
@@ -208,6 +216,7 @@ class RsuCore {
   TimeNs rotation_period_ns_;
 
   PacketDecoder decoder_;
+  PacketOrder packet_order_;
   FrameAssembler assembler_;  // whole rotations for background learning
   perception::BackgroundModel background_;
   SweepClusterer clusterer_;
@@ -229,7 +238,8 @@ class RsuCore {
   v2i::EnumCounter<v2i::DecodeStatus> decode_counts_;
   LidarStats lidar_stats_;
 
-  std::vector<LidarPoint> sensor_scratch_;  // reused packet after packet
+  std::vector<LidarPoint> sensor_scratch_;   // reused packet after packet
+  std::vector<LidarPoint> ordered_scratch_;  // a packet released by packet_order_
   std::vector<LidarPoint> map_scratch_;
 };
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/pose.h"
+#include "lidar/packet_order.h"
 #include "lidar/sensor_model.h"
 #include "perception/pipeline.h"
 #include "v2i/announcement_validation.h"
@@ -86,6 +87,8 @@ struct RsuCoreConfig {
   Pose3 mount;
 
   BackgroundLearningConfig background;
+  // Velodyne packets put back in time order (lidar/packet_order.h); lost and reordered ones counted.
+  PacketOrderConfig packet_order;
   SweepConfig sweep;
   GatheringConfig gathering;
   perception::PerceptionConfig perception = rsu_perception_defaults();

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/angles.h"
+
 #include "v2i/assignment.h"
 
 namespace rsu::v2i {
@@ -19,27 +21,50 @@ bool is_finite(const VehicleHypothesis& v) {
 }
 
 // How far the fitted centre may sit from the true one along each box axis because of unseen extent:
-// half the announced dimension missing from the fitted edge. Which announced dimension lies along which
-// fitted edge is unknown (the off-by-90 deg problem), so every pairing the edge lengths allow is taken
-// and the larger spread kept per axis.
-Eigen::Vector2d unseen_half_extent(const FittedCluster& c, const BoxSize& size,
-                                   const AssociationConfig& cfg) {
+// half the announced dimension missing from the fitted edge, along the box axes at `axis_yaw`. With
+// the vehicle's heading known (AssociationConfig::pairing_max_yaw_sigma_rad) the fitted edge nearer
+// it is along the length and the spread lies along the heading (a small cluster's own fitted yaw is
+// arbitrary and would point its half-length spread anywhere). Otherwise which announced dimension
+// lies along which fitted edge is unknown (the off-by-90 deg problem): every pairing the edge lengths
+// allow is taken and the larger spread kept per axis of the fitted box.
+struct UnseenSpread {
+  Eigen::Vector2d half = Eigen::Vector2d::Zero();
+  double axis_yaw = 0.0;
+};
+
+UnseenSpread unseen_half_extent(const FittedCluster& c, const VehicleHypothesis& v,
+                                const AssociationConfig& cfg) {
+  const BoxSize& size = v.size;
   const double slack_long = size.length_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
   const double slack_wide = size.width_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
+  // With the heading known (AssociationConfig::pairing_max_yaw_sigma_rad), only the pairing it gives.
+  bool allow_along_is_length = true;
+  bool allow_along_is_width = true;
+  double axis_yaw = c.yaw;
+  const double yaw_var = v.covariance(2, 2);
+  if (yaw_var >= 0.0 && std::sqrt(yaw_var) < cfg.pairing_max_yaw_sigma_rad) {
+    const double off = std::abs(std::remainder(c.yaw - v.yaw, kPi));  // in [0, pi/2]
+    allow_along_is_length = off < kPi / 4.0;
+    allow_along_is_width = !allow_along_is_length;
+    // The spread's axes are the heading's; "along" the fitted box is along the heading or across it.
+    axis_yaw = allow_along_is_length ? v.yaw : v.yaw + kPi / 2.0;
+  }
   Eigen::Vector2d spread = Eigen::Vector2d::Zero();
   bool any = false;
   // Pairing 1: along <-> length, across <-> width. Pairing 2: along <-> width, across <-> length.
-  if (c.edge_along_m <= size.length_m + slack_long && c.edge_across_m <= size.width_m + slack_wide) {
+  if (allow_along_is_length && c.edge_along_m <= size.length_m + slack_long &&
+      c.edge_across_m <= size.width_m + slack_wide) {
     spread = spread.cwiseMax(Eigen::Vector2d(std::max(0.0, size.length_m - c.edge_along_m),
                                              std::max(0.0, size.width_m - c.edge_across_m)));
     any = true;
   }
-  if (c.edge_along_m <= size.width_m + slack_wide && c.edge_across_m <= size.length_m + slack_long) {
+  if (allow_along_is_width && c.edge_along_m <= size.width_m + slack_wide &&
+      c.edge_across_m <= size.length_m + slack_long) {
     spread = spread.cwiseMax(Eigen::Vector2d(std::max(0.0, size.width_m - c.edge_along_m),
                                              std::max(0.0, size.length_m - c.edge_across_m)));
     any = true;
   }
-  return any ? Eigen::Vector2d(0.5 * spread) : Eigen::Vector2d::Zero();
+  return {any ? Eigen::Vector2d(0.5 * spread) : Eigen::Vector2d::Zero(), axis_yaw};
 }
 
 bool size_consistent(const FittedCluster& c, const BoxSize& size, const AssociationConfig& cfg) {
@@ -64,9 +89,10 @@ PairCheck check_pair(const FittedCluster& cluster, const VehicleHypothesis& vehi
   Eigen::Matrix2d s = vehicle.covariance.topLeftCorner<2, 2>();
   s += config.fit_sigma_floor_m * config.fit_sigma_floor_m * Eigen::Matrix2d::Identity();
   if (config.inflate_for_unseen_extent) {
-    const Eigen::Vector2d half = unseen_half_extent(cluster, vehicle.size, config);
-    const double c = std::cos(cluster.yaw);
-    const double sn = std::sin(cluster.yaw);
+    const UnseenSpread spread = unseen_half_extent(cluster, vehicle, config);
+    const Eigen::Vector2d& half = spread.half;
+    const double c = std::cos(spread.axis_yaw);
+    const double sn = std::sin(spread.axis_yaw);
     Eigen::Matrix2d axes;
     axes << c, -sn, sn, c;
     s += axes * half.cwiseProduct(half).asDiagonal() * axes.transpose();

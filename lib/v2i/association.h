@@ -35,6 +35,14 @@ struct AssociationConfig {
   // Where faces are unseen the fitted box is short and its centre sits up to half the missing
   // extent towards the LiDAR (paper Section 3.1, Fig. 3): spread the gate by that along each box axis.
   bool inflate_for_unseen_extent = true;
+  // Which announced dimension lies along which fitted edge: when the vehicle's yaw is known better
+  // than this (1 sigma), the fitted edge nearer its heading is along its length, so the unseen extent
+  // is (length - that edge) along the HEADING and (width - the other) across it. Otherwise both
+  // pairings are allowed, along the fitted box's axes (its yaw is only known modulo 90 deg). Without
+  // it a small cluster - a neighbour's near face, a fragment of a van behind - would widen the gate by
+  // half a length across the vehicle, or along its own arbitrary yaw, and match an unconnected vehicle
+  // in the next lane (issue 7, mis-association).
+  double pairing_max_yaw_sigma_rad = 0.35;
   // A fitted box can exceed the announced one only by noise and a small angle error: longer edge
   // <= length * (1 + rel) + abs, shorter edge <= width * (1 + rel) + abs. Smaller is allowed
   // (occlusion, one visible face). Stops a merged cluster of two cars, or a bus, matching a car.

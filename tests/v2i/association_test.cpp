@@ -71,6 +71,22 @@ TEST(Association, UnseenExtentWidensTheGateAlongTheMissingAxis) {
   EXPECT_TRUE(associate(rear_face, vehicles, strict).pairs.empty());
 }
 
+TEST(Association, AKnownHeadingKeepsTheUnseenLengthAlongIt) {
+  // The near side face of an unconnected car in the next lane, 3.5 m to the right of a vehicle that
+  // announces its heading (yaw sigma 0.1 rad) and its centre within 0.5 m. Half the vehicle's LENGTH
+  // may be unseen along its heading, but only half its width across it: the face is not this vehicle.
+  VehicleHypothesis v = vehicle(1, 0.0, 0.0, 0.0, 0.5);
+  const std::vector<FittedCluster> next_lane_face = {{{0.3, -3.5}, 0.0, 2.0, 0.2, 80}};
+  EXPECT_TRUE(associate(next_lane_face, std::vector<VehicleHypothesis>{v}).pairs.empty());
+  // A vehicle whose heading is unknown could be turned by 90 deg: then its length may lie across.
+  v.covariance(2, 2) = 1.0;
+  EXPECT_EQ(associate(next_lane_face, std::vector<VehicleHypothesis>{v}).pairs.size(), 1U);
+  // The same face turned by 90 deg in its representation (edges swapped) is judged the same way.
+  v.covariance(2, 2) = 0.01;
+  const std::vector<FittedCluster> turned = {{{0.3, -3.5}, kPi / 2.0, 0.2, 2.0, 80}};
+  EXPECT_TRUE(associate(turned, std::vector<VehicleHypothesis>{v}).pairs.empty());
+}
+
 TEST(Association, GlobalAssignmentBeatsNearestNeighbour) {
   // Vehicle 0 localises badly (sigma 1 m) and announces itself 1.9 m towards its neighbour, which
   // is 3.5 m away and localises well. Vehicle 0's nearest cluster is the neighbour's.

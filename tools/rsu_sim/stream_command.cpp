@@ -1,7 +1,8 @@
 // rsu-sim stream: the scenario's Velodyne data packets over UDP, paced at real time (as a sensor
 // sends them) or as fast as possible. Packet times are the simulation clock; with --clock wall the
 // simulation clock is shifted so that the first packet is "now" on the host clock (the common clock
-// of tests on one machine).
+// of tests on one machine). --loss and --reorder impair the stream as a bad network would (issue 7's
+// fault tests), drawn per packet from a counter-based random stream, so a seed repeats a run exactly.
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
 
 #include <boost/asio.hpp>
@@ -10,8 +11,10 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <thread>
 
+#include "common/random.h"
 #include "lidar/velodyne_packet.h"
 #include "sim/lidar_simulator.h"
 #include "sim/scenario.h"
@@ -38,6 +41,18 @@ asio::ip::udp::endpoint parse_endpoint(const std::string& text) {
   return {address, static_cast<unsigned short>(port)};
 }
 
+// Uniform in (0, 1) for packet k of the impairment stream `stream` (1 loss, 2 reordering).
+double impairment_draw(std::uint64_t seed, std::uint64_t stream, std::int64_t k) {
+  return uniform_open01(mix64(seed ^ mix64(stream ^ mix64(static_cast<std::uint64_t>(k)))));
+}
+
+double fraction_option(const po::variables_map& vm, const char* name) {
+  const double v = vm[name].as<double>();
+  if (!(v >= 0.0 && v < 1.0))
+    throw std::runtime_error(std::string("stream: --") + name + " must be within [0, 1)");
+  return v;
+}
+
 TimeNs wall_now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
              std::chrono::system_clock::now().time_since_epoch())
@@ -57,7 +72,11 @@ int run_stream(const std::vector<std::string>& args) {
       "packet time base: sim (scenario time) or wall (shifted to the host clock at start)")(
       "epoch-ns", po::value<long long>(),
       "host-clock time (ns since the Unix epoch) of scenario time 0: packets carry scenario time + epoch and "
-      "are paced against the host clock, so that other processes given the same epoch share the clock");
+      "are paced against the host clock, so that other processes given the same epoch share the clock")(
+      "loss", po::value<double>()->default_value(0.0), "fraction of packets not sent (network loss)")(
+      "reorder", po::value<double>()->default_value(0.0),
+      "fraction of packets held back and sent after the next one (network reordering)")(
+      "impair-seed", po::value<unsigned long long>()->default_value(1), "seed of --loss and --reorder");
   add_scenario_options(options);
   po::positional_options_description positional;
   positional.add("scenario", 1);
@@ -76,6 +95,10 @@ int run_stream(const std::vector<std::string>& args) {
   const double seconds = vm["seconds"].as<double>();
   if (!(seconds > 0 && seconds <= 86400))
     throw std::runtime_error("stream: --seconds must be within (0, 86400]");
+
+  const double loss = fraction_option(vm, "loss");
+  const double reorder = fraction_option(vm, "reorder");
+  const std::uint64_t impair_seed = vm["impair-seed"].as<unsigned long long>();
 
   const sim::Scenario scenario = load_scenario(vm);
   if (!scenario.lidar.model.has_packet_format())
@@ -99,7 +122,13 @@ int run_stream(const std::vector<std::string>& args) {
                               : clock == "wall" ? wall_now_ns() - sim_start
                                                 : 0;
   std::array<std::uint8_t, kPacketBytes> payload{};
-  std::uint64_t sent = 0, failed = 0;
+  std::optional<std::array<std::uint8_t, kPacketBytes>> held_back;  // sent after the next packet
+  std::uint64_t sent = 0, failed = 0, dropped = 0, reordered = 0;
+  const auto send = [&](const std::array<std::uint8_t, kPacketBytes>& bytes) {
+    boost::system::error_code ec;
+    socket.send_to(asio::buffer(bytes), destination, 0, ec);
+    ec ? ++failed : ++sent;
+  };
   for (std::int64_t k = first; k < last; ++k) {
     PacketReturns returns = simulator.simulate_packet(k);
     const TimeNs since_start = returns.blocks.first_firing_ns - sim_start;
@@ -112,13 +141,28 @@ int run_stream(const std::vector<std::string>& args) {
     }
     returns.blocks.first_firing_ns += clock_offset;
     encode_packet(scenario.lidar.model, returns, payload);
-    boost::system::error_code ec;
-    socket.send_to(asio::buffer(payload), destination, 0, ec);
-    ec ? ++failed : ++sent;
+    if (loss > 0.0 && impairment_draw(impair_seed, 1, k) < loss) {
+      ++dropped;
+      continue;
+    }
+    if (!held_back && reorder > 0.0 && impairment_draw(impair_seed, 2, k) < reorder) {
+      held_back = payload;
+      ++reordered;
+      continue;
+    }
+    send(payload);
+    if (held_back) {
+      send(*held_back);
+      held_back.reset();
+    }
   }
+  if (held_back)
+    send(*held_back);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  std::printf("sent %llu packets (%llu failed) to %s in %.2f s\n", static_cast<unsigned long long>(sent),
-              static_cast<unsigned long long>(failed), vm["to"].as<std::string>().c_str(), wall);
+  std::printf("sent %llu packets (%llu failed, %llu dropped, %llu reordered) to %s in %.2f s\n",
+              static_cast<unsigned long long>(sent), static_cast<unsigned long long>(failed),
+              static_cast<unsigned long long>(dropped), static_cast<unsigned long long>(reordered),
+              vm["to"].as<std::string>().c_str(), wall);
   return failed == 0 ? 0 : 1;
 }
 

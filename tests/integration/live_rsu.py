@@ -1,0 +1,183 @@
+"""One RSU on loopback, for the fault, load and mis-association tests (issue 7): the real rsud fed by the
+real `rsu-sim stream` (Velodyne packets of a scenario, paced on the host clock from a shared epoch) and the
+real vehicles of `rsu-fleet` (announcing the scenario vehicles' true poses on the same clock, printing every
+correction with its error against the truth of every vehicle).
+
+  LiveRsu(work, tools, scenario)  work folder, tool paths (rsud, rsu_sim, fleet), scenario file
+    .record_background()          the scene without vehicles (rsu-sim simulate), loaded by rsud at start
+    .write_config(**options)      rsud.yaml (VLP model from the scenario; options below)
+    .start_rsud() / .kill_rsud()  start and wait for "ready: serving" / SIGKILL
+    .stream(start_s, seconds, ..) rsu-sim stream on the shared epoch (loss / reorder options)
+    .fleet(until_s, ..)           rsu-fleet on the shared epoch, announcing until scenario time until_s
+    .corrections(path)            the fleet's correction lines as dicts
+    .stats()                      rsud's stats file (counters)
+
+Every wait is bounded; children are killed by .close().
+"""
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import yaml
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "python"))
+from rsu_processes import Children, free_udp_port, read_text, wait_for  # noqa: E402
+
+ROTATION_S = 0.1  # 600 rpm (DESIGN.md §2)
+
+
+class LiveRsu:
+    def __init__(self, work, tools, scenario, lead_s=1.0):
+        self.work = work
+        shutil.rmtree(work, ignore_errors=True)
+        os.makedirs(work)
+        self.tools = tools  # dict: rsud, rsu_sim, fleet
+        self.scenario = os.path.abspath(scenario)
+        with open(self.scenario) as f:
+            self.scene = yaml.safe_load(f)
+        self.model = self.scene["lidar"]["model"]
+        self.children = Children()
+        self.lidar_port = free_udp_port()
+        self.v2i_port = free_udp_port()
+        self.rsud = None
+        self.rsud_runs = 0
+        self.log_path = None
+        self.background = []
+        # Scenario time 0 on the host clock, shared by the stream and the fleet (DESIGN.md §3).
+        self.epoch_ns = time.time_ns() + int(lead_s * 1e9)
+
+    def path(self, name):
+        return os.path.join(self.work, name)
+
+    def close(self):
+        self.children.kill_all()
+
+    # ---- rsud ----------------------------------------------------------------------------------------
+    def record_background(self, frames=3):
+        out = self.path("background")
+        r = subprocess.run([self.tools["rsu_sim"], "simulate", self.scenario, "--without-vehicles", "--frames",
+                            str(frames), "--out", out], capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stdout + r.stderr
+        self.background = sorted(os.path.join(out, f) for f in os.listdir(out) if f.endswith(".pcd"))
+        assert len(self.background) == frames, self.background
+
+    def write_config(self, reorder_packets=0, capacity=256, learning_frames=None, extra=""):
+        mount = self.scene["lidar"].get("mount", {})
+        lidar_input = "velodyne_udp: {bind_address: 127.0.0.1, port: %d%s}" % (
+            self.lidar_port, ", reorder_packets: %d" % reorder_packets if reorder_packets else "")
+        background = ("learning_frames: %d" % learning_frames if learning_frames is not None
+                      else "pcd_files: [%s]" % ", ".join(self.background))
+        text = """rsu_id: 1
+lidar:
+  model: %s
+  mount: {x: %s, y: %s, z: %s, roll_deg: %s, pitch_deg: %s, yaw_deg: %s}
+  input:
+    %s
+background:
+  %s
+v2i:
+  listen_address: 127.0.0.1
+  port: %d
+registry:
+  capacity: %d
+logging:
+  level: info
+  stats_interval_s: 0.5
+  stats_file: %s
+%s""" % (self.model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
+         mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_input, background, self.v2i_port, capacity,
+         self.path("stats"), extra)
+        with open(self.path("rsud.yaml"), "w") as f:
+            f.write(text)
+
+    def start_rsud(self, wait_ready=True):
+        self.rsud_runs += 1
+        self.log_path = self.path("rsud_%d.log" % self.rsud_runs)
+        self.rsud = self.children.spawn([self.tools["rsud"], "--config", self.path("rsud.yaml")], self.log_path)
+        if wait_ready:
+            self.wait_for(lambda: "ready: serving" in self.log(), 20, "rsud to become ready")
+        return self.rsud
+
+    def kill_rsud(self):
+        self.rsud.send_signal(signal.SIGKILL)
+        self.rsud.wait(timeout=5)
+
+    def stop_rsud(self):
+        self.rsud.send_signal(signal.SIGTERM)
+        rc = self.rsud.wait(timeout=20)
+        assert rc == 0, "rsud exited with %d on SIGTERM:\n%s" % (rc, self.log()[-3000:])
+
+    def log(self):
+        return read_text(self.log_path)
+
+    def wait_for(self, condition, seconds, what):
+        wait_for(condition, seconds, what, watch=self.rsud, watch_log=self.log_path)
+
+    def stats(self):
+        values = {}
+        for line in read_text(self.path("stats")).splitlines():
+            k, v = line.split()
+            values[k] = float(v)
+        return values
+
+    # ---- the sensor and the vehicles -----------------------------------------------------------------
+    def stream(self, start_s, seconds, name="stream", loss=0.0, reorder=0.0, seed=1):
+        cmd = [self.tools["rsu_sim"], "stream", self.scenario, "--to", "127.0.0.1:%d" % self.lidar_port,
+               "--epoch-ns", str(self.epoch_ns), "--start", str(start_s), "--seconds", str(seconds)]
+        if loss or reorder:
+            cmd += ["--loss", str(loss), "--reorder", str(reorder), "--impair-seed", str(seed)]
+        return self.children.spawn(cmd, self.path(name + ".log"))
+
+    def fleet(self, until_s, name="fleet", connected=None, extra=0, address_base="127.1.0.1", options=()):
+        """rsu-fleet announcing from now until scenario time until_s."""
+        seconds = until_s - self.scenario_s(time.time_ns())
+        cmd = [self.tools["fleet"], "--rsu", "127.0.0.1:%d" % self.v2i_port, "--scenario", self.scenario,
+               "--epoch-ns", str(self.epoch_ns), "--seconds", str(seconds), "--address-base", address_base,
+               "--corrections", self.path(name + ".corrections")]
+        if connected:
+            cmd += ["--connected", ",".join(str(c) for c in connected)]
+        if extra:
+            cmd += ["--extra", str(extra)]
+        cmd += list(options)
+        return self.children.spawn(cmd, self.path(name + ".out"))
+
+    def corrections(self, name="fleet"):
+        out = []
+        for line in read_text(self.path(name + ".corrections")).splitlines():
+            w = line.split()
+            if len(w) == 15 and w[0] == "correction":
+                out.append({"recv_ns": int(w[1]), "vehicle": int(w[2]), "named": int(w[3]), "rsu": int(w[4]),
+                            "seq": int(w[5]), "sweep_ns": int(w[6]), "x": float(w[7]), "y": float(w[8]),
+                            "yaw": float(w[9]), "points": int(w[10]), "error": float(w[11]),
+                            "yaw_error": float(w[12]), "other": int(w[13]), "other_error": float(w[14])})
+        return out
+
+    def events(self, name="fleet"):
+        """The fleet's event lines other than corrections, e.g. ["size_change", "1", "<ns>"]."""
+        return [line.split() for line in read_text(self.path(name + ".corrections")).splitlines()
+                if line and not line.startswith("correction ")]
+
+    def fleet_summary(self, name="fleet"):
+        for line in read_text(self.path(name + ".out")).splitlines():
+            if line.startswith("summary "):
+                return {k: int(v) for k, v in (w.split("=") for w in line.split()[1:])}
+        return None
+
+    def scenario_s(self, ns):
+        """Host-clock ns -> scenario seconds."""
+        return (ns - self.epoch_ns) * 1e-9
+
+    def wait_until_scenario(self, t_s):
+        time.sleep(max(0.0, (self.epoch_ns + t_s * 1e9 - time.time_ns()) * 1e-9))
+
+
+def finish(process, seconds, what):
+    """Waits for a child that must end by itself and succeed."""
+    try:
+        rc = process.wait(timeout=seconds)
+    except subprocess.TimeoutExpired:
+        raise AssertionError("%s did not finish within %.0f s" % (what, seconds))
+    assert rc == 0, "%s exited with %d" % (what, rc)

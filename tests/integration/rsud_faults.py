@@ -1,0 +1,233 @@
+#!/usr/bin/env python3
+"""Fault tests of rsud (issue 7 item 5): the real rsud, the real `rsu-sim stream` and the real vehicles of
+`rsu-fleet`, on loopback, in the street of scenarios/fault_street.yaml (a VLP-16, two cars driving past at
+3 m/s, 7-8 m from the LiDAR at their nearest). Each case states what must happen and checks it:
+
+  packet_loss_reorder  5 % of the LiDAR packets lost and 5 % reordered (seeded): the vehicle still gets a
+                       correction in at least 80 % of the rotations, every one within 0.15 m of the truth;
+                       rsud counts exactly the packets the stream dropped as lost and the swaps as reordered
+                       (reorder_packets: 3 puts them back in order)
+  stream_restart       the sensor stream stops mid-rotation and restarts 1 s later mid-rotation: rsud keeps
+                       running, no correction carries a sweep time inside the silence, every correction is
+                       within 0.10 m of the truth (nothing stale or made from a partial rotation is off), and
+                       corrections resume within 0.3 s (3 rotations) of the restart
+  size_change          the vehicle first announces a wrong length (3.90 m for its 4.89 m) then the right one:
+                       every correction swept after the change is within 0.10 m of the truth and the first
+                       comes within 0.25 s; before it, none is (the announced size was in use); the registry
+                       counts one size change
+  clock_offset         vehicle clocks off the RSU's: within the generation-time window (max_future 200 ms,
+                       max_age 1 s; +150 ms and -800 ms) the vehicle is served in at least 80 % of the
+                       rotations within 0.10 m of the truth, as without an offset; beyond it (+600 ms,
+                       -1500 ms) every announcement is rejected and counted by reason, and it gets nothing
+  sigkill_restart      rsud killed with SIGKILL mid-run and started again, nothing else restarted: the
+                       vehicle gets a correction within 1 s of the restart, within 0.10 m of the truth
+
+Every wait is bounded in time; every child is killed on the way out.
+"""
+import argparse
+import math
+import os
+import re
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from live_rsu import ROTATION_S, LiveRsu, finish  # noqa: E402
+from rsu_processes import ChildExited  # noqa: E402
+
+SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenarios", "fault_street.yaml")
+
+
+def start(h, lead_s=0.6, **config):
+    h.record_background()
+    h.write_config(**config)
+    h.start_rsud()
+    h.epoch_ns = time.time_ns() + int(lead_s * 1e9)
+
+
+def rotations(t0_s, t1_s):
+    return int(math.floor((t1_s - t0_s) / ROTATION_S + 1e-9))
+
+
+def check_served(h, cs, t0_s, t1_s, share, max_error, what):
+    """At least `share` of the rotations in [t0_s, t1_s) (scenario time) brought a correction, every one
+    within max_error of the truth."""
+    inside = [c for c in cs if t0_s <= h.scenario_s(c["sweep_ns"]) < t1_s]
+    expected = rotations(t0_s, t1_s)
+    assert len(inside) >= share * expected, "%s: %d corrections in %d rotations (%.1f-%.1f s)" % (
+        what, len(inside), expected, t0_s, t1_s)
+    worst = max(c["error"] for c in inside)
+    assert worst < max_error, "%s: a correction is %.3f m from the truth" % (what, worst)
+    return len(inside), expected, worst
+
+
+def stream_counts(h, name):
+    m = re.search(r"sent (\d+) packets \((\d+) failed, (\d+) dropped, (\d+) reordered\)",
+                  open(h.path(name + ".log")).read())
+    assert m, "no summary from rsu-sim stream"
+    return {"sent": int(m.group(1)), "dropped": int(m.group(3)), "reordered": int(m.group(4))}
+
+
+def case_packet_loss_reorder(h):
+    start(h, reorder_packets=3)
+    stream = h.stream(0.0, 6.0, loss=0.05, reorder=0.05, seed=7)
+    fleet = h.fleet(6.3, connected=[1])
+    finish(stream, 20, "rsu-sim stream")
+    finish(fleet, 20, "rsu-fleet")
+    h.stop_rsud()
+    cs = h.corrections()
+    n, expected, worst = check_served(h, cs, 0.3, 5.9, 0.8, 0.15, "5% loss + 5% reordering")
+    sent = stream_counts(h, "stream")
+    s = h.stats()
+    # Lost: every packet the stream dropped, except one dropped at the very start or end (undetectable).
+    assert sent["dropped"] - 2 <= s["packet.lost"] <= sent["dropped"], (s["packet.lost"], sent)
+    assert sent["reordered"] - 1 <= s["packet.reordered"] <= sent["reordered"], (s["packet.reordered"], sent)
+    assert s["packet.late_dropped"] == 0, s["packet.late_dropped"]
+    print("ok: %d of %d packets dropped, %d reordered; rsud counted %d lost, %d reordered; %d corrections in %d "
+          "rotations, worst %.3f m" % (sent["dropped"], sent["sent"] + sent["dropped"], sent["reordered"],
+                                       s["packet.lost"], s["packet.reordered"], n, expected, worst))
+
+
+def case_stream_restart(h):
+    start(h)
+    stop_s, restart_s = 2.55, 3.53  # both mid-rotation
+    fleet = h.fleet(6.3, connected=[1])
+    first = h.stream(0.0, stop_s, name="stream_1")
+    finish(first, 15, "the first stream")
+    second = h.stream(restart_s, 6.0 - restart_s, name="stream_2")
+    finish(second, 15, "the second stream")
+    finish(fleet, 15, "rsu-fleet")
+    assert h.rsud.poll() is None, "rsud died:\n" + h.log()[-3000:]
+    h.stop_rsud()
+    cs = h.corrections()
+    in_gap = [c for c in cs if stop_s < h.scenario_s(c["sweep_ns"]) < restart_s]
+    assert not in_gap, "corrections swept while the sensor was silent: %s" % in_gap[:3]
+    worst = max(c["error"] for c in cs)
+    assert worst < 0.10, "a correction is %.3f m from the truth" % worst
+    after = [c for c in cs if h.scenario_s(c["sweep_ns"]) >= restart_s]
+    assert after, "no corrections after the restart"
+    resume_s = min(h.scenario_s(c["recv_ns"]) for c in after) - restart_s
+    assert resume_s <= 0.3, "corrections resumed %.3f s after the restart" % resume_s
+    check_served(h, cs, 0.3, stop_s - 0.1, 0.9, 0.10, "before the stop")
+    check_served(h, cs, restart_s + 0.3, 5.9, 0.9, 0.10, "after the restart")
+    s = h.stats()
+    assert s["packet.stream_gaps"] >= 1 and s["sweep.restarts"] >= 1, s
+    print("ok: %d corrections, none in the %.2f s silence, worst %.3f m; resumed %.3f s after the restart" % (
+        len(cs), restart_s - stop_s, worst, resume_s))
+
+
+def case_size_change(h):
+    start(h)
+    change_s = 3.0
+    stream = h.stream(0.0, 6.0)
+    fleet = h.fleet(6.3, connected=[1], options=["--size", "1:3.90,1.92,1.70", "--size-change",
+                                                  "1:%.1f:4.89,1.92,1.70" % change_s])
+    finish(stream, 20, "rsu-sim stream")
+    finish(fleet, 20, "rsu-fleet")
+    h.stop_rsud()
+    cs = h.corrections()
+    changes = [e for e in h.events() if e[0] == "size_change"]
+    assert len(changes) == 1, changes
+    changed_ns = int(changes[0][2])  # when the first announcement with the new size was sent
+    before = [c for c in cs if c["sweep_ns"] < changed_ns]
+    after = [c for c in cs if c["sweep_ns"] > changed_ns]
+    # The RSU fixes the box from its nearest corner with the ANNOUNCED size (paper Algorithm 1): with
+    # 3.90 m announced the centre is 0.5 m off, or the strict checks refuse the box.
+    assert all(c["error"] > 0.2 for c in before), "a correction before the change fits the true size: %s" % [
+        c for c in before if c["error"] <= 0.2][:2]
+    assert after, "no corrections after the size change"
+    first_s = (min(c["sweep_ns"] for c in after) - changed_ns) * 1e-9
+    assert first_s <= 0.25, "the first correction after the change was swept %.3f s later" % first_s
+    worst = max(c["error"] for c in after)
+    assert worst < 0.10, "after the change a correction is %.3f m from the truth" % worst
+    check_served(h, cs, change_s + 0.3, 5.9, 0.9, 0.10, "after the change")
+    s = h.stats()
+    assert s["registry.updated_size_changed"] == 1, s["registry.updated_size_changed"]
+    print("ok: before the change %d corrections (all > 0.2 m off, the wrong size used); after it %d, the first "
+          "swept %.3f s after it, worst %.3f m; registry counted 1 size change" % (
+              len(before), len(after), first_s, worst))
+
+
+def case_clock_offset(h):
+    start(h)
+    stream = h.stream(0.0, 7.6)
+    # Phase 1 (to 3.6 s): vehicle 1's clock 150 ms ahead (served), vehicle 2's 600 ms ahead (rejected).
+    # Phase 2 (from 3.8 s): vehicle 1's 800 ms behind (served), vehicle 2's 1500 ms behind (rejected).
+    phases = [(150, 600, 0.0, 3.6), (-800, -1500, 3.8, 7.6)]
+    served, rejected = [], []
+    for i, (ok_ms, bad_ms, t0, t1) in enumerate(phases):
+        h.wait_until_scenario(t0)
+        a = h.fleet(t1, name="ok_%d" % i, connected=[1], address_base="127.1.%d.1" % i,
+                    options=["--clock-offset-ms", str(ok_ms)])
+        b = h.fleet(t1, name="bad_%d" % i, connected=[2], address_base="127.2.%d.1" % i,
+                    options=["--clock-offset-ms", str(bad_ms)])
+        finish(a, t1 - t0 + 10, "rsu-fleet")
+        finish(b, t1 - t0 + 10, "rsu-fleet")
+        served.append(check_served(h, h.corrections("ok_%d" % i), t0 + 0.3, t1 - 0.1, 0.8, 0.10,
+                                   "clock %+d ms" % ok_ms))
+        assert not h.corrections("bad_%d" % i), "vehicle 2 was served with its clock %+d ms off" % bad_ms
+        rejected.append(h.fleet_summary("bad_%d" % i)["sent"])
+    finish(stream, 15, "rsu-sim stream")
+    h.stop_rsud()
+    s = h.stats()
+    assert s["validation.from_future"] == rejected[0], (s["validation.from_future"], rejected)
+    assert s["validation.too_old"] == rejected[1], (s["validation.too_old"], rejected)
+    print("ok: clock +150 ms: %d corrections in %d rotations, worst %.3f m; -800 ms: %d in %d, worst %.3f m; "
+          "+600 ms: %d announcements rejected (from_future), -1500 ms: %d rejected (too_old), none served" % (
+              served[0] + served[1] + tuple(rejected)))
+
+
+def case_sigkill_restart(h):
+    start(h)
+    stream = h.stream(0.0, 7.0)
+    fleet = h.fleet(7.3, connected=[1])
+    h.wait_until_scenario(3.0)
+    assert h.corrections(), "no corrections before the kill"
+    h.kill_rsud()
+    time.sleep(0.3)
+    t_restart = time.time_ns()
+    h.start_rsud(wait_ready=False)
+    h.wait_for(lambda: "ready: serving" in h.log(), 5, "rsud to become ready again")
+    ready_s = (time.time_ns() - t_restart) * 1e-9
+    h.wait_for(lambda: any(c["recv_ns"] > t_restart for c in h.corrections()), 3, "a correction after the restart")
+    first_s = (min(c["recv_ns"] for c in h.corrections() if c["recv_ns"] > t_restart) - t_restart) * 1e-9
+    assert first_s <= 1.0, "the vehicle was served again %.3f s after the restart" % first_s
+    assert stream.poll() is None and fleet.poll() is None, "the stream or the vehicle stopped"
+    finish(stream, 15, "rsu-sim stream")
+    finish(fleet, 15, "rsu-fleet")
+    h.stop_rsud()
+    after = [c for c in h.corrections() if c["recv_ns"] > t_restart]
+    worst = max(c["error"] for c in after)
+    assert worst < 0.10, "after the restart a correction is %.3f m from the truth" % worst
+    print("ok: restarted rsud ready after %.3f s, first correction %.3f s after the restart, %d corrections "
+          "after it, worst %.3f m" % (ready_s, first_s, len(after), worst))
+
+
+CASES = {"packet_loss_reorder": case_packet_loss_reorder, "stream_restart": case_stream_restart,
+         "size_change": case_size_change, "clock_offset": case_clock_offset,
+         "sigkill_restart": case_sigkill_restart}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("case", choices=sorted(CASES))
+    ap.add_argument("--rsud", required=True)
+    ap.add_argument("--rsu-sim", required=True)
+    ap.add_argument("--fleet", required=True)
+    ap.add_argument("--work", required=True)
+    args = ap.parse_args()
+    h = LiveRsu(args.work, {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet}, SCENARIO)
+    try:
+        CASES[args.case](h)
+    except (AssertionError, TimeoutError, ChildExited) as e:
+        print("FAIL: %s" % e)
+        if h.log_path and os.path.exists(h.log_path):
+            print("---- rsud log (tail) ----\n" + h.log()[-4000:])
+        return 1
+    finally:
+        h.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""Mis-association test (issue 7 item 6): the real rsud, `rsu-sim stream` (VLP-32C) and `rsu-fleet` on
+loopback, in scenarios/occlusion_street.yaml: seven vehicles close together and occluding each other (a
+queue at a light, a car passing a parked van, two cars side by side), of which 2, 4 and 7 are NOT connected
+(they never announce).
+
+A correction is sent to the WRONG vehicle when its position is nearer the truth of another vehicle
+(connected or not) than the truth of the vehicle it was addressed to, or when it names another vehicle.
+Must hold: that count is zero; and the connected vehicles are served (at least 50 % of their rotations:
+the rest are the corrections WITHHELD, where the RSU could not tell the vehicles apart or saw too little,
+which is the safe side; reported). Also reported, not asserted: GROSS errors, corrections more than 1 m
+from the truth of their own vehicle (still the nearest): a vehicle partly hidden behind a nearer one shows
+a truncated face whose end is taken for the vehicle's end (occlusion, README's known shortfalls).
+
+Every wait is bounded in time; every child is killed on the way out.
+"""
+import argparse
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from live_rsu import ROTATION_S, LiveRsu, finish  # noqa: E402
+from rsu_processes import ChildExited  # noqa: E402
+
+SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenarios", "occlusion_street.yaml")
+CONNECTED = [1, 3, 5, 6]
+DRIVE_S = 8.0
+GROSS_M = 1.0
+
+
+def run(h):
+    h.record_background()
+    h.write_config()
+    h.start_rsud()
+    h.epoch_ns = time.time_ns() + 600_000_000
+    stream = h.stream(0.0, DRIVE_S)
+    fleet = h.fleet(DRIVE_S + 0.3, connected=CONNECTED)
+    finish(stream, 40, "rsu-sim stream")
+    finish(fleet, 40, "rsu-fleet")
+    h.stop_rsud()
+    cs = [c for c in h.corrections() if 0.0 <= h.scenario_s(c["sweep_ns"]) < DRIVE_S]
+    wrong = [c for c in cs if c["named"] != c["vehicle"] or (c["other"] != 0 and c["other_error"] < c["error"])]
+    gross = [c for c in cs if c not in wrong and c["error"] > GROSS_M]
+    rotations = int(round((DRIVE_S - 0.2) / ROTATION_S))  # the first rotation may precede registration
+    per_vehicle = {v: [c for c in cs if c["vehicle"] == v] for v in CONNECTED}
+    lines = []
+    for v, got in per_vehicle.items():
+        worst = max((c["error"] for c in got), default=float("nan"))
+        lines.append("vehicle %d: %d corrections in %d rotations (%d withheld), worst %.3f m" % (
+            v, len(got), rotations, max(0, rotations - len(got)), worst))
+    print("\n".join(lines))
+    print("corrections: %d, to the wrong vehicle: %d, withheld: %d of %d vehicle-rotations, gross (> %.0f m "
+          "from their own vehicle, occluded): %d" % (
+              len(cs), len(wrong), sum(max(0, rotations - len(g)) for g in per_vehicle.values()),
+              rotations * len(CONNECTED), GROSS_M, len(gross)))
+    assert not wrong, "%d corrections went to the wrong vehicle, e.g. %s" % (len(wrong), wrong[:3])
+    for v, got in per_vehicle.items():
+        assert len(got) >= 0.5 * rotations, "vehicle %d served in only %d of %d rotations" % (v, len(got), rotations)
+    print("ok: zero wrong-vehicle corrections")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--rsud", required=True)
+    ap.add_argument("--rsu-sim", required=True)
+    ap.add_argument("--fleet", required=True)
+    ap.add_argument("--work", required=True)
+    args = ap.parse_args()
+    h = LiveRsu(args.work, {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet}, SCENARIO)
+    try:
+        run(h)
+    except (AssertionError, TimeoutError, ChildExited) as e:
+        print("FAIL: %s" % e)
+        if h.log_path and os.path.exists(h.log_path):
+            print("---- rsud log (tail) ----\n" + h.log()[-4000:])
+        return 1
+    finally:
+        h.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

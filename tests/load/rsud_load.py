@@ -1,0 +1,165 @@
+#!/usr/bin/env python3
+"""Load test of rsud (issue 7 item 4): N vehicles announcing at 10 Hz from one `rsu-fleet` process (each
+from its own loopback address, as rsud rate-limits per host), four of them in view of a VLP-32C streamed
+by `rsu-sim stream` (tests/load/load_street.yaml), the rest beyond the coverage; for a bounded time.
+
+Prints: announcements sent / accepted / rejected by reason; corrections rsud sent and the vehicles received
+(lost in transport), and per vehicle in view: received vs rotations (missing ones listed); latency from the
+sweep to the correction's arrival (p50 / p99 / max); rsud's RSS sampled every 0.25 s (first, last, max and
+the slope of a least-squares line over the second half of the run, MB per minute); rsud's CPU (share of one
+core, from /proc/<pid>/stat).
+
+  tests/load/rsud_load.py --build build                      # the full run: 1000 vehicles, 30 s
+  tests/load/rsud_load.py --build build --smoke              # ctest: 200 vehicles, 5 s, with assertions
+
+With --smoke (or --check) it asserts: nothing rejected, no correction lost in transport, every vehicle in
+view corrected in at least 95 % of its rotations, p99 latency under 50 ms, and RSS growth under 5 MB/min.
+"""
+import argparse
+import os
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "integration"))
+from live_rsu import ROTATION_S, LiveRsu, finish  # noqa: E402
+from rsu_processes import ChildExited, read_text  # noqa: E402
+
+SCENARIO = os.path.join(HERE, "load_street.yaml")
+IN_VIEW = [1, 2, 3, 4]
+PAGE_KB = os.sysconf("SC_PAGE_SIZE") / 1024.0
+TICKS = os.sysconf("SC_CLK_TCK")
+
+
+def rss_mb(pid):
+    for line in read_text("/proc/%d/status" % pid).splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024.0
+    return None
+
+
+def cpu_s(pid):
+    fields = read_text("/proc/%d/stat" % pid).rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICKS  # utime, stime (fields 14 and 15 of proc(5))
+
+
+def slope_mb_per_min(samples):
+    """Least-squares slope of (t_s, mb) over the second half of the run (after the registry filled)."""
+    half = samples[len(samples) // 2:]
+    if len(half) < 3:
+        return float("nan")
+    n = len(half)
+    mt = sum(t for t, _ in half) / n
+    mm = sum(m for _, m in half) / n
+    var = sum((t - mt) ** 2 for t, _ in half)
+    return 60.0 * sum((t - mt) * (m - mm) for t, m in half) / var if var > 0 else float("nan")
+
+
+def percentile(values, q):
+    s = sorted(values)
+    return s[min(len(s) - 1, max(0, int(round(q * (len(s) - 1)))))] if s else float("nan")
+
+
+def run(args):
+    tools = {"rsud": os.path.join(args.build, "daemon", "rsud"),
+             "rsu_sim": os.path.join(args.build, "tools", "rsu-sim"),
+             "fleet": os.path.join(args.build, "tests", "fleet", "rsu-fleet")}
+    h = LiveRsu(args.work, tools, SCENARIO)
+    try:
+        h.record_background()
+        h.write_config(capacity=args.vehicles + 64)
+        rsud = h.start_rsud()
+        h.epoch_ns = time.time_ns() + 1_000_000_000
+        stream = h.stream(0.0, args.seconds)
+        fleet = h.fleet(args.seconds + 0.5, extra=args.vehicles - len(IN_VIEW))
+        samples, cpu0, t0 = [], cpu_s(rsud.pid), time.time()
+        deadline = t0 + args.seconds + 30
+        while fleet.poll() is None and time.time() < deadline:
+            mb = rss_mb(rsud.pid)
+            if mb is not None:
+                samples.append((time.time() - t0, mb))
+            time.sleep(0.25)
+        cpu_share = (cpu_s(rsud.pid) - cpu0) / (time.time() - t0)
+        finish(fleet, 10, "rsu-fleet")
+        finish(stream, 10, "rsu-sim stream")
+        h.stop_rsud()
+        return report(h, args, samples, cpu_share)
+    finally:
+        h.close()
+
+
+def report(h, args, samples, cpu_share):
+    s = h.stats()
+    summary = h.fleet_summary()
+    cs = h.corrections()
+    rejected = {k: int(v) for k, v in s.items() if v > 0 and (
+        (k.startswith("datagram.") and k != "datagram.accepted") or k.startswith("validation.") or
+        k.startswith(("decode.", "registry.rate_limited", "registry.registry_full", "registry.too_many_sources",
+                      "registry.stale_sequence", "registry.duplicate_sequence")))}
+    print("load: %d vehicles at 10 Hz for %.0f s, VLP-32C stream, %d vehicles in view" % (
+        args.vehicles, args.seconds, len(IN_VIEW)))
+    print("announcements: sent %d (send failures %d), accepted %d, rejected %s" % (
+        summary["sent"], summary["send_failed"], s.get("datagram.accepted", 0), rejected or "none"))
+    sent_by_rsud = int(s.get("corrections_sent", 0))
+    print("corrections: rsud sent %d, vehicles received %d (lost in transport %d), to vehicles not in view %d, "
+          "naming another vehicle %d" % (sent_by_rsud, len(cs), sent_by_rsud - len(cs),
+                                          sum(1 for c in cs if c["vehicle"] not in IN_VIEW), summary["foreign"]))
+    # Per vehicle in view: the rotations from its first correction to the end of the stream, and the ones
+    # without a correction (gaps between consecutive sweep times).
+    worst_share = 1.0
+    for v in IN_VIEW:
+        got = sorted(c["sweep_ns"] for c in cs if c["vehicle"] == v)
+        if not got:
+            print("  vehicle %d: no corrections" % v)
+            worst_share = 0.0
+            continue
+        end_ns = h.epoch_ns + int(args.seconds * 1e9)
+        expected = int(round((end_ns - got[0]) * 1e-9 / ROTATION_S))
+        missing = sum(max(0, int(round((b - a) * 1e-9 / ROTATION_S)) - 1) for a, b in zip(got, got[1:]))
+        errors = [c["error"] for c in cs if c["vehicle"] == v]
+        share = len(got) / max(1, expected)
+        worst_share = min(worst_share, share)
+        print("  vehicle %d: %d corrections in %d rotations since its first (%d missing between), worst error "
+              "%.3f m" % (v, len(got), expected, missing, max(errors)))
+    latency = [(c["recv_ns"] - c["sweep_ns"]) * 1e-6 for c in cs]
+    p50, p99, worst_ms = percentile(latency, 0.5), percentile(latency, 0.99), max(latency, default=float("nan"))
+    print("latency sweep -> received: p50 %.1f ms, p99 %.1f ms, max %.1f ms (%d corrections)" % (
+        p50, p99, worst_ms, len(latency)))
+    slope = slope_mb_per_min(samples)
+    print("rsud RSS: first %.1f MB, last %.1f MB, max %.1f MB, slope over the second half %+.2f MB/min "
+          "(%d samples)" % (samples[0][1], samples[-1][1], max(m for _, m in samples), slope, len(samples)))
+    print("rsud CPU: %.0f %% of one core" % (100.0 * cpu_share))
+    if args.check:
+        assert not rejected, "announcements rejected: %s" % rejected
+        assert sent_by_rsud == len(cs), "corrections lost in transport: %d sent, %d received" % (sent_by_rsud, len(cs))
+        assert summary["foreign"] == 0 and all(c["vehicle"] in IN_VIEW for c in cs), "corrections to the wrong vehicle"
+        assert worst_share >= 0.95, "a vehicle in view was corrected in only %.0f %% of its rotations" % (
+            100 * worst_share)
+        assert p99 < 50.0, "p99 latency %.1f ms" % p99
+        assert abs(slope) < 5.0, "RSS grows %.2f MB/min" % slope
+        print("ok")
+    return 0
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--build", default=os.path.join(HERE, "..", "..", "build"))
+    ap.add_argument("--vehicles", type=int, default=1000)
+    ap.add_argument("--seconds", type=float, default=30.0)
+    ap.add_argument("--smoke", action="store_true", help="200 vehicles for 5 s, with the assertions")
+    ap.add_argument("--check", action="store_true", help="assert (see above)")
+    ap.add_argument("--work", default=None)
+    args = ap.parse_args()
+    if args.smoke:
+        args.vehicles, args.seconds, args.check = 200, 5.0, True
+    args.build = os.path.abspath(args.build)
+    args.work = args.work or os.path.join(args.build, "load-run")
+    try:
+        return run(args)
+    except (AssertionError, TimeoutError, ChildExited) as e:
+        print("FAIL: %s" % e)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
