@@ -81,6 +81,8 @@ background:
 v2i:
   listen_address: 127.0.0.1
   port: %d
+security:
+  mode: insecure
 registry:
   capacity: %d
 logging:
