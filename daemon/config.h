@@ -39,7 +39,7 @@ struct SimulatorInput {
 };
 
 // sensor_msgs/PointCloud2 from a ROS 2 LiDAR driver over DDS (needs dds.enabled). Points in the
-// LiDAR's own frame (header.frame_id is not interpreted: lidar.mount places them).
+// LiDAR's own frame: lidar.mount places them, whatever header.frame_id says.
 struct DdsPointCloud2Input {
   std::string topic = "points";  // ROS name; "rt/points" on the wire
   dds::QosConfig qos;
@@ -47,6 +47,9 @@ struct DdsPointCloud2Input {
   // end; false: each message is a part of a rotation in firing order, released as the sweep passes.
   bool whole_rotation = true;
   ros::RingOrder ring_order = ros::RingOrder::kChannel;  // kElevation: the Velodyne ROS drivers' ring
+  // When set, clouds with another header.frame_id are refused (another sensor's cloud on the topic
+  // would be placed with this LiDAR's mount); empty: any.
+  std::string frame_id;
 };
 
 using LidarInput = std::variant<VelodyneUdpInput, PcdInput, SimulatorInput, DdsPointCloud2Input>;

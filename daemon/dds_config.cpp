@@ -110,7 +110,7 @@ DdsConfig read_dds_config(const YamlField& f, const std::filesystem::path& base,
 }
 
 DdsPointCloud2Input read_dds_pointcloud2_input(const YamlField& f) {
-  f.expect_map({"topic", "qos", "whole_rotation", "ring_order"});
+  f.expect_map({"topic", "qos", "whole_rotation", "ring_order", "frame_id"});
   DdsPointCloud2Input in;
   if (f.has("topic")) {
     in.topic = topic_of(f.child("topic"), false);
@@ -131,6 +131,8 @@ DdsPointCloud2Input read_dds_pointcloud2_input(const YamlField& f) {
     else
       r.fail("expected channel or elevation, got \"" + v + "\"");
   }
+  if (f.has("frame_id"))
+    in.frame_id = f.child("frame_id").text();
   return in;
 }
 

@@ -102,6 +102,13 @@ void DdsEdge::on_cloud(const PointCloud2& cloud, const dds_sample_info_t& info) 
                       "header.stamp.nanosec " + std::to_string(cloud.header.stamp.nanosec) + " >= 1e9");
     return;
   }
+  const char* frame = cloud.header.frame_id != nullptr ? cloud.header.frame_id : "";
+  if (!input_.frame_id.empty() && input_.frame_id != frame) {
+    ++clouds_wrong_frame_;
+    bad_input_.report("dds_pointcloud2.frame_id",
+                      "header.frame_id \"" + std::string(frame) + "\", expected \"" + input_.frame_id + "\"");
+    return;
+  }
   std::vector<ros::PointFieldView> fields;
   fields.reserve(cloud.fields._length);
   for (std::uint32_t i = 0; i < cloud.fields._length; ++i) {
@@ -231,6 +238,7 @@ void DdsEdge::write_stats(std::ostream& out) const {
   out << "dds.clouds_accepted " << clouds_accepted_ << "\n";
   out << "dds.clouds_empty " << clouds_empty_ << "\n";
   out << "dds.clouds_rejected.bad_stamp " << clouds_bad_stamp_ << "\n";
+  out << "dds.clouds_rejected.frame_id " << clouds_wrong_frame_ << "\n";
   for (std::size_t i = 1; i < clouds_rejected_.size(); ++i)
     out << "dds.clouds_rejected." << ros::to_string(static_cast<ros::CloudReject>(i)) << " "
         << clouds_rejected_[i] << "\n";
@@ -249,7 +257,7 @@ void DdsEdge::write_stats(std::ostream& out) const {
 
 std::string DdsEdge::stats_line() const {
   std::ostringstream out;
-  std::uint64_t rejected = clouds_bad_stamp_;
+  std::uint64_t rejected = clouds_bad_stamp_ + clouds_wrong_frame_;
   for (const std::uint64_t n : clouds_rejected_)
     rejected += n;
   out << "dds: clouds_received=" << clouds_received_ << " clouds_rejected=" << rejected

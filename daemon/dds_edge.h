@@ -102,6 +102,7 @@ class DdsEdge {
   std::uint64_t clouds_accepted_ = 0;
   std::uint64_t clouds_empty_ = 0;  // accepted, but without a usable point
   std::uint64_t clouds_bad_stamp_ = 0;
+  std::uint64_t clouds_wrong_frame_ = 0;
   std::array<std::uint64_t, static_cast<std::size_t>(ros::CloudReject::kCount)> clouds_rejected_{};
   std::uint64_t points_accepted_ = 0;
   std::uint64_t points_non_finite_ = 0;

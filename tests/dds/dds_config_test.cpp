@@ -44,6 +44,7 @@ TEST(DdsConfig, ReadsEveryKey) {
       "      topic: /velodyne_points\n"
       "      whole_rotation: false\n"
       "      ring_order: elevation\n"
+      "      frame_id: velodyne\n"
       "      qos: {reliability: best_effort, history_depth: 4}\n"
       "dds:\n"
       "  enabled: true\n"
@@ -59,6 +60,7 @@ TEST(DdsConfig, ReadsEveryKey) {
   EXPECT_EQ(in.topic, "/velodyne_points");
   EXPECT_FALSE(in.whole_rotation);
   EXPECT_EQ(in.ring_order, ros::RingOrder::kElevation);
+  EXPECT_EQ(in.frame_id, "velodyne");
   EXPECT_EQ(in.qos.reliability, dds::Reliability::kBestEffort);
   EXPECT_EQ(in.qos.history_depth, 4U);
   EXPECT_TRUE(c.dds.enabled);

@@ -13,7 +13,7 @@ input set to whole_rotation: false). Checks:
   - the object list (rsu_msgs/VehicleFixArray, read through IDL written from dds/msg/*.msg) arrives
     once per rotation with the vehicle at the same place;
   - two broken layouts among the clouds are refused, counted by reason and logged, an empty cloud is
-    counted and skipped, the rest served;
+    counted and skipped, the rest served; another sensor's clouds (other header.frame_id) are refused;
   - rsud drains and exits 0 on SIGTERM.
 Every wait is bounded; every child is killed on the way out.
 """
@@ -175,7 +175,8 @@ lidar:
   model: vlp32c
   mount: {x: 0, y: 0, z: 2.0}
   input:
-    dds_pointcloud2: {topic: test/points, whole_rotation: %s, ring_order: channel, qos: {history_depth: 8}}
+    dds_pointcloud2: {topic: test/points, whole_rotation: %s, ring_order: channel, frame_id: lidar,
+                      qos: {history_depth: 8}}
 background:
   pcd_files: [%s]
 v2i:
@@ -287,6 +288,14 @@ def run(h):
             assert 0 <= l["stamp"] - f["sweep"] <= 0.3e9 + 1e6, (l["stamp"], f)  # object_list_max_age_s
             assert 0.0 < f["yaw_var"] < 1.0 and f["points"] > 0, f
 
+    # Another sensor's clouds on the topic (header.frame_id "camera", not the configured "lidar"): refused.
+    other = h.spawn([h.args.participant, "--domain", str(domain), "--cloud-topic", "rt/test/points", "--frame-id",
+                     "camera", "--rate-hz", "10", "--seconds", "0.3", "--linger-s", "0.5", h.clouds[0]],
+                    "other_sensor.out", env)
+    rc = other.wait(timeout=20)
+    assert rc == 0, "second participant exited with %d:\n%s" % (rc, h.read("other_sensor.out"))
+    other_sent = len(parse_participant(h.read("other_sensor.out"))[0])
+
     # A clean drain (and, under ASan, no leak report): SIGTERM, exit 0.
     rsud.send_signal(signal.SIGTERM)
     rc = rsud.wait(timeout=15)
@@ -296,6 +305,8 @@ def run(h):
         n = s["dds.clouds_rejected." + reason]
         assert 1 <= n <= broken_sent, "%s: %d rejected of %d broken sent" % (reason, n, broken_sent)
         assert ("dds_pointcloud2." + reason) in h.read("rsud.log"), "no log line for " + reason
+    assert 1 <= s["dds.clouds_rejected.frame_id"] <= other_sent, (s["dds.clouds_rejected.frame_id"], other_sent)
+    assert "dds_pointcloud2.frame_id" in h.read("rsud.log")
     rejected = sum(v for k, v in s.items() if k.startswith("dds.clouds_rejected."))
     assert s["dds.clouds_received"] >= len(published) - 2, (s["dds.clouds_received"], len(published))
     assert s["dds.clouds_accepted"] == s["dds.clouds_received"] - rejected, s
