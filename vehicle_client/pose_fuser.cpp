@@ -104,6 +104,7 @@ PoseFuserStats PoseFuser::stats() const {
   PoseFuserStats out = stats_;
   out.late = ekf_.stats().late;
   out.reapplied = ekf_.stats().reapplied;
+  out.ndt_restarts = ekf_.stats().ndt_restarts;
   return out;
 }
 

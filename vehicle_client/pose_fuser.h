@@ -41,6 +41,7 @@ struct PoseFuserStats {
   std::uint64_t late = 0;                     // arrived older than the newest fused measurement
   std::uint64_t reapplied = 0;                // later measurement updates redone because of a late one
   std::uint64_t rsu_reanchors = 0;            // filter re-initialised at a run of agreeing RSU fixes
+  std::uint64_t ndt_restarts = 0;  // filter restarted at an NDT pose after a lock-out (VehicleEkfConfig)
 
   std::uint64_t rsu_rejected_by_gate() const { return rsu_rejected_gate + rsu_rejected_yaw_branch; }
 };

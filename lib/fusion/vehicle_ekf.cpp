@@ -64,6 +64,7 @@ void VehicleEkf::initialize(const StateEstimate& start) {
   anchor_.state(kYaw) = wrap_angle(anchor_.state(kYaw));
   horizon_ = start.time;
   history_.clear();
+  ndt_gate_run_ = 0;
   initialized_ = true;
 }
 
@@ -74,6 +75,20 @@ void VehicleEkf::count(MeasurementOutcome outcome, int delta) {
 
 const StateEstimate& VehicleEkf::newest_state() const {
   return history_.empty() ? anchor_ : history_.back().posterior;
+}
+
+MeasurementOutcome VehicleEkf::start_from(const PoseMeasurement& ndt) {
+  StateEstimate start;
+  start.time = ndt.time;
+  start.state << ndt.pose.x, ndt.pose.y, ndt.pose.yaw, 0.0, 0.0;
+  start.covariance.setZero();
+  start.covariance.topLeftCorner<3, 3>() = ndt.covariance;
+  start.covariance(kSpeed, kSpeed) = config_.initial_speed_sigma_mps * config_.initial_speed_sigma_mps;
+  start.covariance(kYawRate, kYawRate) =
+      config_.initial_yaw_rate_sigma_rps * config_.initial_yaw_rate_sigma_rps;
+  initialize(start);
+  count(MeasurementOutcome::kInitialized, 1);
+  return MeasurementOutcome::kInitialized;
 }
 
 MeasurementOutcome VehicleEkf::fuse(StateEstimate& estimate, const PoseMeasurement& m) const {
@@ -117,17 +132,7 @@ MeasurementOutcome VehicleEkf::add(const PoseMeasurement& m) {
       count(MeasurementOutcome::kRejectedNotInitialized, 1);
       return MeasurementOutcome::kRejectedNotInitialized;
     }
-    StateEstimate start;
-    start.time = m.time;
-    start.state << m.pose.x, m.pose.y, m.pose.yaw, 0.0, 0.0;
-    start.covariance.setZero();
-    start.covariance.topLeftCorner<3, 3>() = m.covariance;
-    start.covariance(kSpeed, kSpeed) = config_.initial_speed_sigma_mps * config_.initial_speed_sigma_mps;
-    start.covariance(kYawRate, kYawRate) =
-        config_.initial_yaw_rate_sigma_rps * config_.initial_yaw_rate_sigma_rps;
-    initialize(start);
-    count(MeasurementOutcome::kInitialized, 1);
-    return MeasurementOutcome::kInitialized;
+    return start_from(m);
   }
   const TimeNs newest = history_.empty() ? anchor_.time : history_.back().measurement.time;
   if (m.time < horizon_) {
@@ -147,6 +152,15 @@ MeasurementOutcome VehicleEkf::add(const PoseMeasurement& m) {
   if (m.time >= newest) {
     HistoryEntry entry{m, MeasurementOutcome::kAccepted, newest_state()};
     entry.outcome = fuse(entry.posterior, m);
+    if (entry.outcome == MeasurementOutcome::kRejectedGate && m.source == MeasurementSource::kNdt) {
+      if (++ndt_gate_run_ >= std::max(config_.ndt_restart_after_rejections, 1)) {
+        // Locked out (see VehicleEkfConfig::ndt_restart_after_rejections): restart at this pose.
+        ++stats_.ndt_restarts;
+        return start_from(m);
+      }
+    } else if (entry.outcome == MeasurementOutcome::kAccepted) {
+      ndt_gate_run_ = 0;
+    }
     count(entry.outcome, 1);
     history_.push_back(entry);
     prune();
@@ -161,6 +175,9 @@ MeasurementOutcome VehicleEkf::add(const PoseMeasurement& m) {
   history_.insert(position, HistoryEntry{m, MeasurementOutcome::kCount, StateEstimate{}});
   replay_from(index);
   const MeasurementOutcome outcome = history_[index].outcome;
+  if (outcome == MeasurementOutcome::kAccepted) {
+    ndt_gate_run_ = 0;
+  }
   prune();
   return outcome;
 }

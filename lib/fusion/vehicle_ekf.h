@@ -33,8 +33,9 @@ struct EkfStats {
   // Per outcome; counts reflect the current decision for measurements still in history (a measurement
   // re-gated after a late insertion moves between counts).
   std::array<std::uint64_t, static_cast<std::size_t>(MeasurementOutcome::kCount)> by_outcome{};
-  std::uint64_t late = 0;       // arrived older than the newest measurement already processed
-  std::uint64_t reapplied = 0;  // measurement updates redone because a late one was inserted before them
+  std::uint64_t late = 0;          // arrived older than the newest measurement already processed
+  std::uint64_t reapplied = 0;     // measurement updates redone because a late one was inserted before them
+  std::uint64_t ndt_restarts = 0;  // restarts at an NDT pose after a run of gate-refused ones (lock-out)
 
   std::uint64_t count(MeasurementOutcome o) const { return by_outcome[static_cast<std::size_t>(o)]; }
   std::uint64_t accepted() const {
@@ -80,6 +81,7 @@ class VehicleEkf {
     StateEstimate posterior;  // after this measurement (unchanged from before it when rejected)
   };
 
+  MeasurementOutcome start_from(const PoseMeasurement& ndt);
   MeasurementOutcome fuse(StateEstimate& estimate, const PoseMeasurement& m) const;
   void replay_from(std::size_t index);
   void prune();
@@ -91,6 +93,7 @@ class VehicleEkf {
   StateEstimate anchor_;  // the state just before history_.front()
   TimeNs horizon_ = 0;    // measurements older than this are refused (the newest one folded into anchor_)
   std::deque<HistoryEntry> history_;
+  int ndt_gate_run_ = 0;  // NDT poses refused by the gate in a row, nothing accepted since
   EkfStats stats_;
 };
 

@@ -36,6 +36,19 @@ struct VehicleEkfConfig {
   // A full-heading pose arriving this long after the newest fused measurement restarts the filter.
   TimeNs restart_after_gap = 5 * kNsPerSecond;
 
+  // Lock-out recovery. The gate trusts the filter's prediction; once the motion state is wrong (a vehicle
+  // that stood still, so its speed variance shrank to the process noise, then jumps to speed at once) the
+  // gate refuses every own-localization pose, each farther from the prediction than the last, and the
+  // filter never follows the vehicle again. When this many NDT poses in a row fail the gate with no
+  // measurement of any source accepted in between, the filter, not the localization, is what is wrong: it
+  // restarts from the latest NDT pose with that pose's covariance and the wide initial motion
+  // uncertainty, as at start-up. A restart, not a growing process noise: the pose comes back at once
+  // instead of after seconds of lag, and the gate stays as tight as before for honest NDT noise. An RSU
+  // fix accepted in between (the filter re-anchored at RSU fixes because NDT drifted) breaks the run, so a
+  // drifted NDT does not pull the filter back. 5 at 10 Hz NDT: half a second; an honest NDT fails the
+  // 99.9 % gate 5 times in a row about once in 10^15.
+  int ndt_restart_after_rejections = 5;
+
   // Uncertainty of the motion states when the filter starts from a pose measurement alone.
   double initial_speed_sigma_mps = 10.0;
   double initial_yaw_rate_sigma_rps = 0.5;

@@ -319,6 +319,35 @@ TEST(VehicleEkf, EstimateAtDoesNotChangeTheFilter) {
   EXPECT_EQ(ekf.latest()->time, newest.time);
 }
 
+// Lock-out recovery needs a run of refused NDT poses with nothing accepted in between: fewer NDT outliers
+// in a row, or outliers interleaved with accepted RSU fixes, never restart the filter.
+TEST(VehicleEkf, ShortOrInterruptedNdtOutlierRunsDoNotRestart) {
+  const VehicleEkfConfig config = config_with_offset();
+  const int run = config.ndt_restart_after_rejections;
+  ASSERT_GT(run, 1);
+  for (const bool with_rsu : {false, true}) {
+    VehicleEkf ekf(config);
+    int k = 0;
+    for (; k < 20; ++k) {
+      ekf.add(ndt_at(kStart + k * 100 * kNsPerMs, static_cast<std::uint64_t>(k)));
+    }
+    // NDT jumps 3 m sideways and stays there: run - 1 poses alone, or any number between good RSU fixes.
+    const int outliers = with_rsu ? 3 * run : run - 1;
+    for (int i = 0; i < outliers; ++i, ++k) {
+      const TimeNs t = kStart + k * 100 * kNsPerMs;
+      PoseMeasurement bad = ndt_at(t, static_cast<std::uint64_t>(k));
+      bad.pose.y += 3.0;
+      EXPECT_EQ(ekf.add(bad), MeasurementOutcome::kRejectedGate) << "outlier " << i;
+      if (with_rsu) {
+        EXPECT_EQ(ekf.add(rsu_at(t + 50 * kNsPerMs, static_cast<std::uint64_t>(k))),
+                  MeasurementOutcome::kAccepted);
+      }
+    }
+    EXPECT_EQ(ekf.stats().ndt_restarts, 0U);
+    EXPECT_LT(position_error(ekf, kStart + (k - 1) * 100 * kNsPerMs), 0.3);
+  }
+}
+
 TEST(VehicleEkf, RestartsFromNdtAfterALongGap) {
   VehicleEkf ekf(config_with_offset());
   for (const auto& m : drive(10, false)) {

@@ -241,6 +241,43 @@ TEST(PoseFuser, AFaultyRsuBesideAGoodOneDoesNotTakeOverThePose) {
   EXPECT_LT(both_rmse, 1.5 * good_only_rmse + 0.01) << "good alone " << good_only_rmse << " m";
 }
 
+// The handover test's finding: a vehicle that stands still and then jumps at once to 10 m/s (a
+// simulator start, or NDT catching up after a stall). The filter is sure the vehicle stands, so the gate
+// refuses the first moving pose, then every later one (each is farther from the standing prediction):
+// without recovery the filter never follows its own localization again. No RSU is in view.
+TEST(PoseFuser, FollowsItsOwnLocalizationAgainAfterAnInstantJumpToSpeed) {
+  PoseFuser fuser(fuser_config());
+  constexpr double kJumpSpeed = 10.0;  // m/s
+  constexpr double kSigma = 0.05;      // m, a good NDT in an open street
+  constexpr TimeNs kMoveAt = kStart + 3 * kNsPerSecond;
+  const Eigen::Vector2d along(std::cos(kHeading), std::sin(kHeading));
+  const Eigen::Vector2d parked(10.0, -5.0);
+  const auto truth_at = [&](TimeNs t) {
+    return t <= kMoveAt ? parked : Eigen::Vector2d(parked + kJumpSpeed * to_seconds(t - kMoveAt) * along);
+  };
+  int k = 0;
+  std::uint64_t ndt_accepted_moving = 0;
+  for (TimeNs t = kStart; t <= kMoveAt + 4 * kNsPerSecond; t += kStep, ++k) {
+    const NormalPair n = standard_normal_pair(3, 0, static_cast<std::uint64_t>(k));
+    const Eigen::Vector2d truth = truth_at(t);
+    const auto outcome = fuser.add_ndt({truth.x() + kSigma * n.a, truth.y() + kSigma * n.b, kHeading},
+                                       diagonal(kSigma, 0.01), t);
+    if (t > kMoveAt && outcome == fusion::MeasurementOutcome::kAccepted)
+      ++ndt_accepted_moving;
+  }
+  const TimeNs end = kMoveAt + 4 * kNsPerSecond;
+  const auto fused = fuser.pose_at(end);
+  ASSERT_TRUE(fused.has_value());
+  const double error =
+      (Eigen::Vector2d(fused->state(fusion::kX), fused->state(fusion::kY)) - truth_at(end)).norm();
+  EXPECT_LT(error, 0.2) << "the fused pose stayed behind the vehicle";
+  EXPECT_NEAR(fused->state(fusion::kSpeed), kJumpSpeed, 0.5);
+  // 40 moving poses; the recovery may cost a handful of them, never the rest of the drive.
+  EXPECT_GE(ndt_accepted_moving, 30U);
+  EXPECT_GE(fuser.stats().ndt_accepted, fuser.stats().ndt_rejected + 60U);
+  EXPECT_EQ(fuser.stats().ndt_restarts, 1U);
+}
+
 TEST(PoseFuser, NothingBeforeTheFirstNdtPoseAndNoRsuStart) {
   PoseFuser fuser(fuser_config());
   EXPECT_FALSE(fuser.pose_at(kStart).has_value());

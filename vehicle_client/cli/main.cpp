@@ -268,10 +268,10 @@ class Session {
     std::fprintf(
         stderr,
         "; fuser: NDT accepted %llu rejected %llu, RSU accepted %llu rejected gate %llu yaw-branch %llu "
-        "other %llu, late %llu, re-applied %llu, re-anchored at RSU fixes %llu\n",
+        "other %llu, late %llu, re-applied %llu, re-anchored at RSU fixes %llu, restarted at NDT %llu\n",
         ull(f.ndt_accepted), ull(f.ndt_rejected), ull(f.rsu_accepted), ull(f.rsu_rejected_gate),
         ull(f.rsu_rejected_yaw_branch), ull(f.rsu_rejected_other), ull(f.late), ull(f.reapplied),
-        ull(f.rsu_reanchors));
+        ull(f.rsu_reanchors), ull(f.ndt_restarts));
   }
 
  private:
