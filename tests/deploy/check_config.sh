@@ -7,6 +7,16 @@ rsud=$1 shipped=$2 work=$3 keygen=$4
 rm -rf "$work" && mkdir -p "$work/keys"
 "$keygen" "$work/keys/rsu" >/dev/null || { echo "FAIL: rsu-keygen"; exit 1; }
 "$keygen" "$work/keys/car" --trust-list "$work/keys/trust.list" --role vehicle --ids 7 >/dev/null || exit 1
+# rsu-keygen: the secret key is mode 0600; nothing is overwritten without --force; a key is listed once.
+[ "$(stat -c %a "$work/keys/rsu.key")" = 600 ] || { echo "FAIL: rsu.key is not mode 0600"; exit 1; }
+before=$(cat "$work/keys/rsu.key")
+if out=$("$keygen" "$work/keys/rsu" 2>&1); then echo "FAIL: rsu-keygen overwrote a key"; exit 1; fi
+case "$out" in *"exists; not overwritten (use --force)"*) ;; *) echo "FAIL: keygen said: $out"; exit 1 ;; esac
+[ "$before" = "$(cat "$work/keys/rsu.key")" ] || { echo "FAIL: the refused run changed rsu.key"; exit 1; }
+"$keygen" "$work/keys/spare" >/dev/null && "$keygen" "$work/keys/spare" --force >/dev/null || exit 1
+if out=$("$keygen" --public-key "$work/keys/car.pub" --trust-list "$work/keys/trust.list" --role vehicle \
+         --ids 8 2>&1); then echo "FAIL: a key was listed twice"; exit 1; fi
+case "$out" in *"is listed twice"*) ;; *) echo "FAIL: keygen said: $out"; exit 1 ;; esac
 config=$work/rsud.yaml
 sed "s|/etc/rsud/keys/|$work/keys/|" "$shipped" > "$config"
 out=$("$rsud" --check-config --config "$config") || { echo "FAIL: the shipped configuration is refused"; exit 1; }
