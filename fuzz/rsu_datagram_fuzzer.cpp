@@ -4,8 +4,8 @@
 // registry's and the replay window's state (updates, capacity, rate limits, expiry) is reached too.
 // Every datagram goes to two cores: one in signed mode (the seeds are signed with fuzz_keys.h's vehicle
 // key, which it trusts) and one in insecure mode, which reaches the registry with any well-formed bytes.
-// Records whose selector byte has its top bit set also go to the signed core's forwarded-announcement
-// path (a peer RSU's relay).
+// Records whose selector byte has its top bit set also go to the signed core's peer path
+// (RsuCore::on_peer_announcement: the same datagram shared by another RSU over the data bus).
 //
 // Input: repeated { u8 source selector, u16 LE milliseconds since the previous datagram,
 //                   u16 LE length, that many datagram bytes }.
@@ -55,7 +55,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const auto record = in.record();
     (void)signed_core.on_datagram(record, source, now);
     if (selector & 0x80U) {
-      (void)signed_core.on_forwarded_announcement(record, now);
+      (void)signed_core.on_peer_announcement(record, {.origin_rsu_id = 2, .sender = source}, now);
     }
     (void)insecure_core.on_datagram(record, source, now);
     (void)signed_core.expire(now);
