@@ -223,5 +223,34 @@ TEST(RsuVehicleCli, BadInputNamesTheLineAndFails) {
   EXPECT_NE(err.find("oops"), std::string::npos) << err;
 }
 
+// Signed is the default: without keys the CLI refuses to start, naming the options; a broken key file
+// is refused naming the file and line.
+TEST(RsuVehicleCli, RefusesToRunWithoutKeysUnlessInsecure) {
+  TempDir dir;
+  const std::string base = std::string(RSU_VEHICLE_BIN) +
+                           " --vehicle-id 1 --rsu 127.0.0.1:9 < /dev/null 2> " +
+                           (dir.path / "stderr.txt").string() + " > /dev/null";
+  EXPECT_EQ(WEXITSTATUS(std::system(base.c_str())), 2);
+  EXPECT_NE(slurp(dir.path / "stderr.txt").find("--key and --trust-list are required"), std::string::npos)
+      << slurp(dir.path / "stderr.txt");
+  std::ofstream(dir.path / "bad.key") << "ed25519-secret-key 00\n";
+  const std::string bad = std::string(RSU_VEHICLE_BIN) + " --vehicle-id 1 --rsu 127.0.0.1:9 --key " +
+                          (dir.path / "bad.key").string() + " --trust-list " +
+                          (dir.path / "trust.list").string() + " < /dev/null 2> " +
+                          (dir.path / "stderr.txt").string() + " > /dev/null";
+  EXPECT_EQ(WEXITSTATUS(std::system(bad.c_str())), 2);
+  EXPECT_NE(slurp(dir.path / "stderr.txt").find("bad.key:1: key must be exactly 64 hex digits"),
+            std::string::npos)
+      << slurp(dir.path / "stderr.txt");
+  const std::string insecure = std::string(RSU_VEHICLE_BIN) +
+                               " --vehicle-id 1 --rsu 127.0.0.1:9 --insecure --drain-ms 0 < /dev/null 2> " +
+                               (dir.path / "stderr.txt").string() + " > /dev/null";
+  EXPECT_EQ(WEXITSTATUS(std::system(insecure.c_str())), 0);
+  EXPECT_NE(slurp(dir.path / "stderr.txt").find("*** INSECURE MODE"), std::string::npos)
+      << slurp(dir.path / "stderr.txt");
+  EXPECT_NE(slurp(dir.path / "stderr.txt").find("authentication (insecure)"), std::string::npos)
+      << slurp(dir.path / "stderr.txt");
+}
+
 }  // namespace
 }  // namespace rsu::vehicle_client

@@ -199,6 +199,10 @@ class Session {
       }
       std::fprintf(corrections_.get(), "%s\n", kCorrectionHeader);
     }
+    if (options_.client.security.mode == v2i::SecurityMode::kInsecure) {
+      warn_insecure();  // at start-up, then every minute while running (on_ndt)
+      last_insecure_warning_ = Steady::now();
+    }
     std::printf("%s\n", kFusedHeader);
     std::fflush(stdout);
   }
