@@ -3,7 +3,8 @@
 // --epoch-ns, as rsu-sim stream is given), moved by a fixed error as a vehicle's own estimate would
 // be; synthetic vehicles (--extra) announce static poses beyond the LiDAR's coverage, as vehicles in
 // radio range but out of sight do. Each vehicle has its own UDP socket on its own loopback address
-// (rsud rate-limits per source host), paced round-robin so the datagrams are spread evenly.
+// (rsud rate-limits per source host), paced round-robin so the datagrams are spread evenly. With
+// --signed each vehicle signs with its own test key (wire format v2), its trust list written first.
 //
 // Every correction received is written as one line to --corrections, with its error against the
 // truth of the vehicle it was addressed to AND against the nearest OTHER scenario vehicle (connected
@@ -35,9 +36,12 @@
 #include <vector>
 
 #include "common/angles.h"
+#include "common/random.h"
 #include "sim/scenario.h"
 #include "sim/trajectory.h"
 #include "tests/fleet/fleet_options.h"
+#include "v2i/message_signer.h"
+#include "v2i/security/trust_list.h"
 #include "v2i/wire_codec.h"
 
 namespace rsu::fleet {
@@ -76,6 +80,7 @@ struct FleetVehicle {
   std::string address;
   std::uint16_t port = 0;
   std::uint32_t sequence = 0;
+  std::optional<v2i::MessageSigner> signer;  // signed mode (--signed)
 };
 
 // Where the vehicles are: footprint-centre truth of every scenario vehicle at a scenario time.
@@ -103,9 +108,35 @@ class Truth {
   const sim::Scenario& scenario_;
 };
 
-// The announcement's bytes. One place, so that signing (issue 7 item 1) is one change here.
-std::vector<std::uint8_t> encode_announcement(const v2i::VehicleAnnouncement& a) {
-  return v2i::encode_v2i_message(a);
+// The announcement's bytes: signed by the vehicle's own key (generation time = its clock) or unsigned.
+std::vector<std::uint8_t> encode_announcement(FleetVehicle& v, const v2i::VehicleAnnouncement& a) {
+  return v.signer ? v.signer->encode(a, a.generation_time) : v2i::encode_v2i_message(a);
+}
+
+// A vehicle's TEST key: the seed bytes are a counter-based hash of (key seed, vehicle id).
+v2i::security::SigningKey test_key(std::uint64_t key_seed, std::uint64_t vehicle_id) {
+  v2i::security::Seed seed{};
+  for (std::size_t i = 0; i < seed.size(); i += 8) {
+    const std::uint64_t bits = mix64(key_seed ^ mix64(vehicle_id ^ mix64(i)));
+    for (std::size_t b = 0; b < 8; ++b)
+      seed[i + b] = static_cast<std::uint8_t>(bits >> (8 * b));
+  }
+  return v2i::security::SigningKey(seed);
+}
+
+// Gives every vehicle its signer and writes their trust list (each key bound to its one vehicle id).
+void sign_fleet(std::vector<FleetVehicle>& fleet, const FleetOptions& o, std::uint32_t first_sequence) {
+  std::string text = "# rsu-fleet test keys (derived from the vehicle ids: tests only)\n";
+  for (FleetVehicle& v : fleet) {
+    const v2i::security::SigningKey key = test_key(o.key_seed, v.id);
+    text += v2i::security::trust_entry_text(
+        {key.public_key(), v2i::security::SignerRole::kVehicle, std::vector<std::uint64_t>{v.id}});
+    v.signer.emplace(key, first_sequence);
+  }
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> out(std::fopen(o.trust_list_path.c_str(), "w"),
+                                                      std::fclose);
+  if (!out || std::fputs(text.c_str(), out.get()) < 0)
+    throw std::runtime_error("cannot write " + o.trust_list_path);
 }
 
 v2i::VehicleAnnouncement announcement_of(FleetVehicle& v, const Truth& truth, const FleetOptions& o,
@@ -246,8 +277,14 @@ int run(const FleetOptions& o) {
   std::vector<FleetVehicle> fleet = make_fleet(scenario, o);
   // Sequences continue from the millisecond clock (at most 100 announcements a second), so a fleet
   // started again for the same vehicles is not refused as replaying old sequence numbers.
+  const auto first_sequence = static_cast<std::uint32_t>(wall_ns() / kNsPerMs);
   for (FleetVehicle& v : fleet)
-    v.sequence = static_cast<std::uint32_t>(wall_ns() / kNsPerMs);
+    v.sequence = first_sequence;
+  if (!o.trust_list_path.empty()) {
+    sign_fleet(fleet, o, first_sequence);
+    if (o.write_trust_list_only)
+      return 0;
+  }
   if (fleet.empty())
     throw std::runtime_error("no vehicle to announce");
   const int epoll_fd = epoll_create1(EPOLL_CLOEXEC);
@@ -280,7 +317,7 @@ int run(const FleetOptions& o) {
                      static_cast<long long>(now));
         v.change_logged = true;
       }
-      const std::vector<std::uint8_t> bytes = encode_announcement(a);
+      const std::vector<std::uint8_t> bytes = encode_announcement(v, a);
       const ssize_t n =
           sendto(v.fd, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&rsu), sizeof rsu);
       n == static_cast<ssize_t>(bytes.size()) ? ++counts.sent : ++counts.send_failed;

@@ -80,7 +80,12 @@ FleetOptions parse_fleet_options(int argc, char** argv) {
       "size", po::value<std::vector<std::string>>(), "ID:L,W,H announced instead of the scenario's shape")(
       "size-change", po::value<std::vector<std::string>>(),
       "ID:AT_S:L,W,H announce this size from scenario time AT_S on")(
-      "corrections", po::value<std::string>(), "file: one line per correction received");
+      "corrections", po::value<std::string>(), "file: one line per correction received")(
+      "signed", po::value<std::string>(),
+      "TRUST_LIST: sign every announcement with the vehicle's own test key (derived from its id and "
+      "--key-seed: tests only) and write the vehicles' trust list to TRUST_LIST first")(
+      "key-seed", po::value<unsigned long long>()->default_value(1), "seed of the derived test keys")(
+      "write-trust-list-only", "with --signed: write the trust list and exit (before rsud reads it)");
   po::variables_map vm;
   po::store(po::parse_command_line(argc, argv, options), vm);
   po::notify(vm);
@@ -138,6 +143,12 @@ FleetOptions parse_fleet_options(int argc, char** argv) {
   }
   if (vm.count("corrections"))
     o.corrections_path = vm["corrections"].as<std::string>();
+  if (vm.count("signed"))
+    o.trust_list_path = vm["signed"].as<std::string>();
+  o.key_seed = vm["key-seed"].as<unsigned long long>();
+  o.write_trust_list_only = vm.count("write-trust-list-only") > 0;
+  if (o.write_trust_list_only && o.trust_list_path.empty())
+    throw std::runtime_error("--write-trust-list-only needs --signed TRUST_LIST");
   return o;
 }
 

@@ -37,6 +37,13 @@ struct FleetOptions {
   std::map<std::uint32_t, v2i::BoxSize> announced_size;  // overrides the scenario's shape
   std::map<std::uint32_t, SizeChange> size_change;
   std::string corrections_path;  // one line per received correction (fleet_main.cpp)
+  // Signed announcements (proto/v2i.proto v2): each vehicle signs with its own TEST key, derived from
+  // its id and this seed, and the vehicles' trust list is written to `trust_list_path` first (for
+  // rsud's security.trust_list_file). Derived keys are for tests only: anyone knowing the scheme has
+  // them. Empty path: unsigned (rsud in insecure mode).
+  std::string trust_list_path;
+  std::uint64_t key_seed = 1;
+  bool write_trust_list_only = false;  // write the trust list and exit
 };
 
 // Parses argv; prints --help and exits 0, or throws std::runtime_error naming the bad option.

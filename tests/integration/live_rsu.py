@@ -46,6 +46,7 @@ class LiveRsu:
         self.rsud_runs = 0
         self.log_path = None
         self.background = []
+        self.trust_list = None  # signed mode: the fleet's trust list (make_keys)
         # Scenario time 0 on the host clock, shared by the stream and the fleet (DESIGN.md §3).
         self.epoch_ns = time.time_ns() + int(lead_s * 1e9)
 
@@ -64,7 +65,15 @@ class LiveRsu:
         self.background = sorted(os.path.join(out, f) for f in os.listdir(out) if f.endswith(".pcd"))
         assert len(self.background) == frames, self.background
 
-    def write_config(self, reorder_packets=0, capacity=256, learning_frames=None, extra=""):
+    def make_keys(self):
+        """Signed mode: the RSU's key (rsu-keygen) and the fleet's trust list (rsu-fleet's test keys)."""
+        r = subprocess.run([self.tools["keygen"], self.path("rsu")], capture_output=True, text=True, timeout=30)
+        assert r.returncode == 0, r.stdout + r.stderr
+        self.trust_list = self.path("fleet.trust")
+
+    def write_config(self, reorder_packets=0, capacity=256, learning_frames=None, extra="", signed=False):
+        """rsud.yaml; signed: verify the fleet's signatures (call make_keys() and write the fleet's trust
+        list first, fleet(write_trust_list=...)), else insecure mode."""
         mount = self.scene["lidar"].get("mount", {})
         lidar_input = "velodyne_udp: {bind_address: 127.0.0.1, port: %d%s}" % (
             self.lidar_port, ", reorder_packets: %d" % reorder_packets if reorder_packets else "")
@@ -82,7 +91,7 @@ v2i:
   listen_address: 127.0.0.1
   port: %d
 security:
-  mode: insecure
+  %s
 registry:
   capacity: %d
 logging:
@@ -90,8 +99,9 @@ logging:
   stats_interval_s: 0.5
   stats_file: %s
 %s""" % (self.model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
-         mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_input, background, self.v2i_port, capacity,
-         self.path("stats"), extra)
+         mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_input, background, self.v2i_port,
+         "{mode: signed, key_file: %s, trust_list_file: %s}" % (self.path("rsu.key"), self.trust_list) if signed
+         else "mode: insecure", capacity, self.path("stats"), extra)
         with open(self.path("rsud.yaml"), "w") as f:
             f.write(text)
 
@@ -143,8 +153,21 @@ logging:
             cmd += ["--connected", ",".join(str(c) for c in connected)]
         if extra:
             cmd += ["--extra", str(extra)]
+        if self.trust_list:
+            cmd += ["--signed", self.trust_list]
         cmd += list(options)
         return self.children.spawn(cmd, self.path(name + ".out"))
+
+    def write_trust_list(self, connected=None, extra=0):
+        """Signed mode: the fleet's trust list, before rsud starts (it reads it at start)."""
+        cmd = [self.tools["fleet"], "--rsu", "127.0.0.1:1", "--scenario", self.scenario, "--epoch-ns", "0",
+               "--signed", self.trust_list, "--write-trust-list-only"]
+        if connected:
+            cmd += ["--connected", ",".join(str(c) for c in connected)]
+        if extra:
+            cmd += ["--extra", str(extra)]
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, r.stdout + r.stderr
 
     def corrections(self, name="fleet"):
         out = []

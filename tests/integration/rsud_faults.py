@@ -15,10 +15,11 @@
                        every correction swept after the change is within 0.10 m of the truth and the first
                        comes within 0.25 s; before it, none is (the announced size was in use); the registry
                        counts one size change
-  clock_offset         vehicle clocks off the RSU's: within the generation-time window (max_future 200 ms,
-                       max_age 1 s; +150 ms and -800 ms) the vehicle is served in at least 80 % of the
-                       rotations within 0.10 m of the truth, as without an offset; beyond it (+600 ms,
-                       -1500 ms) every announcement is rejected and counted by reason, and it gets nothing
+  clock_offset         vehicle clocks off the RSU's, announcements signed: within the generation-time
+                       windows (the announcement's max_future 200 ms, the signature's max_age 1 s; +150 ms
+                       and -800 ms) the vehicle is served in at least 80 % of the rotations within 0.10 m of
+                       the truth, as without an offset; beyond them (+600 ms, -1500 ms) every announcement
+                       is rejected and counted by reason, and it gets nothing
   sigkill_restart      rsud killed with SIGKILL mid-run and started again, nothing else restarted: the
                        vehicle gets a correction within 1 s of the restart, within 0.10 m of the truth
 
@@ -38,9 +39,12 @@ from rsu_processes import ChildExited  # noqa: E402
 SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenarios", "fault_street.yaml")
 
 
-def start(h, lead_s=0.6, **config):
+def start(h, lead_s=0.6, signed=False, **config):
     h.record_background()
-    h.write_config(**config)
+    if signed:
+        h.make_keys()
+        h.write_trust_list()
+    h.write_config(signed=signed, **config)
     h.start_rsud()
     h.epoch_ns = time.time_ns() + int(lead_s * 1e9)
 
@@ -149,7 +153,7 @@ def case_size_change(h):
 
 
 def case_clock_offset(h):
-    start(h)
+    start(h, signed=True)
     stream = h.stream(0.0, 7.6)
     # Phase 1 (to 3.6 s): vehicle 1's clock 150 ms ahead (served), vehicle 2's 600 ms ahead (rejected).
     # Phase 2 (from 3.8 s): vehicle 1's 800 ms behind (served), vehicle 2's 1500 ms behind (rejected).
@@ -170,11 +174,18 @@ def case_clock_offset(h):
     finish(stream, 15, "rsu-sim stream")
     h.stop_rsud()
     s = h.stats()
-    assert s["validation.from_future"] == rejected[0], (s["validation.from_future"], rejected)
-    assert s["validation.too_old"] == rejected[1], (s["validation.too_old"], rejected)
-    print("ok: clock +150 ms: %d corrections in %d rotations, worst %.3f m; -800 ms: %d in %d, worst %.3f m; "
-          "+600 ms: %d announcements rejected (from_future), -1500 ms: %d rejected (too_old), none served" % (
-              served[0] + served[1] + tuple(rejected)))
+    # Refused by whichever window is tighter: the signed header's (auth.future / auth.stale, security's
+    # max_future_s / max_age_s) or the announcement's (validation.from_future / too_old).
+    future = s["auth.future"] + s["validation.from_future"]
+    old = s["auth.stale"] + s["validation.too_old"]
+    assert future == rejected[0], ("future", s["auth.future"], s["validation.from_future"], rejected)
+    assert old == rejected[1], ("old", s["auth.stale"], s["validation.too_old"], rejected)
+    assert s["auth.accepted"] > 0 and s["auth.bad_signature"] == 0, s
+    print("ok: signed; clock +150 ms: %d corrections in %d rotations, worst %.3f m; -800 ms: %d in %d, worst "
+          "%.3f m; +600 ms: %d announcements rejected (auth.future %d, validation.from_future %d), -1500 ms: %d "
+          "rejected (auth.stale %d, validation.too_old %d), none served" % (
+              served[0] + served[1] + (rejected[0], s["auth.future"], s["validation.from_future"], rejected[1],
+                                       s["auth.stale"], s["validation.too_old"])))
 
 
 def case_sigkill_restart(h):
@@ -214,9 +225,11 @@ def main():
     ap.add_argument("--rsud", required=True)
     ap.add_argument("--rsu-sim", required=True)
     ap.add_argument("--fleet", required=True)
+    ap.add_argument("--keygen", required=True)
     ap.add_argument("--work", required=True)
     args = ap.parse_args()
-    h = LiveRsu(args.work, {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet}, SCENARIO)
+    h = LiveRsu(args.work, {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet, "keygen": args.keygen},
+                SCENARIO)
     try:
         CASES[args.case](h)
     except (AssertionError, TimeoutError, ChildExited) as e:
