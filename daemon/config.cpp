@@ -95,7 +95,7 @@ LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
 }
 
 void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
-  f.expect_map({"model", "mount", "input"});
+  f.expect_map({"model", "mount", "input", "max_packet_age_ms"});
   const YamlField model = f.required("model");
   c.core.sensor_model = model.text();
   const auto resolved = sensor_model_by_name(c.core.sensor_model);
@@ -105,6 +105,12 @@ void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path
   c.input = read_input(f.required("input"), base);
   if (const auto* u = std::get_if<VelodyneUdpInput>(&c.input))
     c.core.packet_order.depth = u->reorder_packets;
+  if (f.has("max_packet_age_ms")) {
+    const double ms = f.non_negative_or("max_packet_age_ms", 0.0);
+    if (ms > 60000)
+      f.child("max_packet_age_ms").fail("must be <= 60000 ms");
+    c.core.max_packet_age = static_cast<TimeNs>(ms * 1e6);
+  }
 }
 
 void read_background(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {

@@ -3,7 +3,8 @@
 # release -> build/      (Release, warnings are errors, benchmarks included)
 # asan    -> build-asan/ (RelWithDebInfo with AddressSanitizer + UndefinedBehaviorSanitizer, no benchmarks)
 # tsan    -> build-tsan/ (RelWithDebInfo with ThreadSanitizer, no benchmarks; only the targets of the
-#                         tests labelled `threads`, which is all scripts/test.sh runs under TSan)
+#                         tests labelled `threads`, which is all scripts/test.sh runs under TSan; the
+#                         simulator and fleet driving them come from build/: build release first)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kind=${1:-release}
@@ -24,8 +25,9 @@ case "$kind" in
     cmake --build build-asan -j "$jobs"
     ;;
   tsan)
+    # The live tests' drivers (rsu-sim, rsu-fleet) come from the Release build (tests/CMakeLists.txt).
     cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE_THREAD=ON \
-      -DRSU_BUILD_BENCHMARKS=OFF -DRSU_WERROR=ON "${launcher[@]}" >/dev/null
+      -DRSU_BUILD_BENCHMARKS=OFF -DRSU_WERROR=ON -DRSU_TEST_TOOLS_DIR="$PWD/build" "${launcher[@]}" >/dev/null
     cmake --build build-tsan -j "$jobs" --target rsu_threaded_tests
     ;;
   *) echo "usage: $0 [release|asan|tsan]" >&2; exit 2 ;;

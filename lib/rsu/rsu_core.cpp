@@ -294,6 +294,10 @@ LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, 
   if (decoder_.decode(payload, now, sensor_scratch_) != DecodeResult::accepted) {
     return {};  // counted by the decoder, by reason
   }
+  if (config_.max_packet_age > 0 && now - decoder_.last_first_firing_ns() > config_.max_packet_age) {
+    ++lidar_stats_.packets_too_late;  // behind: shed (RsuCoreConfig::max_packet_age)
+    return {};
+  }
   packet_order_.push(decoder_.last_first_firing_ns(), sensor_scratch_);  // a late one is counted
   LidarStepResult result;
   while (packet_order_.pop(ordered_scratch_))
@@ -794,6 +798,7 @@ std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
   out.emplace_back("packet.late_dropped", o.late);
   out.emplace_back("packet.duplicate", o.duplicate);
   out.emplace_back("packet.stream_gaps", o.stream_gaps);
+  out.emplace_back("packet.too_late", lidar_stats_.packets_too_late);
   const SweepClustererStats& s = clusterer_.stats();
   out.emplace_back("sweep.foreground_points", s.foreground_points);
   out.emplace_back("sweep.clusters_released", s.clusters_released);

@@ -92,6 +92,7 @@ struct LidarStats {
   std::uint64_t corrections_inconsistent = 0;
   std::uint64_t corrections_encode_failed = 0;
   std::uint64_t corrections = 0;
+  std::uint64_t packets_too_late = 0;  // older than RsuCoreConfig::max_packet_age when processed
 };
 
 struct ReloadSummary {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/pose.h"
+#include "common/time.h"
 #include "lidar/packet_order.h"
 #include "lidar/sensor_model.h"
 #include "perception/pipeline.h"
@@ -89,6 +90,11 @@ struct RsuCoreConfig {
   BackgroundLearningConfig background;
   // Velodyne packets put back in time order (lidar/packet_order.h); lost and reordered ones counted.
   PacketOrderConfig packet_order;
+  // A packet whose first firing is older than this when it is processed is dropped and counted
+  // (packet.too_late): the RSU has fallen behind (overload, a stall) and sheds load to catch up. Fixes
+  // that late are of little use, and worse, they would be associated with the vehicles' announcements
+  // made since, predicted back over the lag: in a queue that picks the car behind (issue 7). 0: never.
+  TimeNs max_packet_age = 150 * kNsPerMs;
   SweepConfig sweep;
   GatheringConfig gathering;
   perception::PerceptionConfig perception = rsu_perception_defaults();

@@ -11,6 +11,7 @@ correction with its error against the truth of every vehicle).
     .fleet(until_s, ..)           rsu-fleet on the shared epoch, announcing until scenario time until_s
     .corrections(path)            the fleet's correction lines as dicts
     .stats()                      rsud's stats file (counters)
+  run_case(case, work, tools, scenario)  a test case's exit code, the rsud log's tail on failure
 
 Every wait is bounded; children are killed by .close().
 """
@@ -24,7 +25,7 @@ import time
 import yaml
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "python"))
-from rsu_processes import Children, free_udp_port, read_text, wait_for  # noqa: E402
+from rsu_processes import ChildExited, Children, free_udp_port, read_text, wait_for  # noqa: E402
 
 ROTATION_S = 0.1  # 600 rpm (DESIGN.md §2)
 
@@ -206,3 +207,19 @@ def finish(process, seconds, what):
     except subprocess.TimeoutExpired:
         raise AssertionError("%s did not finish within %.0f s" % (what, seconds))
     assert rc == 0, "%s exited with %d" % (what, rc)
+
+
+def run_case(case, work, tools, scenario):
+    """Runs case(LiveRsu) and returns the process exit code: 1 with the failure and the tail of rsud's log
+    when an assertion or a bounded wait fails. The children are killed either way."""
+    h = LiveRsu(work, tools, scenario)
+    try:
+        case(h)
+    except (AssertionError, TimeoutError, ChildExited) as e:
+        print("FAIL: %s" % e)
+        if h.log_path and os.path.exists(h.log_path):
+            print("---- rsud log (tail) ----\n" + h.log()[-4000:])
+        return 1
+    finally:
+        h.close()
+    return 0

@@ -33,8 +33,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from live_rsu import ROTATION_S, LiveRsu, finish  # noqa: E402
-from rsu_processes import ChildExited  # noqa: E402
+from live_rsu import ROTATION_S, finish, run_case  # noqa: E402
 
 SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenarios", "fault_street.yaml")
 
@@ -228,19 +227,8 @@ def main():
     ap.add_argument("--keygen", required=True)
     ap.add_argument("--work", required=True)
     args = ap.parse_args()
-    h = LiveRsu(args.work, {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet, "keygen": args.keygen},
-                SCENARIO)
-    try:
-        CASES[args.case](h)
-    except (AssertionError, TimeoutError, ChildExited) as e:
-        print("FAIL: %s" % e)
-        if h.log_path and os.path.exists(h.log_path):
-            print("---- rsud log (tail) ----\n" + h.log()[-4000:])
-        return 1
-    finally:
-        h.close()
-    return 0
-
+    tools = {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet, "keygen": args.keygen}
+    return run_case(CASES[args.case], args.work, tools, SCENARIO)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -371,6 +372,33 @@ TEST(RsuCore, RejectsUnusableConfigurations) {
   c = test_config();
   c.mount.z = std::numeric_limits<double>::infinity();
   EXPECT_THROW(RsuCore{c}, std::invalid_argument);
+}
+
+// A packet of the VLP-16 with no returns, first firing at t (azimuths advancing as the sensor's would).
+std::array<std::uint8_t, kPacketBytes> empty_packet(TimeNs t) {
+  PacketReturns r;
+  r.blocks.first_firing_ns = t;
+  for (std::size_t b = 0; b < r.blocks.azimuth_cdeg.size(); ++b)
+    r.blocks.azimuth_cdeg[b] = static_cast<std::uint16_t>(40 * b);
+  std::array<std::uint8_t, kPacketBytes> payload{};
+  encode_packet(*sensor_model_by_name("vlp16"), r, payload);
+  return payload;
+}
+
+TEST(RsuCore, PacketsProcessedTooLateAreShedNotFixedFrom) {
+  RsuCoreConfig config = test_config();
+  config.max_packet_age = 150 * kNsPerMs;
+  RsuCore core(config);
+  const TimeNs t = 10 * kNsPerSecond;
+  core.on_lidar_packet(empty_packet(t), t + 2 * kNsPerMs);                // on time
+  core.on_lidar_packet(empty_packet(t + 1'327'000), t + 149 * kNsPerMs);  // behind, within the limit
+  core.on_lidar_packet(empty_packet(t + 2'654'000), t + 2'654'000 + 151 * kNsPerMs);  // too late
+  EXPECT_EQ(core.packet_stats().accepted, 3U);
+  EXPECT_EQ(core.lidar_stats().packets_too_late, 1U);
+  config.max_packet_age = 0;  // never shed
+  RsuCore patient(config);
+  patient.on_lidar_packet(empty_packet(t), t + 10 * kNsPerSecond);
+  EXPECT_EQ(patient.lidar_stats().packets_too_late, 0U);
 }
 
 TEST(RsuCore, GarbageLidarPacketsAreCountedNotFatal) {
