@@ -73,6 +73,12 @@ int main(int argc, char** argv) {
                     100.0 * s.share_below_0p10_6_36m, s.off_by_90_cells, s.median_error_m, s.p95_error_m,
                     s.no_fit_cells);
       }
+      const auto k = rsu::eval::summarize_consistency(result);
+      std::printf(
+          "        stated covariance (improved, %d fixes): yaw sigma mean %.2f deg, beyond 3 sigma "
+          "%.2f%%; position sigma mean %.3f m, beyond 3 sigma %.2f%%\n",
+          k.fixes, k.mean_yaw_sigma_deg, 100.0 * k.yaw_beyond_3sigma, k.mean_position_sigma_m,
+          100.0 * k.position_beyond_3sigma);
     }
     json << "\n}\n";
     std::ofstream((out / "summary.json").string()) << json.str();

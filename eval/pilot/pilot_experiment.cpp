@@ -137,6 +137,7 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
       cell.lshape_center_err_m = cell.area_err_m2 = cell.lshape_yaw_err_deg = kNaN;
       cell.alg1_center_err_m = cell.alg1_yaw_err_deg = kNaN;
       cell.improved_center_err_m = cell.improved_yaw_err_deg = cell.improved_sigma_m = kNaN;
+      cell.improved_yaw_sigma_deg = cell.improved_position_nees = kNaN;
       cell.improved_resolution = "no_fit";
       run.cells.push_back(cell);
       continue;
@@ -164,8 +165,12 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
       cell.improved_yaw_err_deg = axis_error_deg(improved.pose.yaw, truth.yaw);
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(improved.covariance.topLeftCorner<2, 2>());
       cell.improved_sigma_m = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+      cell.improved_yaw_sigma_deg = rad_to_deg(std::sqrt(std::max(0.0, improved.covariance(2, 2))));
+      const Eigen::Vector2d error = Eigen::Vector2d(improved.pose.x, improved.pose.y) - truth_xy;
+      cell.improved_position_nees = error.dot(improved.covariance.topLeftCorner<2, 2>().ldlt().solve(error));
     } else {
       cell.improved_center_err_m = cell.improved_yaw_err_deg = cell.improved_sigma_m = kNaN;
+      cell.improved_yaw_sigma_deg = cell.improved_position_nees = kNaN;
     }
     cell.improved_resolution = std::string(perception::to_string(improved.resolution));
     run.cells.push_back(cell);
@@ -273,6 +278,28 @@ MethodSummary summarize(const PilotResult& result, const std::string& method) {
   return s;
 }
 
+ConsistencySummary summarize_consistency(const PilotResult& result) {
+  ConsistencySummary s;
+  int yaw_beyond = 0, position_beyond = 0;
+  for (const PilotCell& c : result.cells) {
+    if (!std::isfinite(c.improved_yaw_err_deg) || !std::isfinite(c.improved_position_nees))
+      continue;
+    ++s.fixes;
+    s.mean_yaw_sigma_deg += c.improved_yaw_sigma_deg;
+    s.mean_position_sigma_m += c.improved_sigma_m;
+    yaw_beyond += c.improved_yaw_err_deg > 3.0 * c.improved_yaw_sigma_deg;
+    position_beyond += c.improved_position_nees > kChi2TwoDof3Sigma;
+  }
+  if (s.fixes == 0)
+    return s;
+  const double n = s.fixes;
+  s.mean_yaw_sigma_deg /= n;
+  s.mean_position_sigma_m /= n;
+  s.yaw_beyond_3sigma = yaw_beyond / n;
+  s.position_beyond_3sigma = position_beyond / n;
+  return s;
+}
+
 void write_cells_csv(const PilotResult& result, const std::string& path, bool append) {
   std::ofstream out(path, append ? std::ios::app : std::ios::trunc);
   if (!out)
@@ -280,7 +307,7 @@ void write_cells_csv(const PilotResult& result, const std::string& path, bool ap
   if (!append) {
     out << "model,distance_m,frame,yaw_deg,sweep_ns,points,fit_ok,lshape_center_err_m,area_err_m2,"
            "lshape_yaw_err_deg,alg1_center_err_m,alg1_yaw_err_deg,improved_center_err_m,improved_yaw_err_deg,"
-           "improved_sigma_m,improved_resolution\n";
+           "improved_sigma_m,improved_yaw_sigma_deg,improved_position_nees,improved_resolution\n";
   }
   for (const PilotCell& c : result.cells) {
     out << result.config.model_name << ',' << c.distance_m << ',' << c.frame_in_turn << ','
@@ -288,8 +315,9 @@ void write_cells_csv(const PilotResult& result, const std::string& path, bool ap
         << number(c.lshape_center_err_m) << ',' << number(c.area_err_m2) << ','
         << number(c.lshape_yaw_err_deg) << ',' << number(c.alg1_center_err_m) << ','
         << number(c.alg1_yaw_err_deg) << ',' << number(c.improved_center_err_m) << ','
-        << number(c.improved_yaw_err_deg) << ',' << number(c.improved_sigma_m) << ',' << c.improved_resolution
-        << '\n';
+        << number(c.improved_yaw_err_deg) << ',' << number(c.improved_sigma_m) << ','
+        << number(c.improved_yaw_sigma_deg) << ',' << number(c.improved_position_nees) << ','
+        << c.improved_resolution << '\n';
   }
 }
 
@@ -305,6 +333,12 @@ std::string summary_json_entry(const PilotResult& result) {
         << ", \"median_error_m\": " << number(s.median_error_m)
         << ", \"p95_error_m\": " << number(s.p95_error_m) << ", \"no_fit_cells\": " << s.no_fit_cells << "}";
   }
+  const ConsistencySummary k = summarize_consistency(result);
+  out << ", \"consistency\": {\"fixes\": " << k.fixes
+      << ", \"mean_yaw_sigma_deg\": " << number(k.mean_yaw_sigma_deg)
+      << ", \"yaw_beyond_3sigma\": " << number(k.yaw_beyond_3sigma)
+      << ", \"mean_position_sigma_m\": " << number(k.mean_position_sigma_m)
+      << ", \"position_beyond_3sigma\": " << number(k.position_beyond_3sigma) << "}";
   out << ", \"cells\": " << result.cells.size() << ", \"frames_per_turn\": " << result.frames_per_turn
       << ", \"rays_cast\": " << result.rays_cast << ", \"wall_seconds\": " << number(result.wall_seconds)
       << "}";

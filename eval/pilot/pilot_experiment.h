@@ -45,7 +45,9 @@ struct PilotCell {
   double alg1_yaw_err_deg = 0;
   double improved_center_err_m = 0;
   double improved_yaw_err_deg = 0;
-  double improved_sigma_m = 0;  // sqrt of the larger eigenvalue of the reported position covariance
+  double improved_sigma_m = 0;        // sqrt of the larger eigenvalue of the reported position covariance
+  double improved_yaw_sigma_deg = 0;  // sqrt of the reported yaw variance
+  double improved_position_nees = 0;  // e^T P^-1 e of the centre error against the reported covariance
   std::string improved_resolution;
 };
 
@@ -69,6 +71,22 @@ struct MethodSummary {
   int no_fit_cells = 0;
 };
 MethodSummary summarize(const PilotResult& result, const std::string& method);
+
+// Is the improved correction's stated covariance honest? Over the fixed cells: the mean stated sigmas and
+// the share of fixes whose error lies beyond the 3-sigma bound (yaw: |error| > 3 sigma; position: the
+// 2-dof NEES beyond its 99.73 % quantile, the same tail as 3 sigma in one dimension). An honest model
+// has about 0.27 % beyond for a Gaussian error; a much larger share means overconfident fixes, which the
+// vehicle's gate and EKF then trust too much.
+struct ConsistencySummary {
+  int fixes = 0;
+  double mean_yaw_sigma_deg = 0;
+  double yaw_beyond_3sigma = 0;  // share of fixes
+  double mean_position_sigma_m = 0;
+  double position_beyond_3sigma = 0;
+};
+// 2-dof chi-square quantile of 99.73 %: -2 ln(1 - 0.9973).
+inline constexpr double kChi2TwoDof3Sigma = 11.83;
+ConsistencySummary summarize_consistency(const PilotResult& result);
 
 void write_cells_csv(const PilotResult& result, const std::string& path, bool append);
 std::string summary_json_entry(const PilotResult& result);  // {"lshape": {...}, "algorithm1": ..., ...}

@@ -21,6 +21,17 @@ double axis_variance(const AxisEvidence& axis, double noise_var, double spacing,
 
 }  // namespace
 
+FaceEvidence face_evidence(const RectangleFit& fit, std::size_t edge, const Eigen::Vector2d& lidar_xy) {
+  const Eigen::Vector2d& a = fit.corners[edge % 4];
+  const Eigen::Vector2d& b = fit.corners[(edge + 1) % 4];
+  const Eigen::Vector2d along = b - a;
+  const Eigen::Vector2d sight = 0.5 * (a + b) - lidar_xy;
+  const double norms = along.norm() * sight.norm();
+  const double incidence_sin =
+      norms > 0.0 ? std::abs(along.x() * sight.y() - along.y() * sight.x()) / norms : 1.0;
+  return {fit.edges[edge % 4].support_points, edge % 2 == 0 ? fit.length0 : fit.length1, incidence_sin};
+}
+
 Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig& config) {
   const double range = std::max(0.0, std::isfinite(e.range_m) ? e.range_m : 0.0);
   const double noise_var = config.range_sigma_m * config.range_sigma_m +
@@ -31,12 +42,17 @@ Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig
   double yaw_information = 0.0;
   for (const auto& face : e.seen_faces) {
     if (face.points >= 2 && face.length_m > 0.0) {
-      // Point noise averages out over the face's points; the body's departure from a plane (bumpers,
-      // rounded corners, the narrower glasshouse) does not: it tilts the face's fitted direction by about
-      // 2 sigma_shape / length whatever the number of points.
+      // Point noise averages out over the face's points; the body's departure from a plane does not
+      // (fix_covariance.h): it tilts the face's fitted direction by about 2 tilt / length whatever the
+      // number of points, more at grazing incidence.
       const double l2 = face.length_m * face.length_m;
       const double var_noise = 12.0 * noise_var / (static_cast<double>(face.points) * l2);
-      const double var_shape = 4.0 * shape_var / l2;
+      const double sin_incidence = std::clamp(face.incidence_sin, config.min_incidence_sin, 1.0);
+      // The measured departure: the face points' scatter beyond what the point noise explains.
+      const double departure_var = std::max(0.0, face.residual_spread_m * face.residual_spread_m - noise_var);
+      const double tilt =
+          std::sqrt(config.face_tilt_sigma_m * config.face_tilt_sigma_m + departure_var) / sin_incidence;
+      const double var_shape = 4.0 * tilt * tilt / l2;
       yaw_information += 1.0 / (var_noise + var_shape);
     }
   }

@@ -134,6 +134,28 @@ class Corrector {
     return static_cast<double>(outside) / static_cast<double>(pts_.size());
   }
 
+  // Spread of the points assigned to fitted edge `edge` about their median line: how far the body's
+  // outline along that face departs from a straight face (0 when fewer than 3 points).
+  double face_residual(std::size_t edge) const {
+    const int a = (edge == kLowEdge[0] || edge == kHighEdge[0]) ? 0 : 1;
+    std::vector<double> v;
+    for (std::size_t i = 0; i < pts_.size(); ++i) {
+      if (face_of_point_[i] == static_cast<int>(edge)) {
+        v.push_back(pts_[i][a]);
+      }
+    }
+    if (v.size() < 3) {
+      return 0.0;
+    }
+    // Robust scale (1.4826 x the median absolute deviation): the corner points of the perpendicular face
+    // that fall within the support distance must not pass for a bulging body.
+    const double centre = median(v);
+    for (double& x : v) {
+      x = std::abs(x - centre);
+    }
+    return 1.4826 * median(v);
+  }
+
  private:
   // Where the known-size box can sit along axis a (dimension `dim` on that axis).
   std::vector<AxisOption> axis_options(int a, double dim) const {
@@ -366,8 +388,8 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
     if (refined.edges[i].seen) {
-      evidence.seen_faces[f++] = {refined.edges[i].support_points,
-                                  i % 2 == 0 ? refined.length0 : refined.length1};
+      evidence.seen_faces[f] = face_evidence(refined, i, lidar_xy);
+      evidence.seen_faces[f++].residual_spread_m = corrector.face_residual(i);
     }
   }
   evidence.assignment_confidence = out.confidence;

@@ -120,8 +120,7 @@ CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& siz
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
     if (fit.edges[i].seen) {
-      const double len = (i % 2 == 0) ? fit.length0 : fit.length1;
-      evidence.seen_faces[f++] = {fit.edges[i].support_points, len};
+      evidence.seen_faces[f++] = face_evidence(fit, i, lidar_xy);
     }
   }
   out.covariance = fix_covariance(evidence, covariance);

@@ -15,7 +15,7 @@ drive, x = -20 + 10 t, y = -1.75, yaw 0, computed here):
     error vs the truth, d = e(k+1) - e(k), is within 3 sigma of the two corrections' combined stated
     covariance along d: |d| <= 3 sqrt(u' (C(k) + C(k+1)) u), u = d / |d| (position); the yaw error's change
     within 3 sqrt(var(k) + var(k+1)) (yaw modulo pi);
-  * every correction within 0.25 m and 5 deg of the truth;
+  * every correction within 0.25 m of the truth, and its yaw within 3 of its own stated sigma;
   * the vehicle fused corrections of both RSUs, and its fused pose (rsu-vehicle's EKF over its own poses,
     0.29 m off, and both RSUs' corrections) is within 0.15 m of the truth from t = 0.5 s to the end.
 It prints the figures: corrections per RSU, the largest gap, the largest jump against its bound, errors.
@@ -50,9 +50,10 @@ X0, Y0 = -20.0, -1.75
 
 MAX_GAP_S = 0.200
 MAX_ERROR_M = 0.25
-# The L-shape yaw of a VLP-16 box at 20 m is a few degrees off at times (more than its stated sigma: the
-# vehicle's gate refuses such fixes), so the yaw tolerance is looser than the position's.
-MAX_YAW_ERROR = math.radians(5.0)
+# The L-shape yaw of a VLP-16 box seen along the road is a few degrees off at times (3.7 deg at 21 m); the
+# fix's stated yaw sigma says so (lib/perception/fix_covariance.h: grazing faces, measured body departure),
+# so every fix's yaw error is held to 3 of its own stated sigma (about 3 deg here), not a fixed 5 deg.
+YAW_SIGMAS = 3.0
 NDT_BIAS = (0.25, -0.15, 0.017)  # the vehicle's own poses: the truth this far off (0.29 m)
 MAX_FUSED_ERROR_M = 0.15
 JUMP_SIGMAS = 3.0
@@ -257,13 +258,15 @@ def check(run, epoch):
             worst_yaw_jump = (dyaw, ybound, b["x"])
 
     errors = [math.hypot(f["ex"], f["ey"]) for f in fixes]
+    yaw_z = [abs(f["eyaw"]) / math.sqrt(f["vyaw"]) for f in fixes]
     both = [f for f in fixes if 12.0 <= f["x"] <= 28.0]
     print("handover: corrections per RSU %s (%d in the overlap 12..28 m: %s); largest gap %.0f ms at x = %.1f m; "
           "largest jump %.3f m vs its 3-sigma bound %.3f m (at x = %.1f m), yaw %.4f vs %.4f rad; "
-          "error mean %.3f m, max %.3f m" % (
+          "error mean %.3f m, max %.3f m; yaw error max %.2f deg, at most %.2f stated sigma" % (
               per_rsu, len(both), {rsu: sum(1 for f in both if f["rsu"] == rsu) for rsu in (1, 2)},
               max_gap * 1e3, gap_x, worst_jump[0], worst_jump[1], worst_jump[2], worst_yaw_jump[0],
-              worst_yaw_jump[1], sum(errors) / len(errors), max(errors)))
+              worst_yaw_jump[1], sum(errors) / len(errors), max(errors),
+              math.degrees(max(abs(f["eyaw"]) for f in fixes)), max(yaw_z)))
     print("east RSU: peer.accepted %d, peer.not_fresher %d; west RSU: peer.from_self %d" % (
         s2.get("peer.accepted", 0), s2.get("peer.not_fresher", 0), s1.get("peer.from_self", 0)))
     fused = []
@@ -281,8 +284,9 @@ def check(run, epoch):
     assert max(fused) <= MAX_FUSED_ERROR_M, "the fused pose is %.3f m off" % max(fused)
     for f, e in zip(fixes, errors):
         assert e <= MAX_ERROR_M, "correction by rsu %d at x = %.1f m is %.3f m off" % (f["rsu"], f["x"], e)
-        assert abs(f["eyaw"]) <= MAX_YAW_ERROR, "yaw off by %.2f deg at x = %.1f m" % (
-            math.degrees(f["eyaw"]), f["x"])
+        assert abs(f["eyaw"]) <= YAW_SIGMAS * math.sqrt(f["vyaw"]), \
+            "yaw off by %.2f deg at x = %.1f m, beyond %g stated sigma (%.2f deg)" % (
+                math.degrees(f["eyaw"]), f["x"], YAW_SIGMAS, math.degrees(math.sqrt(f["vyaw"])))
 
 
 def bad_peers(run):

@@ -77,13 +77,58 @@ TEST(FixCovariance, ModelIsMonotoneInPointsRangeAndFaces) {
     EXPECT_TRUE(positive_semidefinite(c));
 }
 
+// A face seen at grazing incidence, or whose points scatter about their line more than the point noise
+// explains (a body that is not a flat face), fixes the direction less well; a scatter the noise explains
+// changes nothing (it already averages out over the points).
+TEST(FixCovariance, GrazingOrBulgingFacesGiveLessCertainYaw) {
+  const FixEvidence base = two_faces(15.0, 60);
+  const double base_yaw = fix_covariance(base)(2, 2);
+
+  FixEvidence grazing = base;
+  grazing.seen_faces[0].incidence_sin = 0.3;
+  EXPECT_GT(fix_covariance(grazing)(2, 2), base_yaw);
+  FixEvidence more_grazing = grazing;
+  more_grazing.seen_faces[0].incidence_sin = 0.15;
+  EXPECT_GT(fix_covariance(more_grazing)(2, 2), fix_covariance(grazing)(2, 2));
+
+  const CovarianceModelConfig config;
+  const double noise_sigma = std::hypot(config.range_sigma_m, 15.0 * config.angle_sigma_rad);
+  FixEvidence noisy = base;
+  noisy.seen_faces[0].residual_spread_m = 0.9 * noise_sigma;
+  EXPECT_DOUBLE_EQ(fix_covariance(noisy)(2, 2), base_yaw);
+  FixEvidence bulging = base;
+  bulging.seen_faces[0].residual_spread_m = 0.1;
+  EXPECT_GT(fix_covariance(bulging)(2, 2), base_yaw);
+  EXPECT_TRUE(positive_semidefinite(fix_covariance(bulging)));
+}
+
+// The incidence of a fitted edge is measured from the LiDAR to the edge's midpoint.
+TEST(FixCovariance, FaceEvidenceMeasuresTheIncidence) {
+  RectangleFit fit;
+  fit.status = FitStatus::ok;
+  fit.length0 = 4.0;
+  fit.length1 = 2.0;
+  fit.corners = {Eigen::Vector2d(10.0, 0.0), Eigen::Vector2d(14.0, 0.0), Eigen::Vector2d(14.0, 2.0),
+                 Eigen::Vector2d(10.0, 2.0)};
+  fit.edges[0].support_points = 17;
+  const Eigen::Vector2d lidar(12.0, -8.0);  // straight below edge 0's midpoint: head-on
+  const FaceEvidence head_on = face_evidence(fit, 0, lidar);
+  EXPECT_EQ(head_on.points, 17U);
+  EXPECT_DOUBLE_EQ(head_on.length_m, 4.0);
+  EXPECT_NEAR(head_on.incidence_sin, 1.0, 1e-12);
+  // Edge 3 (x = 10, from y = 2 to 0) seen from (12, -8): line of sight to (10, 1) is (-2, 9).
+  const FaceEvidence side = face_evidence(fit, 3, lidar);
+  EXPECT_DOUBLE_EQ(side.length_m, 2.0);
+  EXPECT_NEAR(side.incidence_sin, 2.0 / std::hypot(2.0, 9.0), 1e-12);
+}
+
 CorrectedPose correct_scan(const TrueBox& box, const Eigen::Vector2d& lidar, double step_deg,
-                           std::uint64_t seed) {
+                           std::uint64_t seed, const CorrectionConfig& config = {}) {
   std::mt19937_64 rng(seed);
   const auto pts = test::scan_box(box, lidar, deg_to_rad(step_deg), 0.02, rng);
   const RectangleFit fit = fit_rectangle(pts, lidar);
   EXPECT_TRUE(fit.ok());
-  return correct_improved(fit, pts, {box.length, box.width}, lidar, std::nullopt);
+  return correct_improved(fit, pts, {box.length, box.width}, lidar, std::nullopt, config);
 }
 
 TEST(FixCovariance, EndToEndFewerPointsFartherAndOneFaceAreLessCertain) {
@@ -100,7 +145,12 @@ TEST(FixCovariance, EndToEndFewerPointsFartherAndOneFaceAreLessCertain) {
   EXPECT_GT(near_sparse.covariance(2, 2), near_dense.covariance(2, 2));
   EXPECT_GT(far_dense.covariance(0, 0) + far_dense.covariance(1, 1),
             near_dense.covariance(0, 0) + near_dense.covariance(1, 1));
-  EXPECT_GT(far_dense.covariance(2, 2), near_dense.covariance(2, 2));
+  // The faces are seen more obliquely from near than from far on the same diagonal (the grazing term of
+  // the yaw); with that term off, the noise alone makes the far fix's yaw less certain.
+  CorrectionConfig no_grazing;
+  no_grazing.covariance.min_incidence_sin = 1.0;
+  EXPECT_GT(correct_scan(box, 35.0 * diagonal, 0.1, 1, no_grazing).covariance(2, 2),
+            correct_scan(box, 12.0 * diagonal, 0.1, 1, no_grazing).covariance(2, 2));
 
   // From straight ahead only the front shows: less certain across the car (along the front face).
   const CorrectedPose front = correct_scan(box, 12.0 * box.u(), 0.1, 1);
