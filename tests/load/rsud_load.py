@@ -44,6 +44,16 @@ def cpu_s(pid):
     return (int(fields[11]) + int(fields[12])) / TICKS  # utime, stime (fields 14 and 15 of proc(5))
 
 
+def udp_drops(port):
+    """Datagrams the kernel dropped for the UDP socket bound to `port` (its receive buffer was full),
+    from the last column of /proc/net/udp."""
+    for line in read_text("/proc/net/udp").splitlines()[1:]:
+        w = line.split()
+        if len(w) > 12 and w[1].endswith(":%04X" % port):
+            return int(w[-1])
+    return None
+
+
 def slope_mb_per_min(samples):
     """Least-squares slope of (t_s, mb) over the second half of the run (after the registry filled)."""
     half = samples[len(samples) // 2:]
@@ -87,13 +97,14 @@ def run(args):
         cpu_share = (cpu_s(rsud.pid) - cpu0) / (time.time() - t0)
         finish(fleet, 10, "rsu-fleet")
         finish(stream, 10, "rsu-sim stream")
+        drops = udp_drops(h.v2i_port)
         h.stop_rsud()
-        return report(h, args, samples, cpu_share)
+        return report(h, args, samples, cpu_share, drops)
     finally:
         h.close()
 
 
-def report(h, args, samples, cpu_share):
+def report(h, args, samples, cpu_share, kernel_drops):
     s = h.stats()
     summary = h.fleet_summary()
     cs = h.corrections()
@@ -105,8 +116,9 @@ def report(h, args, samples, cpu_share):
     print("load: %d vehicles at 10 Hz for %.0f s, %s, VLP-32C stream, %d vehicles in view" % (
         args.vehicles, args.seconds, "signed (Ed25519, each vehicle its own key)" if args.signed else "unsigned (insecure mode)",
         len(IN_VIEW)))
-    print("announcements: sent %d (send failures %d), accepted %d, rejected %s" % (
-        summary["sent"], summary["send_failed"], s.get("datagram.accepted", 0), rejected or "none"))
+    print("announcements: sent %d (send failures %d), dropped by the kernel at rsud's full receive buffer %s, "
+          "accepted %d, rejected %s" % (summary["sent"], summary["send_failed"], kernel_drops,
+                                        s.get("datagram.accepted", 0), rejected or "none"))
     sent_by_rsud = int(s.get("corrections_sent", 0))
     print("corrections: rsud sent %d, vehicles received %d (lost in transport %d), to vehicles not in view %d, "
           "naming another vehicle %d" % (sent_by_rsud, len(cs), sent_by_rsud - len(cs),
