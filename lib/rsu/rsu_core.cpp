@@ -296,8 +296,12 @@ LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, 
   }
   if (config_.max_packet_age > 0 && now - decoder_.last_first_firing_ns() > config_.max_packet_age) {
     ++lidar_stats_.packets_too_late;  // behind: shed (RsuCoreConfig::max_packet_age)
+    if (!shedding_)
+      clusterer_.restart();  // what is open now lacks the shed points: never fitted as whole
+    shedding_ = true;
     return {};
   }
+  shedding_ = false;
   packet_order_.push(decoder_.last_first_firing_ns(), sensor_scratch_);  // a late one is counted
   LidarStepResult result;
   while (packet_order_.pop(ordered_scratch_))
@@ -461,10 +465,12 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
   const GatheringConfig& g = config_.gathering;
   std::vector<std::array<Eigen::Vector2d, 4>> grown(vehicles.size());
   std::vector<Eigen::Vector2d> grown_half(vehicles.size());
+  std::vector<double> centre_sigmas(vehicles.size());
   for (std::size_t j = 0; j < vehicles.size(); ++j) {
     const v2i::VehicleHypothesis& h = hypotheses[j];
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(h.covariance.topLeftCorner<2, 2>());
     const double centre_sigma = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+    centre_sigmas[j] = std::isfinite(centre_sigma) ? std::min(centre_sigma, g.max_margin_m) : g.max_margin_m;
     const double yaw_sigma = std::sqrt(std::max(0.0, h.covariance(2, 2)));
     const double half_diagonal = 0.5 * std::hypot(h.size.length_m, h.size.width_m);
     double margin = g.footprint_sigmas * (centre_sigma + std::min(yaw_sigma, 1.0) * half_diagonal);
@@ -492,10 +498,12 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
   const auto inside_fraction = [&](const Candidate& c, std::size_t j) {
     return fraction_inside(c, j, grown_half[j]);
   };
-  // Whether a cluster lies in the vehicle's predicted footprint grown by the minimum margin only.
+  // Whether a cluster lies in the vehicle's predicted footprint grown by the minimum margin and one
+  // sigma of its predicted centre only (a vehicle that knows it is lost may be found farther off).
   const auto tightly_inside = [&](const Candidate& c, std::size_t j) {
-    const Eigen::Vector2d half(0.5 * hypotheses[j].size.length_m + g.min_margin_m,
-                               0.5 * hypotheses[j].size.width_m + g.min_margin_m);
+    const double margin = g.min_margin_m + centre_sigmas[j];
+    const Eigen::Vector2d half(0.5 * hypotheses[j].size.length_m + margin,
+                               0.5 * hypotheses[j].size.width_m + margin);
     return fraction_inside(c, j, half) >= g.min_inside_fraction;
   };
 
@@ -568,6 +576,7 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
         held.assigned_part_size = part.footprint.size();
         held.assigned_part_time = part.sweep_time;
         held.assigned_distance_sq = assigned_distance[j];
+        held.assigned_own = tightly_inside(part, j);
       }
       held.footprint.insert(held.footprint.end(), part.footprint.begin(), part.footprint.end());
       held.weighted_offset +=
@@ -585,6 +594,7 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
     // sweep has passed its grown footprint, so that its own cluster, released later, is assigned too and
     // wins as the nearer (issue 7, mis-association).
     const bool far = (hypotheses[j].centre - lidar_xy_).norm() > g.hold_beyond_m;
+    held.far = far;
     const bool own = assigned_distance[j] >= 0.0 && tightly_inside(candidates[members[j].front()], j);
     held.release_at =
         far || !own
@@ -614,6 +624,13 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
   if (vehicle == nullptr || held.footprint.empty())
     return;
   const v2i::VehicleAnnouncement& a = vehicle->announcement;
+  // A near vehicle was held because its assigned cluster lay outside its footprint (gather()); if no
+  // cluster of its own came while the sweep passed it, that one is more likely a neighbour's (its own
+  // hidden, or its packets lost): no fix rather than someone else's.
+  if (!held.far && held.assigned_part_size > 0 && !held.assigned_own) {
+    ++lidar_stats_.clusters_unmatched;
+    return;
+  }
 
   std::span<const Eigen::Vector2d> points(held.footprint);
   TimeNs sweep_time = held.first_time + held.weighted_offset / static_cast<TimeNs>(held.footprint.size());

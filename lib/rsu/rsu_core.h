@@ -190,7 +190,9 @@ class RsuCore {
     std::size_t assigned_part_size = 0;  // 0: no cluster was assigned, only gathered
     TimeNs assigned_part_time = 0;
     double assigned_distance_sq = 0.0;
-    TimeNs release_at = 0;  // firing time when the sweep has passed the footprint and its clusters
+    bool assigned_own = false;  // it lay in the footprint grown by the minimum margin + 1 sigma
+    bool far = false;           // beyond GatheringConfig::hold_beyond_m (held for its fragments)
+    TimeNs release_at = 0;      // firing time when the sweep has passed the footprint and its clusters
   };
 
   void correct_clusters(std::vector<SweptCluster>&& clusters, TimeNs now, LidarStepResult& result);
@@ -231,6 +233,7 @@ class RsuCore {
   v2i::VehicleRegistry registry_;
   std::unordered_map<std::uint64_t, VehicleChannel> channels_;
   std::vector<HeldVehicle> held_;
+  bool shedding_ = false;  // the last packet was shed as too late (RsuCoreConfig::max_packet_age)
   bool sweep_known_ = false;
   LidarPoint sweep_point_;  // the latest point of the stream: where the rotation is, and when
 

@@ -94,12 +94,16 @@ class SweepClusterer {
   // Everything pending, closed or not: the end of a whole frame (PCD replay) or of the stream (drain).
   std::vector<SweptCluster> release_all();
 
+  // Drops every pending point (counted as points_dropped_restart) and starts the stream afresh, as a
+  // gap does: the caller skipped part of the stream (RsuCore sheds packets it is too late for), so
+  // the clusters open at that moment are truncated and must not be fitted as whole vehicles.
+  void restart();
+
   std::size_t pending_points() const { return points_.size(); }
   const SweepClustererStats& stats() const { return stats_; }
 
  private:
   void init(double rotation_hz);
-  void restart();
   std::vector<SweptCluster> release(bool everything);
   void drop_stale();
   // Keeps the pending points for which drop(i) is false, in order (points_, azimuth_, range_ together).
