@@ -11,8 +11,6 @@
 #include <stdexcept>
 #include <thread>
 
-#include "v2i/message_signer.h"
-#include "v2i/wire_codec.h"
 #include "vehicle_client/udp_endpoint_text.h"
 
 namespace rsu::vehicle_client {
@@ -42,7 +40,9 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
         config_(config),
         clock_(std::move(clock)),
         filter_({config.vehicle_id, config.max_tracked_rsus, config.security, config.trust_list}),
-        signer_(config.security.mode == v2i::SecurityMode::kSigned ? config.signing_key : std::nullopt) {
+        announcer_({config.vehicle_id, config.size, config.reference_offset, config.announce_period,
+                    config.max_resend_age},
+                   config.security.mode == v2i::SecurityMode::kSigned ? config.signing_key : std::nullopt) {
     if (config_.vehicle_id == 0) {
       throw std::invalid_argument("vehicle id must be non-zero");
     }
@@ -80,7 +80,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
     socket_.non_blocking(true);
     local_ = socket_.local_endpoint();
     for (const udp::endpoint& rsu : rsus_) {
-      reply_addresses_.push_back(reply_address_for(rsu));
+      reply_to_.push_back({reply_address_for(rsu), local_.port()});
     }
   }
 
@@ -123,7 +123,6 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
         ++stats_.announcements_refused;
         return reason;
       }
-      latest_ = state;
     }
     send(std::move(outgoing), false);
     return v2i::AnnouncementReason::kValid;
@@ -155,7 +154,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
   const std::vector<udp::endpoint>& rsu_endpoints() const { return rsus_; }
   std::uint32_t next_sequence() const {
     const std::lock_guard lock(mutex_);
-    return next_sequence_;
+    return announcer_.next_sequence();
   }
 
  private:
@@ -182,35 +181,16 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
     return probe.local_endpoint().address().to_string();
   }
 
-  // Encodes one announcement per RSU with the next sequence number. Caller holds mutex_.
+  // Encodes one announcement per RSU with the next sequence number (Announcer). Caller holds mutex_.
   v2i::AnnouncementReason build(const VehicleState& state, std::vector<Outgoing>& out) {
-    v2i::VehicleAnnouncement a;
-    a.vehicle_id = config_.vehicle_id;
-    a.sequence = next_sequence_;
-    a.generation_time = state.time;
-    a.size = config_.size;
-    a.reference_offset = config_.reference_offset;
-    a.pose = state.pose;
-    a.pose_covariance = state.covariance;
-    a.speed_mps = state.speed_mps;
-    a.yaw_rate_rps = state.yaw_rate_rps;
-    a.reply_to = {reply_addresses_.front(), local_.port()};
-    // The RSU's own plausibility test, with "now" = the pose's time: content only, the RSU judges age.
-    const v2i::AnnouncementReason reason = v2i::validate_announcement(a, state.time);
-    if (reason != v2i::AnnouncementReason::kValid) {
-      return reason;
-    }
-    const TimeNs now = clock_();
-    for (std::size_t i = 0; i < rsus_.size(); ++i) {
-      a.reply_to.address = reply_addresses_[i];
-      // One signed datagram per RSU (its own reply_to), each with the next signer sequence number.
-      std::vector<std::uint8_t> bytes = signer_.encode(a, now);
-      if (!bytes.empty()) {
-        out.push_back({rsus_[i], std::move(bytes)});
+    std::vector<std::vector<std::uint8_t>> datagrams;
+    const v2i::AnnouncementReason reason = announcer_.announce(state, clock_(), reply_to_, datagrams);
+    for (std::size_t i = 0; i < datagrams.size(); ++i) {
+      if (!datagrams[i].empty()) {
+        out.push_back({rsus_[i], std::move(datagrams[i])});
       }
     }
-    ++next_sequence_;  // wraps modulo 2^32, as the wire says
-    return v2i::AnnouncementReason::kValid;
+    return reason;
   }
 
   void send(std::vector<Outgoing> outgoing, bool keepalive) {
@@ -252,10 +232,12 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
           return;
         }
         self->filter_.expire(self->clock_());
-        const auto quiet = std::chrono::steady_clock::now() - self->last_sent_;
-        if (self->latest_ && quiet >= std::chrono::nanoseconds(self->config_.announce_period) &&
-            self->clock_() - self->latest_->time <= self->config_.max_resend_age) {
-          self->build(*self->latest_, outgoing);
+        // "Quiet" on the monotonic clock: a step of the common clock must not stop or flood repeats.
+        const TimeNs quiet = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                 std::chrono::steady_clock::now() - self->last_sent_)
+                                 .count();
+        if (const auto due = self->announcer_.keepalive_due(quiet, self->clock_())) {
+          self->build(*due, outgoing);
         }
       }
       if (!outgoing.empty()) {
@@ -313,17 +295,15 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
   const VehicleClientConfig config_;
   const Clock clock_;
   std::vector<udp::endpoint> rsus_;
-  std::vector<std::string> reply_addresses_;  // per RSU
+  std::vector<v2i::UdpEndpoint> reply_to_;  // per RSU: the local address it reaches us at
   udp::endpoint local_;
   std::array<std::uint8_t, kReceiveBufferBytes> buffer_{};  // strand_ only
   udp::endpoint sender_;                                    // strand_ only
 
   mutable std::mutex mutex_;  // guards everything below
   bool stopped_ = false;
-  CorrectionFilter filter_;
-  v2i::MessageSigner signer_;
-  std::uint32_t next_sequence_ = 0;
-  std::optional<VehicleState> latest_;
+  vehicle::CorrectionFilter filter_;
+  vehicle::Announcer announcer_;
   std::chrono::steady_clock::time_point last_sent_{};
   VehicleClientStats stats_;
   std::deque<ReceivedCorrection> pending_;

@@ -1,5 +1,6 @@
 // The vehicle's V2I client: announces the vehicle (size, own pose, where to reply) to the RSUs over UDP
-// and receives their corrections, delivered by callback and by poll(). Boost.Asio at the edge; runs on
+// and receives their corrections, delivered by callback and by poll(). Boost.Asio at the edge; what to
+// send and which corrections to take are decided by lib/vehicle (Announcer, CorrectionFilter). Runs on
 // an io_context the caller owns (ThreadedVehicleClient runs its own thread). All public methods are
 // thread-safe; the callback runs on the io_context's thread.
 #pragma once
@@ -21,20 +22,15 @@
 #include "v2i/announcement_validation.h"
 #include "v2i/enum_counter.h"
 #include "v2i/messages.h"
+#include "vehicle/announcer.h"
+#include "vehicle/correction_filter.h"
 #include "vehicle_client/clock.h"
-#include "vehicle_client/correction_filter.h"
 #include "vehicle_client/vehicle_client_config.h"
 
 namespace rsu::vehicle_client {
 
-// The vehicle's own estimate of its reference point, as announced (map frame, DESIGN.md §3).
-struct VehicleState {
-  TimeNs time = 0;  // when the pose was valid (e.g. the NDT scan time): the generation time
-  Pose2 pose;
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  // (x, y, yaw)
-  std::optional<double> speed_mps;
-  std::optional<double> yaw_rate_rps;
-};
+using vehicle::CorrectionVerdict;
+using vehicle::VehicleState;
 
 struct ReceivedCorrection {
   v2i::Correction correction;

@@ -1,6 +1,7 @@
 // rsu-vehicle: the vehicle side of RSU-assisted localization on the command line. Reads the vehicle's
 // NDT poses as CSV on stdin, announces the vehicle to the RSU(s), receives their corrections, fuses
-// both (PoseFuser), and prints the fused poses as CSV on stdout (issue 4, item 3).
+// both, and prints the fused poses as CSV on stdout (issue 4, item 3). The decisions are the vehicle
+// core's (lib/vehicle); this file reads, paces, sends and writes.
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
 
 #include <boost/program_options.hpp>
@@ -18,9 +19,9 @@
 
 #include "v2i/security/key_text.h"
 #include "v2i/security/trust_list.h"
+#include "vehicle/vehicle_core.h"
 #include "vehicle_client/cli/csv_writers.h"
 #include "vehicle_client/ndt_csv.h"
-#include "vehicle_client/pose_fuser.h"
 #include "vehicle_client/udp_endpoint_text.h"
 #include "vehicle_client/vehicle_client.h"
 
@@ -191,7 +192,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
 class Session {
  public:
   explicit Session(const Options& options)
-      : options_(options), threaded_(options.client), fuser_(fuser_config()) {
+      : options_(options), threaded_(options.client), core_(core_config()) {
     if (!options_.corrections_path.empty()) {
       corrections_.reset(std::fopen(options_.corrections_path.c_str(), "w"));
       if (!corrections_) {
@@ -220,11 +221,10 @@ class Session {
                                                         options_.ndt_sigma_yaw * options_.ndt_sigma_yaw)
                                             .asDiagonal());
     handle_corrections();  // first, so that the row below includes every correction received so far
-    fuser_.add_ndt(row.pose, covariance, row.time);
-    const auto fused = fuser_.pose_at(row.time);
-    announce(row, covariance, fused);
-    if (fused) {
-      write_fused_row(stdout, *fused, "ndt");
+    const vehicle::NdtStep step = core_.on_ndt({row.time, row.pose, covariance});
+    announce(step.announce);
+    if (step.fused) {
+      write_fused_row(stdout, *step.fused, "ndt");
     }
     std::fflush(stdout);
   }
@@ -232,24 +232,19 @@ class Session {
   // Fuses and records whatever corrections arrived.
   void handle_corrections() {
     for (const ReceivedCorrection& r : threaded_.client().poll()) {
-      std::string decision = "not_fused";
-      if (!options_.announce_only) {
-        const fusion::MeasurementOutcome outcome = fuser_.add_rsu(r.correction);
-        decision = fusion::to_string(outcome);
-        const auto fused = fuser_.pose_at(r.correction.sweep_time);
-        if (outcome == fusion::MeasurementOutcome::kAccepted && fused) {
-          write_fused_row(stdout, *fused, "rsu");
-        }
+      const vehicle::CorrectionStep step = core_.on_correction(r.correction);
+      if (step.fused) {
+        write_fused_row(stdout, *step.fused, "rsu");
       }
       if (corrections_) {
-        write_correction_row(corrections_.get(), r, decision);
+        write_correction_row(corrections_.get(), r, step.label());
       }
     }
   }
 
   void print_stats() const {
     const VehicleClientStats c = threaded_.client().stats();
-    const PoseFuserStats f = fuser_.stats();
+    const vehicle::PoseFuserStats f = core_.fuser_stats();
     std::fprintf(stderr,
                  "rsu-vehicle: announcements sent %llu (keep-alive %llu, send errors %llu, refused %llu); "
                  "datagrams received %llu; corrections accepted %llu, rejected %llu",
@@ -281,33 +276,19 @@ class Session {
  private:
   static unsigned long long ull(std::uint64_t v) { return static_cast<unsigned long long>(v); }
 
-  PoseFuserConfig fuser_config() const {
-    PoseFuserConfig config;
-    config.ekf.reference_offset = options_.client.reference_offset;
+  vehicle::VehicleCoreConfig core_config() const {
+    vehicle::VehicleCoreConfig config;
+    config.fuser.ekf.reference_offset = options_.client.reference_offset;
+    config.fuse_corrections = !options_.announce_only;
     return config;
   }
 
-  // Announces the vehicle's best estimate: the fused one (with speed and yaw rate once the filter knows
-  // them), else the NDT pose itself.
-  void announce(const NdtPoseRow& row, const Eigen::Matrix3d& ndt_covariance,
-                const std::optional<fusion::StateEstimate>& fused) {
-    VehicleState state{row.time, row.pose, ndt_covariance, std::nullopt, std::nullopt};
-    if (fused) {
-      state.pose = fused->pose();
-      state.covariance = fused->covariance.topLeftCorner<3, 3>();
-      // "Known" means the filter has settled: 1 m/s and 0.2 rad/s (1 sigma) are loose but honest.
-      if (fused->covariance(fusion::kSpeed, fusion::kSpeed) < 1.0) {
-        state.speed_mps = fused->state(fusion::kSpeed);
-      }
-      if (fused->covariance(fusion::kYawRate, fusion::kYawRate) < 0.04) {
-        state.yaw_rate_rps = fused->state(fusion::kYawRate);
-      }
-    }
+  void announce(const VehicleState& state) {
     const v2i::AnnouncementReason reason = threaded_.client().announce(state);
     if (reason != v2i::AnnouncementReason::kValid && refusals_logged_ < 10) {
       ++refusals_logged_;
       std::fprintf(stderr, "rsu-vehicle: announcement at %lld not sent: %s\n",
-                   static_cast<long long>(row.time), v2i::to_string(reason));
+                   static_cast<long long>(state.time), v2i::to_string(reason));
     }
   }
 
@@ -317,7 +298,7 @@ class Session {
 
   const Options& options_;
   ThreadedVehicleClient threaded_;
-  PoseFuser fuser_;
+  vehicle::VehicleCore core_;
   std::unique_ptr<std::FILE, FileCloser> corrections_;
   int refusals_logged_ = 0;
   Steady::time_point last_insecure_warning_{};

@@ -1,6 +1,6 @@
 // PoseFuser on a simulated straight drive: noisy NDT plus RSU corrections (box centre, yaw modulo pi,
 // delivered late) against the test's own ground truth.
-#include "vehicle_client/pose_fuser.h"
+#include "vehicle/pose_fuser.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include "common/angles.h"
 #include "common/random.h"
 
-namespace rsu::vehicle_client {
+namespace rsu::vehicle {
 namespace {
 
 constexpr double kSpeed = 12.0;  // m/s
@@ -297,4 +297,4 @@ TEST(PoseFuser, NothingBeforeTheFirstNdtPoseAndNoRsuStart) {
 }
 
 }  // namespace
-}  // namespace rsu::vehicle_client
+}  // namespace rsu::vehicle

@@ -1,4 +1,4 @@
-#include "vehicle_client/correction_filter.h"
+#include "vehicle/correction_filter.h"
 
 #include <algorithm>
 #include <variant>
@@ -6,7 +6,7 @@
 #include "fusion/measurement_model.h"
 #include "v2i/wire_codec.h"
 
-namespace rsu::vehicle_client {
+namespace rsu::vehicle {
 
 const char* to_string(CorrectionVerdict verdict) {
   switch (verdict) {
@@ -105,4 +105,4 @@ void CorrectionFilter::remember(const v2i::Correction& correction) {
   known->second = {correction.sequence, correction.sweep_time, checks_};
 }
 
-}  // namespace rsu::vehicle_client
+}  // namespace rsu::vehicle

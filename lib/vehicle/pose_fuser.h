@@ -1,8 +1,8 @@
 // The vehicle's pose fuser: lib/fusion's CTRV EKF (x, y, yaw, speed, yaw rate) fed with the vehicle's
 // NDT poses and the RSU corrections it receives, each at its own time with its own covariance. An RSU
-// correction counts at its sweep time (DESIGN.md §3), its box yaw is used modulo pi, one arriving after
-// newer NDT poses is inserted and the later ones re-applied, and an outlier (an off-by-90 deg box, a
-// wrong cluster) is refused by the Mahalanobis gate so it never moves the pose (issue 4, item 3).
+// correction counts at its sweep time (when the LiDAR swept the vehicle), its box yaw is used modulo pi, one
+// arriving after newer NDT poses is inserted and the later ones re-applied, and an outlier (an off-by-90 deg
+// box, a wrong cluster) is refused by the Mahalanobis gate so it never moves the pose (issue 4, item 3).
 #pragma once
 
 #include <cstdint>
@@ -13,7 +13,7 @@
 #include "fusion/vehicle_ekf.h"
 #include "v2i/messages.h"
 
-namespace rsu::vehicle_client {
+namespace rsu::vehicle {
 
 struct PoseFuserConfig {
   // reference_offset must equal the one announced to the RSU (corrections give the box centre).
@@ -74,4 +74,4 @@ class PoseFuser {
   int rejected_run_ = 0;
 };
 
-}  // namespace rsu::vehicle_client
+}  // namespace rsu::vehicle

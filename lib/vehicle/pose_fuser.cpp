@@ -1,10 +1,10 @@
-#include "vehicle_client/pose_fuser.h"
+#include "vehicle/pose_fuser.h"
 
 #include <cmath>
 
 #include "common/angles.h"
 
-namespace rsu::vehicle_client {
+namespace rsu::vehicle {
 
 using fusion::MeasurementOutcome;
 
@@ -108,4 +108,4 @@ PoseFuserStats PoseFuser::stats() const {
   return out;
 }
 
-}  // namespace rsu::vehicle_client
+}  // namespace rsu::vehicle

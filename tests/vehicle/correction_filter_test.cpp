@@ -1,13 +1,13 @@
 // CorrectionFilter: ordering per RSU, restart of an RSU, sequence wrap-around and bounded memory (in
 // insecure mode: those are about ordering), then signed mode: only genuine, fresh RSU corrections.
-#include "vehicle_client/correction_filter.h"
+#include "vehicle/correction_filter.h"
 
 #include <gtest/gtest.h>
 
 #include "v2i/message_signer.h"
 #include "v2i/wire_codec.h"
 
-namespace rsu::vehicle_client {
+namespace rsu::vehicle {
 namespace {
 
 constexpr std::uint64_t kVehicleId = 99;
@@ -134,4 +134,4 @@ TEST(CorrectionFilter, SignedModeTakesOnlyGenuineFreshCorrections) {
 }
 
 }  // namespace
-}  // namespace rsu::vehicle_client
+}  // namespace rsu::vehicle

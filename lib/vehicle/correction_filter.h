@@ -17,7 +17,7 @@
 #include "v2i/messages.h"
 #include "v2i/security/trust_list.h"
 
-namespace rsu::vehicle_client {
+namespace rsu::vehicle {
 
 enum class CorrectionVerdict : std::uint8_t {
   kAccepted,
@@ -80,4 +80,4 @@ class CorrectionFilter {
   std::uint64_t sequence_restarts_ = 0;
 };
 
-}  // namespace rsu::vehicle_client
+}  // namespace rsu::vehicle
