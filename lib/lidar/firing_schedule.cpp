@@ -119,8 +119,10 @@ void beam_firings(const SensorModel& model, const PacketBlocks& blocks, std::vec
     for (int s = 0; s < model.sequences_per_block; ++s) {
       for (int laser = 0; laser < lasers; ++laser) {
         const auto li = static_cast<std::size_t>(laser);
-        const double dt_us = s * model.sequence_period_us + model.firing_offset_us[li];
-        const double az_deg = block_az_deg + diff_deg * dt_us / block_us + model.azimuth_offset_deg[li];
+        const double sequence_us = s * model.sequence_period_us;
+        const double dt_us = sequence_us + model.firing_offset_us[li];
+        const double az_dt_us = sequence_us + model.azimuth_interpolation_us[li];
+        const double az_deg = block_az_deg + diff_deg * az_dt_us / block_us + model.azimuth_offset_deg[li];
         Firing f;
         f.block = b;
         f.channel = s * lasers + laser;

@@ -7,9 +7,10 @@
 // quantised to 0.01 deg. A laser's beam rotation angle is interpolated between its block's azimuth and
 // the next block's (for the last block of a packet, the previous block's azimuth difference is reused,
 // as the decoder cannot see the next packet), plus the laser's azimuth offset:
-//   azimuth = block_az + diff * dt / block_duration + azimuth_offset[laser], wrapped to [0, 2 pi),
-// where dt is the firing's time after the block's first firing and diff = (next block az - block az)
-// mod 360 deg.
+//   azimuth = block_az + diff * dt_az / block_duration + azimuth_offset[laser], wrapped to [0, 2 pi),
+// where diff = (next block az - block az) mod 360 deg and dt_az is the laser's place in the block as
+// the manufacturer's precision-azimuth rule puts it: its sequence's start plus
+// azimuth_interpolation_us[laser] (the firing time, except on the VLP-32C: sensor_model.h).
 //
 // Channel mapping: channel = sequence * laser_count + laser. A VLP-16 block holds two sequences
 // (channels 16..31 are the second, fired 55.296 us after the first); a VLP-32C block holds one.

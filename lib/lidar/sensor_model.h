@@ -3,7 +3,16 @@
 // Sensor frame: x forward, y left, z up. A beam with elevation w and rotation angle a (clockwise seen
 // from above, 0 at +x, the Velodyne azimuth convention) points along
 //   (cos w cos a, -cos w sin a, sin w).
-// Laser i's beam rotation angle is the encoder azimuth at its firing time plus azimuth_offset_deg[i].
+// Laser i's beam rotation angle is the encoder azimuth where the manufacturer's precision-azimuth rule
+// places it in its data block (azimuth_interpolation_us[i]; firing_schedule.h) plus azimuth_offset_deg[i].
+//
+// Sign convention of the azimuth offset: it is ADDED to the encoder azimuth, as the Velodyne manuals'
+// azimuth offset (delta) is. The Velodyne calibration files (ROS velodyne driver, nebula, VeloView's
+// rotCorrection) store the same angle with the opposite sign as `rot_correction`, which the drivers
+// SUBTRACT from the block azimuth (VLP-32C manual 63-9325 sec. 9.5 says so); azimuth_offset_deg is
+// therefore -rot_correction. A decoder that adds rot_correction misplaces every VLP-32C point by twice
+// its offset (2.8 or 8.4 deg), which decoding a real capture against nebula's reference decode shows
+// (tests/lidar/real_capture_test.cpp).
 #pragma once
 
 #include <cstdint>
@@ -19,11 +28,15 @@ namespace rsu {
 struct SensorModel {
   std::string name;                        // "vlp16", "vlp32c", "generic64", ...
   std::vector<double> elevation_deg;       // per laser, channel (firing) order
-  std::vector<double> azimuth_offset_deg;  // per laser, added to the encoder azimuth
+  std::vector<double> azimuth_offset_deg;  // per laser, added to the encoder azimuth (-rot_correction)
   std::vector<double> firing_offset_us;    // per laser, from the start of its firing sequence
-  double sequence_period_us = 55.296;      // one firing sequence of every laser
-  int sequences_per_block = 1;             // data blocks per packet hold 32 channels: VLP-16 packs 2
-  double distance_unit_m = 0.002;          // packet distance quantum
+  // Per laser, from the start of its firing sequence: the time at which the block's azimuth gap is
+  // interpolated for this laser (firing_schedule.h). Equal to firing_offset_us, except on the VLP-32C,
+  // whose manual interpolates the pair fired k-th at 2k x 2.304 us (make_vlp32c).
+  std::vector<double> azimuth_interpolation_us;
+  double sequence_period_us = 55.296;  // one firing sequence of every laser
+  int sequences_per_block = 1;         // data blocks per packet hold 32 channels: VLP-16 packs 2
+  double distance_unit_m = 0.002;      // packet distance quantum
   double min_range_m = 0.5;
   double max_range_m = 100.0;
   std::uint8_t product_id = 0;  // packet byte 1205; 0 = no Velodyne packet format

@@ -34,7 +34,8 @@ struct BackgroundLearningConfig {
 struct SweepConfig {
   // Extra azimuth the sweep must be past a cluster before it is released, on top of the spread of
   // the sensor's per-laser azimuth offsets (computed from the model): covers the interpolation of
-  // firing azimuths between blocks and a slightly tilted mount.
+  // firing azimuths between blocks (the VLP-32C manual's rule puts a pair up to 0.13 deg ahead of the
+  // rotor at its firing at 600 rpm, sensor_model.h) and a slightly tilted mount.
   double release_margin_deg = 0.5;
   // Foreground points waiting for their cluster to close; beyond this the oldest are dropped (a flood
   // of foreground, e.g. before any background exists, cannot grow memory without bound).

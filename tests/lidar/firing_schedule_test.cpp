@@ -135,20 +135,25 @@ TEST(LidarFiringSchedule, BlockAzimuthIsQuantisedEncoderAngle) {
 }
 
 TEST(LidarFiringSchedule, FiringAzimuthFollowsTheRotor) {
-  // Ground truth: a beam's rotation angle is the rotor angle at its firing time plus the laser's offset,
-  // up to the block azimuth's rounding (0.005 deg) plus the rounding of the difference it is
-  // interpolated with (0.01 deg, scaled by dt / block duration <= 1).
+  // Ground truth: a beam's rotation angle is the rotor angle at its firing time minus the calibration
+  // files' rot_correction (sensor_model.h), up to the block azimuth's rounding (0.005 deg) plus the
+  // rounding of the difference it is interpolated with (0.01 deg, scaled by dt / block duration,
+  // which is <= 1.25 for the VLP-32C's last pair). The VLP-32C manual's precision azimuth places the
+  // pair fired k-th at 2k x 2.304 us of the block, not at its firing time k x 2.304 us.
   for (const SensorModel& model : {make_vlp16(), make_vlp32c()}) {
     const TimeNs t0 = 987'654'321;
     const double start = 358.0;
     const FiringSchedule schedule(model, t0, start);
+    const bool vlp32c = model.name == "vlp32c";
     for (std::int64_t k = 0; k < 30; ++k) {
       for (const Firing& f : schedule.firings(schedule.packet(k))) {
         ASSERT_GE(f.azimuth_rad, 0.0);
         ASSERT_LT(f.azimuth_rad, 2.0 * std::numbers::pi);
-        const double offset = model.name == "vlp32c" ? test::kVlp32cAzimuthOffsetDeg[f.laser] : 0.0;
-        const double expected = true_encoder_deg(start, t0, f.time_ns) + offset;
-        EXPECT_NEAR(angle_diff_deg(f.azimuth_rad / kDeg, expected), 0.0, 0.015 + 1e-9)
+        const double rot_correction = vlp32c ? test::kVlp32cRotCorrectionDeg[f.laser] : 0.0;
+        const TimeNs pair_time_ns = vlp32c ? (f.laser / 2) * 2'304 : 0;  // the pair's firing, in the block
+        const TimeNs azimuth_time = f.time_ns + pair_time_ns;            // VLP-32C: twice into the block
+        const double expected = true_encoder_deg(start, t0, azimuth_time) - rot_correction;
+        EXPECT_NEAR(angle_diff_deg(f.azimuth_rad / kDeg, expected), 0.0, 0.0175 + 1e-9)
             << model.name << " packet " << k << " channel " << f.channel;
       }
     }

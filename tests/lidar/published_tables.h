@@ -13,7 +13,10 @@ constexpr std::array<double, 32> kVlp32cElevationDeg = {
     -6.148, -5.333, 1.333,  0.667,   -4,     -4.667, 1.667,  1,      -3.667, -3.333, 3.333,
     2.333,  -2.667, -3,     7,       4.667,  -2.333, -2,     15,     10.333, -1.333};
 
-constexpr std::array<double, 32> kVlp32cAzimuthOffsetDeg = {
+// `rot_correction` of the Velodyne calibration files (VLP32.yaml of the ROS velodyne and nebula drivers,
+// in degrees), which the drivers SUBTRACT from the block azimuth: the manual's azimuth offset is its
+// negation.
+constexpr std::array<double, 32> kVlp32cRotCorrectionDeg = {
     -1.4, 4.2, -1.4, 1.4, -1.4, 1.4, -4.2, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 1.4,
     -1.4, 4.2, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4, -1.4, 1.4, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4};
 

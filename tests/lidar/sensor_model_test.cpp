@@ -51,8 +51,11 @@ TEST(LidarSensorModel, Vlp32cMatchesPublishedTables) {
   const SensorModel m = make_vlp32c();
   ASSERT_EQ(m.laser_count(), 32U);
   for (std::size_t i = 0; i < 32; ++i) {
-    EXPECT_DOUBLE_EQ(m.azimuth_offset_deg[i], test::kVlp32cAzimuthOffsetDeg[i]) << "laser " << i;
+    EXPECT_DOUBLE_EQ(m.azimuth_offset_deg[i], -test::kVlp32cRotCorrectionDeg[i]) << "laser " << i;
     EXPECT_NEAR(m.firing_offset_us[i], static_cast<double>(i / 2) * test::kFiringIntervalUs, 1e-9);
+    // The manual's precision azimuth: channels K and K + 1 (K even) at K x 2.304 us of the gap.
+    EXPECT_NEAR(m.azimuth_interpolation_us[i], static_cast<double>(i - i % 2) * test::kFiringIntervalUs,
+                1e-9);
     expect_beam_angles(m, i, test::kVlp32cElevationDeg[i]);
   }
   EXPECT_EQ(m.sequences_per_block, 1);

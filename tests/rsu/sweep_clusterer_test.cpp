@@ -159,13 +159,13 @@ std::vector<double> offsets_rad(const SensorModel& model) {
   return out;
 }
 
-// Background returns from ONE laser only (the VLP-32C's ring 6, offset -4.2 deg): the rule must
+// Background returns from ONE laser only (the VLP-32C's ring 1, offset -4.2 deg): the rule must
 // read the encoder azimuth from whichever laser returns. The spread-only rule takes the largest
 // BEAM azimuth as the sweep and so lags by the whole 8.4 deg spread here.
 TEST(SweepClusterer, LaserAwareRuleReadsTheEncoderFromAnyLaser) {
   const SensorModel vlp32c = make_vlp32c();
   const std::vector<double> offsets = offsets_rad(vlp32c);
-  ASSERT_DOUBLE_EQ(vlp32c.azimuth_offset_deg[6], -4.2);
+  ASSERT_DOUBLE_EQ(vlp32c.azimuth_offset_deg[1], -4.2);
   SweepConfig config;
   config.release_margin_deg = 0.5;
   for (const double r : {4.0, 10.0, 25.0}) {
@@ -176,18 +176,18 @@ TEST(SweepClusterer, LaserAwareRuleReadsTheEncoderFromAnyLaser) {
                       : SweepClusterer(config, clustering(), Eigen::Vector2d::Zero(), kHz, deg_to_rad(8.4));
       for (int i = 0; i < 20; ++i) {
         LidarPoint p = at(r, 40.0 + 0.25 * i);
-        p.ring = 6;
+        p.ring = 1;
         sweep.add(p, true);
       }
       double released_at = std::numeric_limits<double>::quiet_NaN();
       for (double a = 45.0; a < 90.0 && std::isnan(released_at); a += 0.05) {
         LidarPoint p = at(50.0, a);
-        p.ring = 6;
+        p.ring = 1;
         sweep.add(p, false);
         if (!sweep.release_closed().empty())
           released_at = a;
       }
-      // Independently: the ring-6 beam at azimuth b means encoder b + 4.2; the -4.2 deg lasers' wedge
+      // Independently: the ring-1 beam at azimuth b means encoder b + 4.2; the -4.2 deg lasers' wedge
       // starts at b, so the last point (44.75 deg) is clear once b - margin - 44.75 >= asin(0.7 / r);
       // the spread rule needs another 8.4 deg.
       const double needed =
