@@ -10,6 +10,7 @@ packages=(
   libboost-dev libboost-system-dev libboost-program-options-dev
   libspdlog-dev libfmt-dev protobuf-compiler libprotobuf-dev
   libyaml-cpp-dev libsystemd-dev libpng-dev libsodium-dev
+  libssl-dev  # tests: MD5, to compare Ouster range images with the Ouster SDK's digests
   cyclonedds-dev cyclonedds-tools
   clang libclang-rt-14-dev  # fuzz/ (scripts/fuzz.sh): clang recommends, not depends on, the libFuzzer runtime
   systemd
