@@ -1,13 +1,17 @@
 // Writes the seed corpora of the fuzz harnesses into <dir>/<harness>/ (fuzz/corpus/ in the repository):
 // valid V2I datagrams signed with fuzz_keys.h's keys (plus one unsigned), valid VLP-16 and VLP-32C
 // packets from the encoder,
-// a small capture and a small PCD. The configuration and scenario seeds are the shipped files
-// (deploy/rsud.yaml, scenarios/*.yaml), copied by hand. Usage: fuzz_seed_corpus <dir>.
+// a small capture and a small PCD, and packets of the real Ouster captures (tests/data/real/ouster) in
+// ouster_packet_fuzzer's framing. The configuration and scenario seeds are the shipped files
+// (deploy/rsud.yaml, scenarios/*.yaml) and the Ouster metadata seeds the real metadata files, copied by
+// hand. Usage: fuzz_seed_corpus <dir>.
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -206,6 +210,57 @@ void write_pcd(const fs::path& dir) {
              std::span(reinterpret_cast<const std::uint8_t*>(ascii.data()), ascii.size()));
 }
 
+// A real Ouster packet cut down to its first `columns` columns of `pixels` pixels: the same bytes, in a
+// smaller format of the same profile (header and footer of `edge` bytes each, `tail` bytes after each
+// column's pixels: the LEGACY status).
+Bytes cut_packet(const Bytes& packet, std::size_t edge, std::size_t column_header, std::size_t pixel,
+                 std::size_t tail, std::size_t pixels_from, std::size_t pixels, std::size_t columns) {
+  const std::size_t column_from = column_header + pixels_from * pixel + tail;
+  Bytes out(packet.begin(), packet.begin() + static_cast<std::ptrdiff_t>(edge));
+  for (std::size_t c = 0; c < columns; ++c) {
+    const auto col = packet.begin() + static_cast<std::ptrdiff_t>(edge + c * column_from);
+    out.insert(out.end(), col, col + static_cast<std::ptrdiff_t>(column_header + pixels * pixel));
+    const auto status = col + static_cast<std::ptrdiff_t>(column_from - tail);
+    out.insert(out.end(), status, status + static_cast<std::ptrdiff_t>(tail));
+  }
+  out.insert(out.end(), packet.end() - static_cast<std::ptrdiff_t>(edge), packet.end());
+  return out;
+}
+
+// Ouster: the format byte of ouster_packet_fuzzer.cpp, then u16-length records of packets from the
+// real captures (as recorded, or cut down to the harness's smaller formats 2 and 3).
+void write_ouster(const fs::path& dir) {
+  const auto datagrams = [](const char* capture) {
+    std::ifstream in(fs::path(RSU_SOURCE_DIR) / "tests/data/real/ouster" / capture, std::ios::binary);
+    const Bytes bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return rsu::parse_pcap(bytes).datagrams;
+  };
+  const auto seed = [&](const char* name, std::uint8_t format, const std::vector<Bytes>& packets) {
+    Bytes out{format};
+    for (const Bytes& p : packets) {
+      put_u16(out, static_cast<std::uint32_t>(p.size()));
+      out.insert(out.end(), p.begin(), p.end());
+    }
+    write_file(dir / name, out);
+  };
+  // The n-th datagram of a capture sent to `port` (7502 lidar, 7503 IMU).
+  const auto packet = [&](const char* capture, std::uint16_t port, std::size_t n) {
+    for (const rsu::UdpDatagram& d : datagrams(capture)) {
+      if (d.dst.port == port && n-- == 0) {
+        return d.payload;
+      }
+    }
+    throw std::runtime_error(std::string(capture) + ": too few packets");
+  };
+  const char* legacy = "OS-1-32-G_v2.1.1_1024x10.pcap";
+  const char* rng15 = "OS-1-128_v2.3.0_1024x10_lb_n3.pcap";
+  const char* rng19 = "OS-2-128-U1_v2.3.0_1024x10.pcap";
+  seed("os1_32_legacy", 0, {packet(legacy, 7502, 0), packet(legacy, 7502, 1)});
+  seed("os1_128_rng15_and_imu", 1, {packet(rng15, 7502, 0), packet(rng15, 7503, 0)});
+  seed("os2_128_rng19_cut_to_16_beams", 2, {cut_packet(packet(rng19, 7502, 0), 32, 12, 12, 0, 128, 16, 16)});
+  seed("os1_32_legacy_cut_to_16_beams", 3, {cut_packet(packet(legacy, 7502, 0), 0, 16, 12, 4, 32, 16, 8)});
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -219,6 +274,7 @@ int main(int argc, char** argv) {
   write_velodyne(root / "velodyne_packet");
   write_pcap(root / "pcap");
   write_pcd(root / "pcd");
+  write_ouster(root / "ouster_packet");
   std::cout << "seed corpora written to " << root << "\n";
   return 0;
 }
