@@ -2,7 +2,10 @@
 // Ethernet II, IPv4 (RFC 791, checksum RFC 1071), UDP (RFC 768).
 #include "lidar/pcap.h"
 
+#include <optional>
 #include <stdexcept>
+
+#include "lidar/ipv4_reassembly.h"
 
 namespace rsu {
 namespace {
@@ -77,10 +80,30 @@ std::uint16_t finish_checksum(std::uint32_t sum) {
   return static_cast<std::uint16_t>(~sum & 0xFFFF);
 }
 
-// One captured frame -> UDP datagram, or the reason it is not one.
-enum class FrameKind { udp, not_ipv4, not_udp, fragmented, malformed };
+// One captured frame -> UDP datagram, or the reason it is not one. A fragment is handed back in
+// `fragment` (its data a view into `frame`) for the reassembler.
+enum class FrameKind { udp, not_ipv4, not_udp, fragment, malformed };
 
-FrameKind parse_frame(std::span<const std::uint8_t> frame, std::uint32_t link_type, UdpDatagram& out) {
+// The UDP datagram in an IPv4 payload.
+FrameKind parse_udp(std::uint32_t src_ip, std::uint32_t dst_ip, std::span<const std::uint8_t> udp,
+                    UdpDatagram& out) {
+  if (udp.size() < kUdpBytes) {
+    return FrameKind::malformed;
+  }
+  const std::size_t udp_bytes = get_be16(udp, 4);
+  if (udp_bytes < kUdpBytes || udp_bytes > udp.size()) {
+    return FrameKind::malformed;
+  }
+  out.src = {src_ip, get_be16(udp, 0)};
+  out.dst = {dst_ip, get_be16(udp, 2)};
+  const auto payload = udp.subspan(kUdpBytes, udp_bytes - kUdpBytes);
+  out.payload.assign(payload.begin(), payload.end());
+  return FrameKind::udp;
+}
+
+// The IPv4 packet after the link-layer header, or why there is none.
+FrameKind link_payload(std::span<const std::uint8_t> frame, std::uint32_t link_type,
+                       std::span<const std::uint8_t>& ip) {
   std::size_t l3 = 0;
   std::uint16_t ether_type = 0;
   if (link_type == kLinkEthernet) {
@@ -106,7 +129,16 @@ FrameKind parse_frame(std::span<const std::uint8_t> frame, std::uint32_t link_ty
   if (ether_type != kEtherTypeIpv4) {
     return FrameKind::not_ipv4;
   }
-  const std::span<const std::uint8_t> ip = frame.subspan(l3);
+  ip = frame.subspan(l3);
+  return FrameKind::udp;
+}
+
+FrameKind parse_frame(std::span<const std::uint8_t> frame, std::uint32_t link_type, UdpDatagram& out,
+                      Ipv4Fragment& fragment) {
+  std::span<const std::uint8_t> ip;
+  if (const FrameKind kind = link_payload(frame, link_type, ip); kind != FrameKind::udp) {
+    return kind;
+  }
   if (ip.size() < kIpv4Bytes || (ip[0] >> 4) != 4) {
     return FrameKind::malformed;
   }
@@ -116,25 +148,22 @@ FrameKind parse_frame(std::span<const std::uint8_t> frame, std::uint32_t link_ty
   if (header_bytes < kIpv4Bytes || total_bytes < header_bytes || total_bytes > ip.size()) {
     return FrameKind::malformed;
   }
-  if ((get_be16(ip, 6) & 0x3FFF) != 0) {  // more-fragments flag or a fragment offset
-    return FrameKind::fragmented;
+  const std::uint16_t flags_offset = get_be16(ip, 6);
+  if ((flags_offset & 0x3FFF) != 0) {  // more-fragments flag or a fragment offset
+    fragment.src = get_be32(ip, 12);
+    fragment.dst = get_be32(ip, 16);
+    fragment.protocol = ip[9];
+    fragment.identification = get_be16(ip, 4);
+    fragment.offset_bytes = std::size_t{flags_offset & 0x1FFFu} * 8;
+    fragment.more_fragments = (flags_offset & 0x2000) != 0;
+    fragment.data = ip.subspan(header_bytes, total_bytes - header_bytes);
+    return FrameKind::fragment;
   }
   if (ip[9] != kProtocolUdp) {
     return FrameKind::not_udp;
   }
-  const std::span<const std::uint8_t> udp = ip.subspan(header_bytes, total_bytes - header_bytes);
-  if (udp.size() < kUdpBytes) {
-    return FrameKind::malformed;
-  }
-  const std::size_t udp_bytes = get_be16(udp, 4);
-  if (udp_bytes < kUdpBytes || udp_bytes > udp.size()) {
-    return FrameKind::malformed;
-  }
-  out.src = {get_be32(ip, 12), get_be16(udp, 0)};
-  out.dst = {get_be32(ip, 16), get_be16(udp, 2)};
-  const auto payload = udp.subspan(kUdpBytes, udp_bytes - kUdpBytes);
-  out.payload.assign(payload.begin(), payload.end());
-  return FrameKind::udp;
+  return parse_udp(get_be32(ip, 12), get_be32(ip, 16), ip.subspan(header_bytes, total_bytes - header_bytes),
+                   out);
 }
 
 }  // namespace
@@ -232,6 +261,90 @@ std::string_view to_string(PcapError error) {
   return "unknown";
 }
 
+namespace {
+
+void count(FrameKind kind, UdpDatagram&& datagram, PcapParseResult& result) {
+  switch (kind) {
+    case FrameKind::udp:
+      result.datagrams.push_back(std::move(datagram));
+      break;
+    case FrameKind::not_ipv4:
+      ++result.skipped.not_ipv4;
+      break;
+    case FrameKind::not_udp:
+      ++result.skipped.not_udp;
+      break;
+    case FrameKind::fragment:  // handled by the caller
+      break;
+    case FrameKind::malformed:
+      ++result.skipped.malformed;
+      break;
+  }
+}
+
+void finish_reassembly(Ipv4Reassembler& reassembler, PcapParseResult& result) {
+  reassembler.finish();
+  const ReassemblyStats& s = reassembler.stats();
+  result.skipped.fragmented = s.timed_out + s.overlapping + s.too_large;
+  result.reassembled = s.reassembled;
+}
+
+struct FileFormat {
+  bool big_endian = false;
+  TimeNs ns_per_fraction = kNsPerUs;
+  std::uint32_t link_type = kLinkEthernet;
+};
+
+// The records after the file header; stops at the first that does not fit (result.error).
+void read_records(std::span<const std::uint8_t> bytes, const FileFormat& format, PcapParseResult& result) {
+  const TimeNs fraction_limit = kNsPerSecond / format.ns_per_fraction;
+  Ipv4Reassembler reassembler;
+
+  std::size_t at = kFileHeaderBytes;
+  while (at < bytes.size()) {
+    if (bytes.size() - at < kRecordHeaderBytes) {
+      result.error = PcapError::truncated_record_header;
+      break;
+    }
+    const std::uint32_t seconds = get_u32(bytes, at, format.big_endian);
+    const std::uint32_t fraction = get_u32(bytes, at + 4, format.big_endian);
+    const std::uint32_t captured = get_u32(bytes, at + 8, format.big_endian);
+    if (captured > kMaxCapturedLength) {
+      result.error = PcapError::bad_record_length;
+      break;
+    }
+    at += kRecordHeaderBytes;
+    if (bytes.size() - at < captured) {
+      result.error = PcapError::truncated_record;
+      break;
+    }
+    const std::span<const std::uint8_t> frame = bytes.subspan(at, captured);
+    at += captured;
+
+    if (TimeNs{fraction} >= fraction_limit) {
+      ++result.skipped.malformed;
+      continue;
+    }
+    UdpDatagram datagram;
+    datagram.time_ns = TimeNs{seconds} * kNsPerSecond + TimeNs{fraction} * format.ns_per_fraction;
+    Ipv4Fragment fragment;
+    fragment.time_ns = datagram.time_ns;
+    FrameKind kind = parse_frame(frame, format.link_type, datagram, fragment);
+    if (kind == FrameKind::fragment) {
+      const std::optional<Ipv4Datagram> whole = reassembler.add(fragment);
+      if (!whole) {
+        continue;  // waiting for the rest (or counted by the reassembler)
+      }
+      kind = whole->protocol == kProtocolUdp ? parse_udp(whole->src, whole->dst, whole->payload, datagram)
+                                             : FrameKind::not_udp;
+    }
+    count(kind, std::move(datagram), result);
+  }
+  finish_reassembly(reassembler, result);
+}
+
+}  // namespace
+
 PcapParseResult parse_pcap(std::span<const std::uint8_t> bytes) {
   PcapParseResult result;
   if (bytes.size() < kFileHeaderBytes) {
@@ -266,53 +379,7 @@ PcapParseResult parse_pcap(std::span<const std::uint8_t> bytes) {
     result.error = PcapError::unsupported_link_type;
     return result;
   }
-  const TimeNs fraction_limit = kNsPerSecond / ns_per_fraction;
-
-  std::size_t at = kFileHeaderBytes;
-  while (at < bytes.size()) {
-    if (bytes.size() - at < kRecordHeaderBytes) {
-      result.error = PcapError::truncated_record_header;
-      return result;
-    }
-    const std::uint32_t seconds = get_u32(bytes, at, big_endian);
-    const std::uint32_t fraction = get_u32(bytes, at + 4, big_endian);
-    const std::uint32_t captured = get_u32(bytes, at + 8, big_endian);
-    if (captured > kMaxCapturedLength) {
-      result.error = PcapError::bad_record_length;
-      return result;
-    }
-    at += kRecordHeaderBytes;
-    if (bytes.size() - at < captured) {
-      result.error = PcapError::truncated_record;
-      return result;
-    }
-    const std::span<const std::uint8_t> frame = bytes.subspan(at, captured);
-    at += captured;
-
-    if (TimeNs{fraction} >= fraction_limit) {
-      ++result.skipped.malformed;
-      continue;
-    }
-    UdpDatagram datagram;
-    datagram.time_ns = TimeNs{seconds} * kNsPerSecond + TimeNs{fraction} * ns_per_fraction;
-    switch (parse_frame(frame, link_type, datagram)) {
-      case FrameKind::udp:
-        result.datagrams.push_back(std::move(datagram));
-        break;
-      case FrameKind::not_ipv4:
-        ++result.skipped.not_ipv4;
-        break;
-      case FrameKind::not_udp:
-        ++result.skipped.not_udp;
-        break;
-      case FrameKind::fragmented:
-        ++result.skipped.fragmented;
-        break;
-      case FrameKind::malformed:
-        ++result.skipped.malformed;
-        break;
-    }
-  }
+  read_records(bytes, {big_endian, ns_per_fraction, link_type}, result);
   return result;
 }
 

@@ -5,7 +5,8 @@
 // Written: magic 0xa1b2c3d4 (microsecond timestamps) in little-endian order, version 2.4, snaplen
 // 65535, link type 1 (Ethernet), each datagram as Ethernet II + IPv4 (header checksum) + UDP
 // (checksum). Read: both byte orders, microsecond or nanosecond magic, link types 1 (Ethernet,
-// optionally 802.1Q tagged) and 113 (Linux cooked capture, `tcpdump -i any`).
+// optionally 802.1Q tagged) and 113 (Linux cooked capture, `tcpdump -i any`); IPv4 fragments are
+// reassembled (ipv4_reassembly.h).
 #pragma once
 
 #include <cstdint>
@@ -59,7 +60,8 @@ std::string_view to_string(PcapError error);
 struct PcapSkipped {
   std::uint64_t not_ipv4 = 0;
   std::uint64_t not_udp = 0;
-  std::uint64_t fragmented = 0;  // IPv4 fragments (Velodyne packets are never fragmented)
+  std::uint64_t fragmented = 0;  // fragmented IPv4 datagrams that could not be put together
+                                 // (incomplete, inconsistent or oversized: ipv4_reassembly.h)
   std::uint64_t malformed = 0;   // bad IPv4/UDP header or lengths, cut by the snapshot length, bad time
 };
 
@@ -69,6 +71,9 @@ struct PcapParseResult {
   // yields its complete records, while error says that the file did not end cleanly.
   std::vector<UdpDatagram> datagrams;
   PcapSkipped skipped;
+  // UDP datagrams that arrived as IPv4 fragments and were put back together (every Ouster lidar
+  // packet on a 1500-byte link), included in `datagrams` at the capture time of their last fragment.
+  std::uint64_t reassembled = 0;
 
   bool ok() const { return error == PcapError::none; }
 };
