@@ -51,6 +51,9 @@ int run_report(const eval::CorridorExperimentConfig& config, const std::filesyst
   const std::string table = eval::format_table(scores, methods);
   std::cout << table;
   std::ofstream(out / "table.txt") << table;
+  const std::string comparison = eval::format_paper_comparison(scores, config.rsu_models);
+  std::cout << comparison;
+  std::ofstream(out / "paper_comparison.txt") << comparison;
   std::ofstream(out / "summary.json") << eval::summary_json(scores, methods);
   eval::write_frames_csv(scores, (out / "frames.csv").string());
   return 0;

@@ -4,19 +4,42 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include "common/angles.h"
+#include "eval/consistency.h"
 #include "sim/trajectory.h"
 
 namespace rsu::eval {
 namespace {
 
+// Where a file keeps the position covariance: the NDT and fused files name it sxx, syy (and sxy if
+// correlated), the corrections file cxx, cxy, cyy.
+struct CovarianceColumns {
+  std::optional<std::size_t> xx, xy, yy;
+};
+
 // A CSV file with a header row, columns looked up by name.
 struct CsvTable {
   std::vector<std::string> header;
   std::vector<std::vector<std::string>> rows;
+
+  std::optional<std::size_t> find(const std::string& name) const {
+    const auto it = std::find(header.begin(), header.end(), name);
+    return it == header.end() ? std::nullopt : std::optional(static_cast<std::size_t>(it - header.begin()));
+  }
+
+  CovarianceColumns covariance() const {
+    for (const char* prefix : {"s", "c"}) {
+      const std::string p = prefix;
+      if (find(p + "xx") && find(p + "yy"))
+        return {find(p + "xx"), find(p + "xy"), find(p + "yy")};
+    }
+    return {};
+  }
 
   std::size_t column(const std::string& name, const std::string& path) const {
     const auto it = std::find(header.begin(), header.end(), name);
@@ -70,6 +93,7 @@ std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, c
   const std::size_t ct = t.column("time_ns", path), cx = t.column("x", path), cy = t.column("y", path),
                     cyaw = t.column("yaw", path);
   const sim::Vehicle& vehicle = vehicle_of(config);
+  const CovarianceColumns cov = t.covariance();
   // The fused output (rsu-vehicle) has a row after each NDT pose and after each correction: score the
   // ones at the NDT poses' times, so that fused and NDT are compared frame for frame.
   const auto source_it = std::find(t.header.begin(), t.header.end(), "source");
@@ -87,6 +111,15 @@ std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, c
     e.along_road_m = truth.x - config.scenario.lidar.mount.x;
     e.error_m = std::hypot(x - truth.x, y - truth.y);
     e.yaw_error_deg = box_yaw ? axis_error_deg(yaw, truth.yaw) : rad_to_deg(angle_distance(yaw, truth.yaw));
+    e.position_nees = std::numeric_limits<double>::quiet_NaN();
+    const auto cell = [&](std::optional<std::size_t> c) {
+      return c && *c < row.size() ? std::stod(row[*c]) : 0.0;
+    };
+    if (cov.xx && cov.yy) {
+      Eigen::Matrix2d p;
+      p << cell(cov.xx), cell(cov.xy), cell(cov.xy), cell(cov.yy);
+      e.position_nees = position_nees(Eigen::Vector2d(x - truth.x, y - truth.y), p);
+    }
     out.push_back(e);
   }
   return out;
@@ -94,19 +127,61 @@ std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, c
 
 const std::pair<const char*, double> kRanges[] = {{"pm36", 36.0}, {"pm50", 50.0}};
 
+double range_half(const std::string& range) {
+  for (const auto& [name, half] : kRanges) {
+    if (range == name)
+      return half;
+  }
+  return 0.0;
+}
+
+// The paper's Table 2 (mean absolute error, m) for -36..36 m and -50..50 m.
+struct PaperRow {
+  double ndt, vlp16, vlp32c;
+};
+constexpr PaperRow kPaper[] = {{0.1927, 0.1724, 0.124}, {0.1704, 0.4596, 0.1167}};
+
 std::string fmt(double v, int precision = 4) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.*f", precision, v);
   return buf;
 }
 
+std::string json_number(double v) {
+  return std::isfinite(v) ? fmt(v, 6) : std::string("null");
+}
+
+std::string percent(double share) {
+  return std::isfinite(share) ? fmt(100.0 * share, 1) + " %" : std::string("-");
+}
+
+// "rsu_vlp16", "fused_vlp16", ... -> "vlp16", ... in order, once each.
+std::vector<std::string> methods_rsu_models(const std::vector<std::string>& methods) {
+  std::vector<std::string> models;
+  for (const std::string& m : methods) {
+    if (m.rfind("rsu_", 0) == 0)
+      models.push_back(m.substr(4));
+  }
+  return models;
+}
+
 }  // namespace
 
-ErrorStats error_stats(const std::vector<double>& errors) {
+ErrorStats error_stats(const std::vector<double>& errors, const std::vector<double>& nees) {
   ErrorStats s;
   s.count = errors.size();
+  s.beyond_3sigma = std::numeric_limits<double>::quiet_NaN();
   if (errors.empty())
     return s;
+  std::size_t stated = 0, beyond = 0;
+  for (const double n : nees) {
+    if (std::isfinite(n)) {
+      ++stated;
+      beyond += n > kChi2TwoDof3Sigma ? 1 : 0;
+    }
+  }
+  if (stated > 0)
+    s.beyond_3sigma = static_cast<double>(beyond) / static_cast<double>(stated);
   std::vector<double> sorted = errors;
   std::sort(sorted.begin(), sorted.end());
   double sum = 0, sum_sq = 0;
@@ -135,12 +210,14 @@ ExperimentScores score_experiment(const CorridorExperimentConfig& config, const 
   }
   for (const auto& [method, estimates] : scores.estimates) {
     for (const auto& [range, half] : kRanges) {
-      std::vector<double> errors;
+      std::vector<double> errors, nees;
       for (const auto& e : estimates) {
-        if (std::abs(e.along_road_m) <= half)
+        if (std::abs(e.along_road_m) <= half) {
           errors.push_back(e.error_m);
+          nees.push_back(e.position_nees);
+        }
       }
-      scores.stats[method][range] = error_stats(errors);
+      scores.stats[method][range] = error_stats(errors, nees);
     }
   }
   for (const auto& [range, half] : kRanges) {
@@ -160,18 +237,75 @@ std::string format_table(const ExperimentScores& scores, const std::vector<std::
   for (const auto& [range, half] : kRanges) {
     out << "range -" << half << " m to " << half << " m along the road (" << scores.frames_in_range.at(range)
         << " frames):\n";
-    out << "  method          fixes      MAE m     RMSE m      p95 m      max m\n";
+    out << "  method          fixes      MAE m     RMSE m      p95 m      max m  beyond 3 sigma\n";
     for (const std::string& m : methods) {
       const auto it = scores.stats.find(m);
       if (it == scores.stats.end())
         continue;
       const ErrorStats& s = it->second.at(range);
       char line[160];
-      std::snprintf(line, sizeof line, "  %-14s %6zu %10s %10s %10s %10s\n", m.c_str(), s.count,
+      std::snprintf(line, sizeof line, "  %-14s %6zu %10s %10s %10s %10s  %13s\n", m.c_str(), s.count,
                     fmt(s.mae_m, 3).c_str(), fmt(s.rmse_m, 3).c_str(), fmt(s.p95_m, 3).c_str(),
-                    fmt(s.max_m, 3).c_str());
+                    fmt(s.max_m, 3).c_str(), percent(s.beyond_3sigma).c_str());
       out << line;
     }
+  }
+  return out.str();
+}
+
+std::vector<FusedGoals> fused_goals(const ExperimentScores& scores,
+                                    const std::vector<std::string>& rsu_models) {
+  std::vector<FusedGoals> out;
+  for (const std::string& m : rsu_models) {
+    const auto fused = scores.stats.find("fused_" + m);
+    const auto rsu = scores.stats.find("rsu_" + m);
+    const auto ndt = scores.stats.find("ndt");
+    if (fused == scores.stats.end() || rsu == scores.stats.end() || ndt == scores.stats.end())
+      continue;
+    for (const auto& [range, half] : kRanges) {
+      FusedGoals g;
+      g.rsu_model = m;
+      g.range = range;
+      g.fused_mae_m = fused->second.at(range).mae_m;
+      g.ndt_mae_m = ndt->second.at(range).mae_m;
+      const ErrorStats& r = rsu->second.at(range);
+      g.best_mae_m = r.count > 0 ? std::min(g.ndt_mae_m, r.mae_m) : g.ndt_mae_m;
+      g.reduction_vs_ndt = g.ndt_mae_m > 0 ? 1.0 - g.fused_mae_m / g.ndt_mae_m : 0.0;
+      out.push_back(g);
+    }
+  }
+  return out;
+}
+
+std::string format_paper_comparison(const ExperimentScores& scores,
+                                    const std::vector<std::string>& rsu_models) {
+  std::ostringstream out;
+  out << "MAE (m), the paper's Table 2 beside this run (paper / here):\n";
+  out << "  range            NDT self-loc.    RSU VLP-16       RSU VLP-32C      fused VLP-16  fused "
+         "VLP-32C\n";
+  const auto here = [&](const std::string& method, const char* range) {
+    const auto it = scores.stats.find(method);
+    return it == scores.stats.end() || it->second.at(range).count == 0 ? std::string("-")
+                                                                       : fmt(it->second.at(range).mae_m, 3);
+  };
+  for (const auto& [range, half] : kRanges) {
+    const PaperRow& p = range == std::string("pm36") ? kPaper[0] : kPaper[1];
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "  -%.0f m to %.0f m   %6.3f / %-6s  %6.3f / %-6s  %6.3f / %-6s  %12s  %13s\n", half, half,
+                  p.ndt, here("ndt", range).c_str(), p.vlp16, here("rsu_vlp16", range).c_str(), p.vlp32c,
+                  here("rsu_vlp32c", range).c_str(), here("fused_vlp16", range).c_str(),
+                  here("fused_vlp32c", range).c_str());
+    out << line;
+  }
+  out << "The vehicle's fused pose against NDT alone and against the better of NDT and the RSU (MAE):\n";
+  for (const FusedGoals& g : fused_goals(scores, rsu_models)) {
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "  fused %-7s -%2.0f m to %2.0f m: %5.1f %% below NDT; %.3f m vs the better's %.3f m: %s\n",
+                  g.rsu_model.c_str(), range_half(g.range), range_half(g.range), 100.0 * g.reduction_vs_ndt,
+                  g.fused_mae_m, g.best_mae_m, g.fused_mae_m <= g.best_mae_m + 0.0005 ? "no worse" : "WORSE");
+    out << line;
   }
   return out.str();
 }
@@ -179,8 +313,8 @@ std::string format_table(const ExperimentScores& scores, const std::vector<std::
 std::string summary_json(const ExperimentScores& scores, const std::vector<std::string>& methods) {
   std::ostringstream out;
   out << "{\n";
-  const char* fields[] = {"mae_m", "rmse_m", "p95_m", "max_m", "count"};
-  for (int f = 0; f < 5; ++f) {
+  const char* fields[] = {"mae_m", "rmse_m", "p95_m", "max_m", "count", "position_beyond_3sigma"};
+  for (int f = 0; f < 6; ++f) {
     out << "  \"" << fields[f] << "\": {";
     bool first_method = true;
     for (const std::string& m : methods) {
@@ -196,14 +330,34 @@ std::string summary_json(const ExperimentScores& scores, const std::vector<std::
                          : f == 1 ? s.rmse_m
                          : f == 2 ? s.p95_m
                          : f == 3 ? s.max_m
-                                  : static_cast<double>(s.count);
-        out << (first_range ? "" : ", ") << '"' << range << "\": " << (f == 4 ? fmt(v, 0) : fmt(v, 6));
+                         : f == 4 ? static_cast<double>(s.count)
+                                  : s.beyond_3sigma;
+        out << (first_range ? "" : ", ") << '"' << range << "\": " << (f == 4 ? fmt(v, 0) : json_number(v));
         first_range = false;
       }
       out << "}";
     }
-    out << "}" << (f < 4 ? "," : "") << "\n";
+    out << "},\n";
   }
+  out << "  \"paper_mae_m\": {\"ndt\": {\"pm36\": " << kPaper[0].ndt << ", \"pm50\": " << kPaper[1].ndt
+      << "}, \"rsu_vlp16\": {\"pm36\": " << kPaper[0].vlp16 << ", \"pm50\": " << kPaper[1].vlp16
+      << "}, \"rsu_vlp32c\": {\"pm36\": " << kPaper[0].vlp32c << ", \"pm50\": " << kPaper[1].vlp32c
+      << "}},\n";
+  // Per RSU model and range: the fused MAE's reduction against NDT alone and against the better of NDT and
+  // the RSU (negative: the fused pose is worse than that better one).
+  out << "  \"fused_goals\": {";
+  std::string model;
+  for (const FusedGoals& g : fused_goals(scores, methods_rsu_models(methods))) {
+    if (g.rsu_model != model) {
+      out << (model.empty() ? "" : "}, ") << "\"fused_" << g.rsu_model << "\": {";
+      model = g.rsu_model;
+    } else {
+      out << ", ";
+    }
+    out << '"' << g.range << "\": {\"reduction_vs_ndt\": " << json_number(g.reduction_vs_ndt)
+        << ", \"better_of_ndt_and_rsu_mae_m\": " << json_number(g.best_mae_m) << "}";
+  }
+  out << (model.empty() ? "}\n" : "}}\n");
   out << "}\n";
   return out.str();
 }

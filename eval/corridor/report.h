@@ -1,6 +1,8 @@
 // Scores the realistic experiment against the scenario's truth and writes the paper's table (Table 2:
-// mean absolute error for +-36 m and +-50 m along the road) with RMSE, 95th percentile and maximum,
-// every frame's error (frames.csv) and summary.json.
+// mean absolute error for +-36 m and +-50 m along the road) with RMSE, 95th percentile, maximum and the
+// share of estimates beyond 3 sigma of their own stated covariance, the same MAE beside the paper's,
+// how the fused pose compares with NDT and the RSU alone, every frame's error (frames.csv) and
+// summary.json.
 #pragma once
 
 #include <map>
@@ -17,11 +19,13 @@ struct ScoredEstimate {
   double along_road_m = 0;   // true x relative to the RSU LiDAR
   double error_m = 0;        // planar position error
   double yaw_error_deg = 0;  // mod 180 for RSU fixes (a box has no front)
+  double position_nees = 0;  // against the estimate's own stated covariance (eval/consistency.h)
 };
 
 struct ErrorStats {
   std::size_t count = 0;
   double mae_m = 0, rmse_m = 0, p95_m = 0, max_m = 0;
+  double beyond_3sigma = 0;  // share of the estimates with a position NEES beyond the 3-sigma bound
 };
 
 struct ExperimentScores {
@@ -33,14 +37,30 @@ struct ExperimentScores {
   std::map<std::string, std::size_t> frames_in_range;
 };
 
+// How the fused pose of one RSU model compares in one range with NDT alone and with the better of NDT and
+// that RSU.
+struct FusedGoals {
+  std::string rsu_model, range;
+  double fused_mae_m = 0, ndt_mae_m = 0;
+  double best_mae_m = 0;        // the better of NDT's and the RSU's MAE (NDT's if the RSU had no fix)
+  double reduction_vs_ndt = 0;  // 1 - fused / NDT
+};
+std::vector<FusedGoals> fused_goals(const ExperimentScores& scores,
+                                    const std::vector<std::string>& rsu_models);
+
 // Reads <dir>/ndt.csv and, per RSU model m, <dir>/corrections_<m>.csv and <dir>/fused_<m>.csv (columns
 // named in their header rows; time_ns, x, y, yaw required). Missing files are reported as errors.
 ExperimentScores score_experiment(const CorridorExperimentConfig& config, const std::string& dir);
 
-ErrorStats error_stats(const std::vector<double>& errors);
+// Statistics of the errors; nees (empty, or one per error) gives beyond_3sigma.
+ErrorStats error_stats(const std::vector<double>& errors, const std::vector<double>& nees = {});
 
 // The table as text, and summary.json.
 std::string format_table(const ExperimentScores& scores, const std::vector<std::string>& methods);
+// The MAE beside the paper's Table 2, and for each RSU model whether the fused pose meets the goals: at
+// least 80 % below NDT's error, and no worse than the better of NDT and that RSU, in each range.
+std::string format_paper_comparison(const ExperimentScores& scores,
+                                    const std::vector<std::string>& rsu_models);
 std::string summary_json(const ExperimentScores& scores, const std::vector<std::string>& methods);
 void write_frames_csv(const ExperimentScores& scores, const std::string& path);
 

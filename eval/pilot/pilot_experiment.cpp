@@ -167,7 +167,7 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
       cell.improved_sigma_m = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
       cell.improved_yaw_sigma_deg = rad_to_deg(std::sqrt(std::max(0.0, improved.covariance(2, 2))));
       const Eigen::Vector2d error = Eigen::Vector2d(improved.pose.x, improved.pose.y) - truth_xy;
-      cell.improved_position_nees = error.dot(improved.covariance.topLeftCorner<2, 2>().ldlt().solve(error));
+      cell.improved_position_nees = position_nees(error, improved.covariance.topLeftCorner<2, 2>());
     } else {
       cell.improved_center_err_m = cell.improved_yaw_err_deg = cell.improved_sigma_m = kNaN;
       cell.improved_yaw_sigma_deg = cell.improved_position_nees = kNaN;

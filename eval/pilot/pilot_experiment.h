@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/time.h"
+#include "eval/consistency.h"
 #include "sim/scene.h"
 
 namespace rsu::eval {
@@ -84,8 +85,6 @@ struct ConsistencySummary {
   double mean_position_sigma_m = 0;
   double position_beyond_3sigma = 0;
 };
-// 2-dof chi-square quantile of 99.73 %: -2 ln(1 - 0.9973).
-inline constexpr double kChi2TwoDof3Sigma = 11.83;
 ConsistencySummary summarize_consistency(const PilotResult& result);
 
 void write_cells_csv(const PilotResult& result, const std::string& path, bool append);
