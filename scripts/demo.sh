@@ -5,9 +5,11 @@
 #      fed with Velodyne packets by the simulator, and the real vehicle client announcing, receiving
 #      corrections and fusing them, every V2I message signed (Ed25519) with keys rsu-keygen makes into
 #      out/corridor/keys/; prints the paper's table and writes the figures;
-#   2. the paper's pilot experiment (Sec. 3.1): heat maps over distance x yaw, both LiDAR models;
-#   3. one simulated frame of the street as PCD, pcap and a top-down picture;
-#   4. two RSUs on one DDS bus hand a driving vehicle over: two rsud, two simulated LiDARs 40 m apart, one
+#   2. the same experiment in the degraded corridor, the paper's street as it describes it (a road between
+#      two tall buildings where NDT degrades along the road): its table beside the paper's, its figures;
+#   3. the paper's pilot experiment (Sec. 3.1): heat maps over distance x yaw, both LiDAR models;
+#   4. one simulated frame of the street as PCD, pcap and a top-down picture;
+#   5. two RSUs on one DDS bus hand a driving vehicle over: two rsud, two simulated LiDARs 40 m apart, one
 #      rsu-vehicle announcing to the first RSU only; prints corrections per RSU, gaps, jumps, errors.
 # Everything goes to out/ (override with OUT=...).
 set -euo pipefail
@@ -23,22 +25,28 @@ cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud r
 echo "== 1. realistic experiment: corridor street, NDT vs RSU vs fused (paper Sec. 4) =="
 $PY eval/corridor/run_experiment.py --build build --out "$OUT/corridor"
 
-echo "== 2. pilot experiment: 75 distances x 180 yaw angles, VLP-16 and VLP-32C (paper Sec. 3.1) =="
+echo "== 2. realistic experiment in the degraded corridor: NDT degrades between two tall buildings =="
+$PY eval/corridor/run_experiment.py --build build --experiment scenarios/corridor_degraded_experiment.yaml \
+  --out "$OUT/corridor_degraded"
+
+echo "== 3. pilot experiment: 75 distances x 180 yaw angles, VLP-16 and VLP-32C (paper Sec. 3.1) =="
 build/eval/rsu-pilot --out "$OUT/pilot"
 $PY eval/plots/pilot_heatmaps.py "$OUT/pilot" >/dev/null
 echo "heat maps: $OUT/pilot/<model>_<metric>.png; every cell: $OUT/pilot/cells.csv; $OUT/pilot/summary.json"
 
-echo "== 3. one frame of the street: PCD, Velodyne pcap, top-down picture =="
+echo "== 4. one frame of the street: PCD, Velodyne pcap, top-down picture =="
 build/tools/rsu-sim simulate scenarios/corridor.yaml --out "$OUT/sim" | tail -3
 $PY eval/plots/topdown.py "$OUT/sim"
 
-echo "== 4. two RSUs on one DDS bus hand a driving vehicle over (issue 6) =="
+echo "== 5. two RSUs on one DDS bus hand a driving vehicle over (issue 6) =="
 $PY tests/integration/handover_integration.py --rsud build/daemon/rsud --rsu-sim build/tools/rsu-sim \
   --vehicle build/vehicle_client/rsu-vehicle --keygen build/tools/rsu-keygen --work "$OUT/handover" |
   tee "$OUT/handover_summary.txt"
 echo "every correction: $OUT/handover/corrections.csv; logs and stats of both rsud: $OUT/handover/"
 
-echo
-echo "== the realistic experiment's table (also $OUT/corridor/table.txt) =="
-cat "$OUT/corridor/table.txt"
-echo "figures: $OUT/corridor/error_vs_position.png, $OUT/corridor/error_boxplot.png"
+for street in corridor corridor_degraded; do
+  echo
+  echo "== the realistic experiment in the street $street (also $OUT/$street/table.txt, paper_comparison.txt) =="
+  cat "$OUT/$street/table.txt" "$OUT/$street/paper_comparison.txt"
+  echo "figures: $OUT/$street/error_vs_position.png, $OUT/$street/error_boxplot.png"
+done

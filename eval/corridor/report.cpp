@@ -302,8 +302,9 @@ std::string format_paper_comparison(const ExperimentScores& scores,
   for (const FusedGoals& g : fused_goals(scores, rsu_models)) {
     char line[200];
     std::snprintf(line, sizeof line,
-                  "  fused %-7s -%2.0f m to %2.0f m: %5.1f %% below NDT; %.3f m vs the better's %.3f m: %s\n",
-                  g.rsu_model.c_str(), range_half(g.range), range_half(g.range), 100.0 * g.reduction_vs_ndt,
+                  "  fused %-7s -%2.0f m to %2.0f m: %5.1f %% %s NDT; %.3f m vs the better's %.3f m: %s\n",
+                  g.rsu_model.c_str(), range_half(g.range), range_half(g.range),
+                  100.0 * std::abs(g.reduction_vs_ndt), g.reduction_vs_ndt >= 0 ? "below" : "ABOVE",
                   g.fused_mae_m, g.best_mae_m, g.fused_mae_m <= g.best_mae_m + 0.0005 ? "no worse" : "WORSE");
     out << line;
   }
