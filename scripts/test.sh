@@ -8,7 +8,9 @@
 #   ASan+UBSan  every test (memory errors and UB anywhere, our parsers above all) but those labelled
 #               `throughput` (the load smoke and the mis-association run): they assert the speed of an
 #               uninstrumented rsud (p99 latency, RSS slope, VLP-32C service rate), which ASan's
-#               slowdown and quarantine defeat; their code paths run in the other tests
+#               slowdown and quarantine defeat; their code paths run in the other tests; nor those
+#               labelled `experiment` (a whole experiment's computation, e.g. NDT over a drive: 11 s in
+#               Release, 100 s under ASan; its parts run under ASan in the shorter tests)
 #   TSan        only the tests labelled `threads` (tests/CMakeLists.txt): the vehicle client (io
 #               thread), the pilot's workers, the DDS wrapper (Cyclone's threads), and rsud as a
 #               process (integration tests, DDS peers); not those also labelled `realtime` (fault,
@@ -55,7 +57,7 @@ if [ "${1:-}" != "--quick" ]; then
   begin "ASan+UBSan tests"
   # Leak checking stays on; halt_on_error makes any report a test failure.
   ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE throughput
+    ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE "throughput|experiment"
   end "ASan+UBSan tests"
 
   begin "TSan build"
