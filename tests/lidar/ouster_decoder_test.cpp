@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+
+#include <Eigen/Geometry>
 #include <functional>
 #include <numbers>
 #include <stdexcept>
@@ -142,6 +144,34 @@ TEST(OusterDecoder, EveryPixelMatchesTheManualFormula) {
       ASSERT_EQ(pts[i].ring, row);
       ASSERT_EQ(pts[i].time_ns, static_cast<TimeNs>(kT0 + static_cast<std::uint64_t>(c) * kDt));
     }
+  }
+}
+
+// A sensor mounted tilted in its own metadata (lidar_to_sensor not only about z): the azimuth is then
+// the direction's, not the column's angle plus the beam's offset.
+TEST(OusterDecoder, TiltedLidarToSensorTransform) {
+  Metadata m = simple_metadata();
+  const double tilt = 10 * kPi / 180;  // about x
+  Eigen::Matrix4d t = m.lidar_to_sensor;
+  t.block<3, 3>(0, 0) = Eigen::Matrix3d(Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX())) *
+                        m.lidar_to_sensor.block<3, 3>(0, 0);
+  m.lidar_to_sensor = t;
+  Decoder d(m);
+  PacketBuilder p(m, 7, 200, kT0, kDt);
+  p.set_range(3, 2, 20'000);
+  p.set_range(3, 2 + 1, 20'000);
+  const std::vector<LidarPoint> pts = decode_one(d, p.bytes(), PacketResult::accepted);
+  ASSERT_EQ(pts.size(), 2U);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const int row = 2 + static_cast<int>(i);
+    const Eigen::Vector3d want = manual_point(m, row, 203, 20'000);
+    EXPECT_NEAR(pts[i].x, want.x(), 1e-5);
+    EXPECT_NEAR(pts[i].y, want.y(), 1e-5);
+    EXPECT_NEAR(pts[i].z, want.z(), 1e-5);
+    const Eigen::Vector3d beam = want - manual_point(m, row, 203, 10'000);
+    EXPECT_NEAR(
+        std::remainder(static_cast<double>(pts[i].azimuth_rad) - std::atan2(-beam.y(), beam.x()), 2 * kPi),
+        0.0, 1e-5);
   }
 }
 

@@ -27,6 +27,13 @@ BeamGeometry::BeamGeometry(const Metadata& metadata)
     cos_altitude_.push_back(std::cos(altitude));
     sin_altitude_.push_back(std::sin(altitude));
   }
+  columns_ = columns;
+  const bool about_z = rotation_.row(2).isApprox(Eigen::RowVector3d(0, 0, 1)) &&
+                       rotation_.col(2).isApprox(Eigen::Vector3d(0, 0, 1));
+  for (std::size_t r = 0; about_z && r < cos_altitude_.size(); ++r) {
+    const Eigen::Vector3d d = direction(static_cast<int>(r), 0);
+    row_azimuth_rad_.push_back(std::atan2(-d.y(), d.x()));
+  }
 }
 
 Eigen::Vector3d BeamGeometry::lidar_direction(int row, int measurement_id) const {
@@ -51,6 +58,10 @@ Eigen::Vector3d BeamGeometry::point(int row, int measurement_id, double range_mm
 }
 
 double BeamGeometry::azimuth_rad(int row, int measurement_id) const {
+  if (!row_azimuth_rad_.empty()) {
+    return wrap_angle_positive(row_azimuth_rad_[static_cast<std::size_t>(row)] +
+                               2.0 * kPi * measurement_id / columns_);
+  }
   const Eigen::Vector3d d = direction(row, measurement_id);
   return wrap_angle_positive(std::atan2(-d.y(), d.x()));  // clockwise: y is left
 }

@@ -44,6 +44,10 @@ class BeamGeometry {
   std::vector<double> cos_encoder_, sin_encoder_;  // per column
   std::vector<double> cos_offset_, sin_offset_;    // per row: theta_a
   std::vector<double> cos_altitude_, sin_altitude_;
+  // When lidar_to_sensor turns only about z (it commutes with the encoder's turn): each row's beam
+  // azimuth at column 0; column m's is 2 pi m / W further clockwise. Empty otherwise (atan2 per point).
+  std::vector<double> row_azimuth_rad_;
+  int columns_ = 0;
   double beam_x_mm_ = 0.0;
   double beam_z_mm_ = 0.0;
   double beam_length_mm_ = 0.0;  // |n|: range measured from this far behind the beam origin
