@@ -160,9 +160,9 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
     const YamlField m = f.child("correction");
     const std::string v = m.text();
     if (v == "improved")
-      p.correction_method = perception::CorrectionMethod::improved;
+      p.fix.method = perception::CorrectionMethod::improved;
     else if (v == "algorithm1")
-      p.correction_method = perception::CorrectionMethod::algorithm1;
+      p.fix.method = perception::CorrectionMethod::algorithm1;
     else
       m.fail("expected improved or algorithm1, got \"" + v + "\"");
   }

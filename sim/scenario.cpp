@@ -288,4 +288,26 @@ Scenario load_scenario_file(const std::string& path) {
   }
 }
 
+NamedVehicleShape parse_vehicle_shape(std::string_view yaml_text, const std::string& source_name) {
+  try {
+    const YamlField root(io::parse_yaml(std::string(yaml_text), source_name), "", source_name, 1);
+    root.expect_map({"name", "shape"});
+    NamedVehicleShape out;
+    if (root.has("name"))
+      out.name = root.child("name").text();
+    out.shape = read_shape(root.required("shape"));
+    return out;
+  } catch (const io::YamlError& e) {
+    throw ScenarioError(e.what());
+  }
+}
+
+NamedVehicleShape load_vehicle_shape_file(const std::string& path) {
+  try {
+    return parse_vehicle_shape(io::read_text_file(path), path);
+  } catch (const io::YamlError& e) {
+    throw ScenarioError(e.what());
+  }
+}
+
 }  // namespace rsu::sim

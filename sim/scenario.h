@@ -16,19 +16,19 @@ namespace rsu::sim {
 
 struct LidarConfig {
   std::string model_name = "vlp16";
-  SensorModel model;           // resolved from model_name (and rpm)
-  Pose3 mount;                 // sensor pose in the map frame
+  SensorModel model;  // resolved from model_name (and rpm)
+  Pose3 mount;        // sensor pose in the map frame
   NoiseModel noise;
   double start_azimuth_deg = 0.0;
 };
 
 struct Scenario {
   std::string name;
-  std::string source;          // file the scenario was read from
+  std::string source;  // file the scenario was read from
   LidarConfig lidar;
   Scene scene;
-  TimeNs start_ns = 0;         // time of the first simulated frame
-  int frames = 10;             // how many frames the main command simulates
+  TimeNs start_ns = 0;  // time of the first simulated frame
+  int frames = 10;      // how many frames the main command simulates
 };
 
 class ScenarioError : public std::runtime_error {
@@ -39,5 +39,15 @@ class ScenarioError : public std::runtime_error {
 // Throws ScenarioError with "<source>:<line>: <field path>: <what is wrong>".
 Scenario parse_scenario(std::string_view yaml_text, const std::string& source_name);
 Scenario load_scenario_file(const std::string& path);
+
+// A vehicle body on its own: a YAML map holding `shape:` with the scenario files' vehicle shape fields
+// (length, width, height, belt_height, ...; sim/scene.h VehicleShape), and optionally `name:`.
+// Throws ScenarioError located as above.
+struct NamedVehicleShape {
+  std::string name;
+  VehicleShape shape;
+};
+NamedVehicleShape parse_vehicle_shape(std::string_view yaml_text, const std::string& source_name);
+NamedVehicleShape load_vehicle_shape_file(const std::string& path);
 
 }  // namespace rsu::sim

@@ -43,7 +43,7 @@ const rsu::bench::CorridorFrames& frames(int model) {
 }
 
 VehicleSize vehicle_size(const rsu::bench::CorridorFrames& f) {
-  return {f.vehicle_shape.length, f.vehicle_shape.width};
+  return {f.vehicle_shape.length, f.vehicle_shape.width, f.vehicle_shape.height};
 }
 
 // The vehicle's own yaw estimate as it would announce it, a few degrees off.
@@ -52,7 +52,7 @@ YawPrior vehicle_prior(const rsu::bench::CorridorFrames& f) {
 }
 
 PerceptionPipeline make_pipeline(const rsu::bench::CorridorFrames& f, const PerceptionConfig& config = {}) {
-  PerceptionPipeline p(config, f.lidar_xy);
+  PerceptionPipeline p(config, f.lidar_position);
   for (const auto& b : f.background) {
     p.add_background_frame(b);
   }
@@ -74,7 +74,7 @@ void BM_Pipeline(benchmark::State& state, int model) {
     const PerceptionResult result = pipeline.process(f.frame);
     for (const auto& object : result.objects) {
       if (object.fit.ok()) {
-        benchmark::DoNotOptimize(pipeline.correct(object, vehicle_size(f), vehicle_prior(f)));
+        benchmark::DoNotOptimize(pipeline.correct(object, {vehicle_size(f), vehicle_prior(f)}));
       }
     }
     objects = result.objects.size();
@@ -92,7 +92,7 @@ void BM_PipelineReferenceFrame(benchmark::State& state, int model) {
     const PerceptionResult result = pipeline.process(f.frame);
     for (const auto& object : result.objects) {
       if (object.fit.ok()) {
-        benchmark::DoNotOptimize(pipeline.correct(object, vehicle_size(f), vehicle_prior(f)));
+        benchmark::DoNotOptimize(pipeline.correct(object, {vehicle_size(f), vehicle_prior(f)}));
       }
     }
     objects = result.objects.size();

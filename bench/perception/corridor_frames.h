@@ -19,6 +19,7 @@ namespace rsu::bench {
 struct CorridorFrames {
   std::string model_name;
   Eigen::Vector2d lidar_xy = Eigen::Vector2d::Zero();
+  Eigen::Vector3d lidar_position = Eigen::Vector3d::Zero();
   std::vector<std::vector<LidarPoint>> background;  // frames without vehicles
   std::vector<LidarPoint> frame;                    // the vehicle in view
   Pose2 vehicle_pose;                               // at the frame's middle
@@ -48,6 +49,7 @@ inline CorridorFrames make_corridor_frames(const std::string& model_name, double
   model.rpm = scenario.lidar.model.rpm;
   const Pose3& mount = scenario.lidar.mount;
   out.lidar_xy = Eigen::Vector2d(mount.x, mount.y);
+  out.lidar_position = Eigen::Vector3d(mount.x, mount.y, mount.z);
 
   sim::Scene empty = scenario.scene;
   empty.vehicles.clear();

@@ -1,17 +1,20 @@
-// The paper's pilot experiment (Sec. 3.1, Table 1; DESIGN.md §2), reproduced: a LiDAR 2 m above an
-// empty ground plane, the vehicle spinning about its centre at 20 deg/s while the LiDAR runs at 10 Hz
-// (2 deg per frame), one full turn per distance, distances 3 m to 40 m in 0.5 m steps. Each frame is a
-// cell (distance, yaw) of the paper's heat maps; every cell is measured three ways: the raw L-shape box
-// (`lshape`), Algorithm 1 (`algorithm1`) and the improved correction (`improved`, given a yaw prior with
-// a uniform error of up to +-prior_error_deg).
+// The paper's pilot experiment (Sec. 3.1, Table 1; DESIGN.md §2), reproduced: a LiDAR above an empty
+// ground plane (2 m in the paper), the vehicle spinning about its centre at 20 deg/s while the LiDAR runs
+// at 10 Hz (2 deg per frame), one full turn per distance, distances 3 m to 40 m in 0.5 m steps. Each
+// frame is a cell (distance, yaw) of the paper's heat maps; every cell is measured three ways, all
+// through the fix function rsud runs (perception::fix_vehicle) with rsud's configuration: the raw
+// L-shape box the fix starts from (`lshape`), Algorithm 1 (`algorithm1`) and the improved correction
+// (`improved`, given a yaw prior with a uniform error of up to +-prior_error_deg).
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "common/time.h"
-#include "eval/consistency.h"
+#include "perception/vehicle_fix.h"
 #include "sim/scene.h"
 
 namespace rsu::eval {
@@ -26,9 +29,31 @@ struct PilotConfig {
   double prior_error_deg = 10.0;        // the improved correction's yaw prior error bound (issue target)
   double prior_sigma_deg = 10.0;        // the sigma the prior is announced with
   double ground_filter_height_m = 0.2;  // the pilot's "drop zero-height points"
+  std::string vehicle_name = "suv";     // for reports
   sim::VehicleShape vehicle;            // Lexus RX450h by default
   sim::NoiseModel noise;                // DESIGN.md §2 defaults
+  // The fix's configuration: rsud's (the library defaults, deploy/rsud.yaml). The method field is
+  // overridden per measured method.
+  perception::VehicleFixConfig fix;
   int threads = 2;
+};
+
+enum class PilotMethod { lshape, algorithm1, improved };
+inline constexpr std::array<PilotMethod, 3> kPilotMethods = {PilotMethod::lshape, PilotMethod::algorithm1,
+                                                             PilotMethod::improved};
+const char* to_string(PilotMethod method);
+
+// One method's result in one cell; NaN where there is no fix (or, for lshape, no covariance).
+struct MethodCell {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  double center_err_m = kNaN;
+  double yaw_err_deg = kNaN;    // length axis vs the true one, mod 180, in [0, 90]
+  double sigma_m = kNaN;        // sqrt of the larger eigenvalue of the stated position covariance
+  double yaw_sigma_deg = kNaN;  // sqrt of the stated yaw variance
+  double position_nees = kNaN;  // e^T P^-1 e of the centre error against the stated covariance
+  std::string status;           // "ok" or why there is no fix (perception::CorrectionStatus)
+
+  bool fixed() const { return status == "ok"; }
 };
 
 // One frame of the experiment.
@@ -39,55 +64,26 @@ struct PilotCell {
   TimeNs sweep_ns = 0;     // median firing time of the vehicle's points
   std::size_t points = 0;  // foreground points (all on the vehicle: the scene is empty)
   bool fit_ok = false;
-  double lshape_center_err_m = 0;  // NaN when no fit
-  double area_err_m2 = 0;          // fitted area - true area
-  double lshape_yaw_err_deg = 0;   // longer fitted edge vs the true length axis, mod 180, in [0, 90]
-  double alg1_center_err_m = 0;
-  double alg1_yaw_err_deg = 0;
-  double improved_center_err_m = 0;
-  double improved_yaw_err_deg = 0;
-  double improved_sigma_m = 0;        // sqrt of the larger eigenvalue of the reported position covariance
-  double improved_yaw_sigma_deg = 0;  // sqrt of the reported yaw variance
-  double improved_position_nees = 0;  // e^T P^-1 e of the centre error against the reported covariance
-  std::string improved_resolution;
+  double area_err_m2 = MethodCell::kNaN;  // fitted area - true area
+  std::array<MethodCell, 3> methods;      // indexed by PilotMethod
+  std::string improved_resolution;        // how the improved correction settled length vs width
+
+  const MethodCell& of(PilotMethod m) const { return methods[static_cast<std::size_t>(m)]; }
+  const MethodCell& improved() const { return of(PilotMethod::improved); }
 };
 
 struct PilotResult {
   PilotConfig config;
   int frames_per_turn = 0;
   std::vector<double> distances;
+  // Distances left out because the vehicle, spinning there, would reach into a LiDAR mounted lower
+  // than its roof (the LiDAR cannot be inside the vehicle).
+  std::vector<double> skipped_distances;
   std::vector<PilotCell> cells;  // distance-major
   double wall_seconds = 0;
   std::uint64_t rays_cast = 0;
 };
 
 PilotResult run_pilot(const PilotConfig& config);
-
-// Summary figures per method, as summary.json holds them.
-struct MethodSummary {
-  double share_below_0p10_6_36m = 0;  // cells from 6 to 36 m with centre error < 0.10 m (no fit = not)
-  int off_by_90_cells = 0;            // yaw error > 45 deg
-  double median_error_m = 0;          // over cells with a fit, all distances
-  double p95_error_m = 0;
-  int no_fit_cells = 0;
-};
-MethodSummary summarize(const PilotResult& result, const std::string& method);
-
-// Is the improved correction's stated covariance honest? Over the fixed cells: the mean stated sigmas and
-// the share of fixes whose error lies beyond the 3-sigma bound (yaw: |error| > 3 sigma; position: the
-// 2-dof NEES beyond its 99.73 % quantile, the same tail as 3 sigma in one dimension). An honest model
-// has about 0.27 % beyond for a Gaussian error; a much larger share means overconfident fixes, which the
-// vehicle's gate and EKF then trust too much.
-struct ConsistencySummary {
-  int fixes = 0;
-  double mean_yaw_sigma_deg = 0;
-  double yaw_beyond_3sigma = 0;  // share of fixes
-  double mean_position_sigma_m = 0;
-  double position_beyond_3sigma = 0;
-};
-ConsistencySummary summarize_consistency(const PilotResult& result);
-
-void write_cells_csv(const PilotResult& result, const std::string& path, bool append);
-std::string summary_json_entry(const PilotResult& result);  // {"lshape": {...}, "algorithm1": ..., ...}
 
 }  // namespace rsu::eval

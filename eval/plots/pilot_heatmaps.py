@@ -2,7 +2,8 @@
 """Heat maps of the pilot experiment (paper Sec. 3.1, Figs. 3-4), one PNG per metric and LiDAR model.
 
 Reads <folder>/cells.csv written by rsu-pilot and writes <folder>/<model>_<metric>.png: distance on x,
-vehicle yaw on y, as in the paper.
+vehicle yaw on y, as in the paper. Several folders (rsu-pilot matrix writes one per cell) may be given;
+--metrics picks the columns drawn.
 """
 import argparse
 import csv
@@ -23,22 +24,35 @@ METRICS = [
     ("lshape_yaw_err_deg", "Yaw error, L-shape fit (longer edge)", "error (°)", (0, 90), False),
     ("alg1_center_err_m", "Centre error after Algorithm 1 (paper)", "error (m)", (0, 0.3), False),
     ("improved_center_err_m", "Centre error after the improved correction", "error (m)", (0, 0.3), False),
+    ("improved_sigma_m", "Stated position sigma (improved, larger axis)", "sigma (m)", (0, 0.3), False),
+    ("improved_position_nees", "Error against the stated covariance (NEES; > 11.83: beyond 3 sigma)", "NEES",
+     (0, 20.0), False),
 ]
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("folder")
+    ap.add_argument("folders", nargs="+")
+    ap.add_argument("--metrics", help="comma-separated columns to draw (default: all)")
     args = ap.parse_args()
+    wanted = set(args.metrics.split(",")) if args.metrics else None
+    for folder in args.folders:
+        draw_folder(folder, [m for m in METRICS if wanted is None or m[0] in wanted])
+
+
+def draw_folder(folder, metrics):
     cells = defaultdict(list)
-    with open(os.path.join(args.folder, "cells.csv"), newline="") as f:
+    with open(os.path.join(folder, "cells.csv"), newline="") as f:
         for row in csv.DictReader(f):
             cells[row["model"]].append(row)
     for model, rows in cells.items():
+        where = ""
+        if "lidar_height_m" in rows[0]:
+            where = f" at {float(rows[0]['lidar_height_m']):g} m, {rows[0]['vehicle']}"
         distances = sorted({float(r["distance_m"]) for r in rows})
         frames = max(int(r["frame"]) for r in rows) + 1
         d_index = {d: i for i, d in enumerate(distances)}
-        for column, title, label, limits, absolute in METRICS:
+        for column, title, label, limits, absolute in metrics:
             grid = np.full((frames, len(distances)), np.nan)
             for r in rows:
                 v = r[column]
@@ -57,11 +71,11 @@ def main():
             ax.set_xlabel("distance from the LiDAR (m)")
             ax.set_ylabel("vehicle yaw at the start of the frame (°)")
             ax.set_yticks(range(0, 361, 45))
-            ax.set_title(f"{model.upper()}: {title}")
+            ax.set_title(f"{model.upper()}{where}: {title}", fontsize=10)
             for x in (6, 36):
                 ax.axvline(x, color="cyan", lw=0.8, ls="--")
             fig.tight_layout()
-            out = os.path.join(args.folder, f"{model}_{column}.png")
+            out = os.path.join(folder, f"{model}_{column}.png")
             fig.savefig(out)
             plt.close(fig)
             print(f"wrote {out}")

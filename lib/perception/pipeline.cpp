@@ -1,7 +1,5 @@
 #include "perception/pipeline.h"
 
-#include "common/angles.h"
-
 namespace rsu::perception {
 
 BackgroundModelConfig background_model_config(const PerceptionConfig& config) {
@@ -9,8 +7,10 @@ BackgroundModelConfig background_model_config(const PerceptionConfig& config) {
           config.range_image};
 }
 
-PerceptionPipeline::PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector2d& lidar_xy)
-    : config_(config), lidar_xy_(lidar_xy), background_(background_model_config(config), lidar_xy) {}
+PerceptionPipeline::PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector3d& lidar_position)
+    : config_(config),
+      lidar_position_(lidar_position),
+      background_(background_model_config(config), lidar_position.head<2>()) {}
 
 void PerceptionPipeline::add_background_frame(std::span<const LidarPoint> points) {
   background_.add_background_frame(points);
@@ -35,15 +35,20 @@ PerceptionResult PerceptionPipeline::process(std::span<const LidarPoint> points)
   for (const Cluster& cluster : clusters.clusters) {
     DetectedObject object;
     object.point_indices = cluster;
-    object.footprint.reserve(cluster.size());
+    object.points.reserve(cluster.size());
+    std::vector<Eigen::Vector2d> footprint;
+    footprint.reserve(cluster.size());
     const TimeNs t0 = points[cluster.front()].time_ns;
     TimeNs offset_sum = 0;  // relative to t0: a frame spans 0.1 s, so the sum cannot overflow
     for (const std::uint32_t i : cluster) {
-      object.footprint.emplace_back(static_cast<double>(points[i].x), static_cast<double>(points[i].y));
-      offset_sum += points[i].time_ns - t0;
+      const LidarPoint& p = points[i];
+      object.points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y),
+                                 static_cast<double>(p.z));
+      footprint.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y));
+      offset_sum += p.time_ns - t0;
     }
     object.sweep_time_ns = t0 + offset_sum / static_cast<TimeNs>(cluster.size());
-    object.fit = fit_rectangle(object.footprint, lidar_xy_, config_.fit);
+    object.fit = fit_rectangle(footprint, lidar_xy(), config_.fix.fit);
     if (!object.fit.ok()) {
       ++result.stats.failed_fits;
     }
@@ -52,25 +57,8 @@ PerceptionResult PerceptionPipeline::process(std::span<const LidarPoint> points)
   return result;
 }
 
-CorrectedPose PerceptionPipeline::correct(const DetectedObject& object, const VehicleSize& size,
-                                          const std::optional<YawPrior>& prior) const {
-  return perception::correct(object.fit, object.footprint, size, lidar_xy_, prior, config_);
-}
-
-CorrectedPose correct(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy,
-                      const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
-                      const std::optional<YawPrior>& prior, const PerceptionConfig& config) {
-  // The fix's yaw is quantised by the orientation search that produced the fit.
-  CorrectionConfig correction = config.correction;
-  correction.fit = config.fit;
-  correction.covariance.search_resolution_rad =
-      deg_to_rad(config.fit.search.method == OrientationSearchMethod::exhaustive
-                     ? config.fit.search.exhaustive_step_deg
-                     : config.fit.search.fine_resolution_deg);
-  if (config.correction_method == CorrectionMethod::algorithm1) {
-    return correct_algorithm1(fit, size, lidar_xy, correction.covariance);
-  }
-  return correct_improved(fit, cluster_xy, size, lidar_xy, prior, correction);
+VehicleFix PerceptionPipeline::correct(const DetectedObject& object, const AnnouncedVehicle& vehicle) const {
+  return fix_vehicle(object.points, vehicle, lidar_position_, config_.fix);
 }
 
 }  // namespace rsu::perception

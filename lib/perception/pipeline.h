@@ -1,7 +1,7 @@
 // The RSU's per-frame perception, as the paper runs it (Sec. 3-4): remove the static background, cluster
 // what is left, fit a rectangle to each cluster (L-shape fitting). Association of clusters with the
 // connected vehicles that announced their size is another step's job; it calls correct() per matched
-// vehicle to turn the raw fit into a size-corrected fix (Algorithm 1 or the improved correction).
+// vehicle to turn its points into a size-corrected fix (fix_vehicle, vehicle_fix.h).
 //
 // Points come in the map frame (the caller applies the LiDAR mount pose) and keep their ring, azimuth and
 // firing time; the LiDAR's map position is fixed for the pipeline's lifetime.
@@ -22,11 +22,11 @@
 #include "perception/range_image_background.h"
 #include "perception/reference_frame_background.h"
 #include "perception/size_correction.h"
+#include "perception/vehicle_fix.h"
 
 namespace rsu::perception {
 
 enum class ClusteringMethod { reference, grid };
-enum class CorrectionMethod { algorithm1, improved };
 
 struct PerceptionConfig;
 // The background part of a perception configuration.
@@ -47,15 +47,14 @@ struct PerceptionConfig {
   ClusteringConfig clustering{
       .tolerance_m = 0.7, .min_points = 10, .max_points = 20000, .distance = ClusterDistance::planar};
 
-  LShapeFitConfig fit;
-  CorrectionMethod correction_method = CorrectionMethod::improved;
-  CorrectionConfig correction;
+  // The rectangle fit (fix.fit, also used for each cluster's fit) and the size correction.
+  VehicleFixConfig fix;
 };
 
-// One cluster: its points, its footprint and its rectangle fit.
+// One cluster: its points and its rectangle fit.
 struct DetectedObject {
   std::vector<std::uint32_t> point_indices;  // into the processed frame
-  std::vector<Eigen::Vector2d> footprint;    // x, y of those points
+  std::vector<Eigen::Vector3d> points;       // those points (map frame)
   TimeNs sweep_time_ns = 0;                  // mean firing time: when the LiDAR swept it (DESIGN.md §3)
   RectangleFit fit;
 };
@@ -77,7 +76,8 @@ struct PerceptionResult {
 
 class PerceptionPipeline {
  public:
-  PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector2d& lidar_xy);
+  // lidar_position: the LiDAR's position in the map frame.
+  PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector3d& lidar_position);
 
   // A frame recorded without vehicles (map frame): becomes part of the reference frame, or trains the
   // range image. Unused by the ground-height method. Until one is added, every non-ground point is
@@ -86,22 +86,16 @@ class PerceptionPipeline {
 
   PerceptionResult process(std::span<const LidarPoint> points_in_map_frame) const;
 
-  // The size-corrected fix of one object, for the vehicle matched to it.
-  CorrectedPose correct(const DetectedObject& object, const VehicleSize& size,
-                        const std::optional<YawPrior>& prior = std::nullopt) const;
+  // The fix of one object, for the vehicle matched to it (fix_vehicle with this pipeline's settings).
+  VehicleFix correct(const DetectedObject& object, const AnnouncedVehicle& vehicle) const;
 
   const PerceptionConfig& config() const { return config_; }
-  const Eigen::Vector2d& lidar_xy() const { return lidar_xy_; }
+  Eigen::Vector2d lidar_xy() const { return lidar_position_.head<2>(); }
 
  private:
   PerceptionConfig config_;
-  Eigen::Vector2d lidar_xy_;
+  Eigen::Vector3d lidar_position_;
   BackgroundModel background_;
 };
-
-// The same correction as PerceptionPipeline::correct, for callers holding a fit and its points.
-CorrectedPose correct(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy,
-                      const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
-                      const std::optional<YawPrior>& prior, const PerceptionConfig& config = {});
 
 }  // namespace rsu::perception

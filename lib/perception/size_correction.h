@@ -33,9 +33,12 @@
 
 namespace rsu::perception {
 
+// The vehicle's box as it announces it (proto/v2i.proto VehicleAnnouncement): footprint length and
+// width, and height above the ground. Defaults: the Lexus RX450h of the paper's experiments.
 struct VehicleSize {
-  double length = 4.89;  // DESIGN.md §2: Lexus RX450h
+  double length = 4.89;
   double width = 1.92;
+  double height = 1.70;
 };
 
 // The vehicle's own yaw estimate (map frame, counter-clockwise from +x) and its standard deviation.
@@ -104,9 +107,9 @@ struct CorrectionConfig {
   // the chosen box: one more likely than max_position_ambiguity (same log-odds scale as the
   // assignment, geometry_scale) refuses the fix, less likely
   // ones add their spread to the covariance.
-  // Off by default (the single-frame pipeline); the RSU turns it on (rsu/rsu_core_config.h), where a
-  // far, fragmented vehicle's one-fragment "faces" gave confident fixes a metre off.
-  bool strict_consistency_checks = false;
+  // On: a far, fragmented vehicle's one-fragment "faces" gave confident fixes a metre off. (Before the
+  // pilot and rsud shared one fix function, the pilot measured without these checks.)
+  bool strict_consistency_checks = true;
   double position_ambiguity_min_m = 0.2;
   double max_position_ambiguity = 0.1;
   LShapeFitConfig fit;  // face support and 'seen' rules (the pipeline passes its own)

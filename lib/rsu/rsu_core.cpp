@@ -400,6 +400,7 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
 
   struct Candidate {
     std::vector<Eigen::Vector2d> footprint;
+    std::vector<float> heights;  // z of the footprint's points
     perception::RectangleFit fit;
     TimeNs sweep_time = 0;
     bool fitted = false;  // fit ok and inside the coverage radius: offered to association
@@ -412,11 +413,13 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
       continue;
     Candidate c;
     c.footprint.reserve(cluster.points.size());
+    c.heights.reserve(cluster.points.size());
     for (const LidarPoint& p : cluster.points) {
       c.footprint.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y));
+      c.heights.push_back(p.z);
     }
     c.sweep_time = mean_time(cluster.points);
-    c.fit = perception::fit_rectangle(c.footprint, lidar_xy_, config_.perception.fit);
+    c.fit = perception::fit_rectangle(c.footprint, lidar_xy_, config_.perception.fix.fit);
     ++lidar_stats_.clusters_fitted;
     if (!c.fit.ok()) {
       // Too small or thin to fit alone, but it may still be a fragment of a vehicle (gathered below).
@@ -579,6 +582,7 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
         held.assigned_own = tightly_inside(part, j);
       }
       held.footprint.insert(held.footprint.end(), part.footprint.begin(), part.footprint.end());
+      held.heights.insert(held.heights.end(), part.heights.begin(), part.heights.end());
       held.weighted_offset +=
           static_cast<TimeNs>(part.footprint.size()) * (part.sweep_time - held.first_time);
       ++held.parts;
@@ -619,6 +623,20 @@ void RsuCore::release_held(bool everything, TimeNs now, LidarStepResult& result)
   }
 }
 
+perception::VehicleFix RsuCore::fix_announced(std::span<const Eigen::Vector3d> points,
+                                              const v2i::VehicleAnnouncement& a, TimeNs sweep_time) const {
+  // The yaw prior: the announced yaw carried to the sweep time with the announced motion (the
+  // hypothesis model), with its grown uncertainty.
+  const v2i::VehicleHypothesis at_sweep = v2i::predict_hypothesis(a, sweep_time, config_.hypothesis);
+  const double yaw_var = at_sweep.covariance(2, 2);
+  perception::AnnouncedVehicle vehicle;
+  vehicle.size = {a.size.length_m, a.size.width_m, a.size.height_m};
+  if (std::isfinite(at_sweep.yaw) && std::isfinite(yaw_var) && yaw_var >= 0.0) {
+    vehicle.yaw_prior = perception::YawPrior{at_sweep.yaw, std::max(std::sqrt(yaw_var), 1e-3)};
+  }
+  return perception::fix_vehicle(points, vehicle, sensor_to_map_.translation(), config_.perception.fix);
+}
+
 void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult& result) {
   const v2i::RegisteredVehicle* vehicle = registry_.find(held.vehicle_id, now);
   if (vehicle == nullptr || held.footprint.empty())
@@ -632,9 +650,12 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
     return;
   }
 
-  std::span<const Eigen::Vector2d> points(held.footprint);
+  std::vector<Eigen::Vector3d> gathered(held.footprint.size());
+  for (std::size_t i = 0; i < gathered.size(); ++i)
+    gathered[i] = {held.footprint[i].x(), held.footprint[i].y(), static_cast<double>(held.heights[i])};
+  std::span<const Eigen::Vector3d> points(gathered);
   TimeNs sweep_time = held.first_time + held.weighted_offset / static_cast<TimeNs>(held.footprint.size());
-  perception::RectangleFit fit = perception::fit_rectangle(points, lidar_xy_, config_.perception.fit);
+  perception::VehicleFix fix = fix_announced(points, a, sweep_time);
   const auto fits_vehicle = [&](const perception::RectangleFit& f, TimeNs t, std::size_t n) {
     const v2i::FittedCluster as_cluster{f.center, f.yaw, f.length0, f.length1, n};
     return f.ok() &&
@@ -642,7 +663,7 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
                    .verdict == v2i::PairGate::kPass;
   };
   if (held.parts > 1) {
-    if (fits_vehicle(fit, sweep_time, points.size())) {
+    if (fits_vehicle(fix.fit, sweep_time, points.size())) {
       lidar_stats_.fragments_merged += held.parts - 1;
     } else {
       // The union is not one vehicle of this size (something else was inside the footprint): the
@@ -656,30 +677,19 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
       }
       points = points.subspan(held.assigned_part_begin, held.assigned_part_size);
       sweep_time = held.assigned_part_time;
-      fit = perception::fit_rectangle(points, lidar_xy_, config_.perception.fit);
+      fix = fix_announced(points, a, sweep_time);
     }
   }
-  if (!fit.ok()) {
+  if (!fix.fit.ok()) {
     ++lidar_stats_.corrections_failed;
     return;
   }
-  if ((fit.center - lidar_xy_).norm() > config_.coverage_radius_m) {
+  if ((fix.fit.center - lidar_xy_).norm() > config_.coverage_radius_m) {
     ++lidar_stats_.clusters_out_of_coverage;
     return;
   }
-  // The yaw prior: the announced yaw carried to the sweep time with the announced motion (the
-  // hypothesis model), with its grown uncertainty.
-  const v2i::VehicleHypothesis at_sweep = v2i::predict_hypothesis(a, sweep_time, config_.hypothesis);
-  const double yaw_var = at_sweep.covariance(2, 2);
-  std::optional<perception::YawPrior> prior;
-  if (std::isfinite(at_sweep.yaw) && std::isfinite(yaw_var) && yaw_var >= 0.0) {
-    prior = perception::YawPrior{at_sweep.yaw, std::max(std::sqrt(yaw_var), 1e-3)};
-  }
-  const perception::CorrectedPose fix =
-      perception::correct(fit, points, perception::VehicleSize{a.size.length_m, a.size.width_m}, lidar_xy_,
-                          prior, config_.perception);
-  if (fix.status == perception::CorrectionStatus::inconsistent_box ||
-      fix.status == perception::CorrectionStatus::ambiguous_position) {
+  if (fix.status() == perception::CorrectionStatus::inconsistent_box ||
+      fix.status() == perception::CorrectionStatus::ambiguous_position) {
     ++lidar_stats_.corrections_inconsistent;
     return;
   }
@@ -694,9 +704,9 @@ void RsuCore::correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult&
   inputs.sequence = channel.next_sequence;
   inputs.announcement_sequence = a.sequence;
   inputs.sweep_time = sweep_time;
-  inputs.points_used = points.size();
+  inputs.points_used = fix.points_used;
   OutgoingCorrection out;
-  out.correction = make_correction(inputs, fix, fit, lidar_xy_);
+  out.correction = make_correction(inputs, fix.corrected, fix.fit, lidar_xy_);
   out.bytes = signer_.encode(out.correction, now);
   if (out.bytes.empty()) {
     ++lidar_stats_.corrections_encode_failed;

@@ -40,6 +40,7 @@
 #include "lidar/point.h"
 #include "lidar/velodyne_packet.h"
 #include "perception/background_model.h"
+#include "perception/vehicle_fix.h"
 #include "rsu/datagram_outcome.h"
 #include "rsu/rsu_core_config.h"
 #include "rsu/sweep_clusterer.h"
@@ -179,6 +180,7 @@ class RsuCore {
   struct HeldVehicle {
     std::uint64_t vehicle_id = 0;
     std::vector<Eigen::Vector2d> footprint;  // union of the gathered clusters' points, map frame
+    std::vector<float> heights;              // their z, map frame
     TimeNs first_time = 0;                   // sweep time of the first gathered cluster
     TimeNs weighted_offset = 0;              // sum over points of (point's cluster time - first_time)
     std::size_t parts = 0;                   // clusters gathered
@@ -200,6 +202,9 @@ class RsuCore {
   // Fixes the held vehicles whose footprint the sweep has passed (all of them if `everything`).
   void release_held(bool everything, TimeNs now, LidarStepResult& result);
   void correct_held(const HeldVehicle& held, TimeNs now, LidarStepResult& result);
+  // The vehicle's fix from its points swept at `sweep_time`, with its announced size and heading.
+  perception::VehicleFix fix_announced(std::span<const Eigen::Vector3d> points,
+                                       const v2i::VehicleAnnouncement& a, TimeNs sweep_time) const;
   // The firing time at which the sweep has passed every point of `outline` (map frame) far enough
   // that no cluster near them can still grow (the SweepClusterer's closing rule).
   TimeNs passed_time(const std::vector<Eigen::Vector2d>& outline) const;

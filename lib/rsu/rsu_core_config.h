@@ -64,14 +64,6 @@ struct GatheringConfig {
   double hold_beyond_m = 25.0;
 };
 
-// The perception defaults, with the improved correction testing seen faces against end-anchored boxes
-// (size_correction.h): the RSU sees vehicles up to its coverage radius, fragmented at long range.
-inline perception::PerceptionConfig rsu_perception_defaults() {
-  perception::PerceptionConfig c;
-  c.correction.strict_consistency_checks = true;
-  return c;
-}
-
 // Announcements other RSUs accepted from vehicles and shared on the data bus (RsuCore::
 // on_peer_announcement; README, "Several RSUs on one bus").
 struct PeerConfig {
@@ -98,7 +90,9 @@ struct RsuCoreConfig {
   TimeNs max_packet_age = 150 * kNsPerMs;
   SweepConfig sweep;
   GatheringConfig gathering;
-  perception::PerceptionConfig perception = rsu_perception_defaults();
+  // Background, clustering and the per-vehicle fix (perception::fix_vehicle): the library's defaults,
+  // the same the pilot experiment measures, unless the configuration file changes them.
+  perception::PerceptionConfig perception;
 
   // Clusters whose fitted centre is farther than this from the LiDAR get no correction: beyond it the
   // fit is too sparse to beat the vehicle's own estimate (paper Table 2: VLP-16 beyond 36 m).

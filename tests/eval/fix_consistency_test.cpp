@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "eval/pilot/pilot_experiment.h"
+#include "eval/pilot/pilot_summary.h"
 
 namespace rsu::eval {
 namespace {
@@ -25,22 +26,12 @@ PilotResult consistency_run(const std::string& model) {
   return run_pilot(config);
 }
 
-PilotResult up_to(const PilotResult& result, double distance_max_m) {
-  PilotResult out = result;
-  out.cells.clear();
-  for (const PilotCell& c : result.cells) {
-    if (c.distance_m <= distance_max_m + 1e-9)
-      out.cells.push_back(c);
-  }
-  return out;
-}
-
 double rms_yaw_error_deg(const PilotResult& result) {
   double sum_sq = 0.0;
   int n = 0;
   for (const PilotCell& c : result.cells) {
-    if (std::isfinite(c.improved_yaw_err_deg) && std::isfinite(c.improved_yaw_sigma_deg)) {
-      sum_sq += c.improved_yaw_err_deg * c.improved_yaw_err_deg;
+    if (std::isfinite(c.improved().yaw_err_deg) && std::isfinite(c.improved().yaw_sigma_deg)) {
+      sum_sq += c.improved().yaw_err_deg * c.improved().yaw_err_deg;
       ++n;
     }
   }
@@ -63,7 +54,9 @@ void expect_honest(const std::string& model) {
   ::testing::Test::RecordProperty("position_beyond_3sigma_6_33m",
                                   std::to_string(near.position_beyond_3sigma));
   ::testing::Test::RecordProperty("mean_position_sigma_m", std::to_string(k.mean_position_sigma_m));
-  ASSERT_GE(k.fixes, static_cast<int>(0.99 * 31 * 60));
+  // rsud's configuration withholds fixes whose box the points do not decide (about 2 % of the VLP-16's
+  // cells here; the target is at most 5 %); before the pilot measured rsud's configuration, 99 % were fixed.
+  ASSERT_GE(k.fixes, static_cast<int>(0.97 * 31 * 60));
   EXPECT_LE(k.yaw_beyond_3sigma, 0.01)
       << model << ": mean stated yaw sigma " << k.mean_yaw_sigma_deg << " deg, rms error " << rms << " deg";
   // Honest, not inflated: the stated sigma is of the size of the real error, not many times it.

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "eval/pilot/pilot_experiment.h"
+#include "eval/pilot/pilot_summary.h"
 
 namespace rsu::eval {
 namespace {
@@ -24,9 +25,9 @@ TEST(Pilot, Vlp16ReproducesThePaperAndTheImprovedCorrectionRemovesOffBy90) {
   ASSERT_EQ(result.frames_per_turn, 180);  // 20 deg/s at 10 Hz: 2 deg per frame
   ASSERT_EQ(result.cells.size(), 3u * 180u);
 
-  const MethodSummary lshape = summarize(result, "lshape");
-  const MethodSummary alg1 = summarize(result, "algorithm1");
-  const MethodSummary improved = summarize(result, "improved");
+  const MethodSummary lshape = summarize(result, PilotMethod::lshape);
+  const MethodSummary alg1 = summarize(result, PilotMethod::algorithm1);
+  const MethodSummary improved = summarize(result, PilotMethod::improved);
   // Paper Sec. 3.1: the raw box centre is off by about half a vehicle; the yaw is off by 90 deg where only
   // the front or back was seen.
   EXPECT_LT(lshape.share_below_0p10_6_36m, 0.2);
@@ -64,7 +65,7 @@ TEST(Pilot, SameSeedSameResult) {
   ASSERT_EQ(a.cells.size(), b.cells.size());
   for (std::size_t i = 0; i < a.cells.size(); ++i) {
     EXPECT_EQ(a.cells[i].points, b.cells[i].points);
-    EXPECT_EQ(a.cells[i].improved_center_err_m, b.cells[i].improved_center_err_m);
+    EXPECT_EQ(a.cells[i].improved().center_err_m, b.cells[i].improved().center_err_m);
   }
 }
 

@@ -189,9 +189,10 @@ TEST(Correction, AnUndecisivePriorLeavesTheDecisionToGeometry) {
   std::mt19937_64 rng(6);
   const auto pts = test::scan_box(box, lidar, deg_to_rad(0.2), 0.02, rng);
   const RectangleFit fit = fit_rectangle(pts, lidar);
-  // 45 deg between the axes: the prior says nothing about which is the length.
+  // 45 deg between the axes: the prior says nothing about which is the length (and, uncertain by 30 deg,
+  // does not contradict the fitted axes either: the consistency checks keep the fix).
   const CorrectedPose r =
-      correct_improved(fit, pts, {4.89, 1.92}, lidar, YawPrior{deg_to_rad(45.0), deg_to_rad(10.0)});
+      correct_improved(fit, pts, {4.89, 1.92}, lidar, YawPrior{deg_to_rad(45.0), deg_to_rad(30.0)});
   EXPECT_EQ(r.resolution, AmbiguityResolution::geometry);
   EXPECT_LT(rad_to_deg(axis_error(r.pose.yaw, box.yaw)), 3.0);
 }

@@ -46,7 +46,8 @@ void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, cons
     ASSERT_TRUE(object.fit.ok());
     const TrueBox& truth = *nearest_vehicle(scene, object.fit.center);
     // Every point of the object lies on (or, with noise, next to) its vehicle's footprint.
-    for (const auto& p : object.footprint) {
+    for (const Eigen::Vector3d& q : object.points) {
+      const Eigen::Vector2d p = q.head<2>();
       const Eigen::Vector2d local((p - truth.centre).dot(truth.u()), (p - truth.centre).dot(truth.v()));
       EXPECT_LE(std::abs(local.x()), truth.length / 2.0 + 0.1);
       EXPECT_LE(std::abs(local.y()), truth.width / 2.0 + 0.1);
@@ -58,18 +59,19 @@ void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, cons
     mean_t /= static_cast<double>(object.point_indices.size());
     EXPECT_NEAR(static_cast<double>(object.sweep_time_ns), mean_t, 1.0);
 
-    const CorrectedPose fix =
-        pipeline.correct(object, {truth.length, truth.width}, YawPrior{truth.yaw + 0.1, 0.17});
+    const VehicleFix fix = pipeline.correct(
+        object, AnnouncedVehicle{{truth.length, truth.width}, YawPrior{truth.yaw + 0.1, 0.17}});
     ASSERT_TRUE(fix.ok());
-    EXPECT_LT(std::hypot(fix.pose.x - truth.centre.x(), fix.pose.y - truth.centre.y()), 0.1);
-    EXPECT_LT(angle_distance(fix.pose.yaw, truth.yaw), deg_to_rad(3.0));
+    const Pose2& pose = fix.corrected.pose;
+    EXPECT_LT(std::hypot(pose.x - truth.centre.x(), pose.y - truth.centre.y()), 0.1);
+    EXPECT_LT(angle_distance(pose.yaw, truth.yaw), deg_to_rad(3.0));
   }
 }
 
 TEST(PerceptionPipeline, RangeImageBackground) {
   Street s;
   std::mt19937_64 rng(1);
-  PerceptionPipeline pipeline({}, s.lidar.position.head<2>());
+  PerceptionPipeline pipeline({}, s.lidar.position);
   for (const double phase : {0.1, 0.4, 0.7, 0.9})
     pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, phase, rng)));
   expect_finds_and_corrects_vehicles(pipeline, s.busy,
@@ -82,7 +84,7 @@ TEST(PerceptionPipeline, ReferenceFrameBackgroundWithReferenceClustering) {
   PerceptionConfig config;
   config.background = BackgroundMethod::reference_frame;
   config.clustering_method = ClusteringMethod::reference;
-  PerceptionPipeline pipeline(config, s.lidar.position.head<2>());
+  PerceptionPipeline pipeline(config, s.lidar.position);
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.2, rng)));
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.7, rng)));
   expect_finds_and_corrects_vehicles(pipeline, s.busy,
@@ -95,8 +97,8 @@ TEST(PerceptionPipeline, GroundHeightInAnEmptySceneLikeThePilot) {
   std::mt19937_64 rng(3);
   PerceptionConfig config;
   config.background = BackgroundMethod::ground_height;
-  config.fit.search.method = OrientationSearchMethod::exhaustive;  // the paper's 1 deg search
-  const PerceptionPipeline pipeline(config, s.lidar.position.head<2>());
+  config.fix.fit.search.method = OrientationSearchMethod::exhaustive;  // the paper's 1 deg search
+  const PerceptionPipeline pipeline(config, s.lidar.position);
   expect_finds_and_corrects_vehicles(pipeline, s.busy,
                                      test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
 }
@@ -108,7 +110,7 @@ TEST(PerceptionPipeline, GridAndReferenceClusteringGiveTheSameObjects) {
   grid_config.background = BackgroundMethod::reference_frame;
   PerceptionConfig ref_config = grid_config;
   ref_config.clustering_method = ClusteringMethod::reference;
-  PerceptionPipeline a(grid_config, s.lidar.position.head<2>()), b(ref_config, s.lidar.position.head<2>());
+  PerceptionPipeline a(grid_config, s.lidar.position), b(ref_config, s.lidar.position);
   const auto background = test::points_of(test::scan_3d(s.empty, s.lidar, 0.5, rng));
   a.add_background_frame(background);
   b.add_background_frame(background);
@@ -126,8 +128,8 @@ TEST(PerceptionPipeline, Algorithm1IsSelectable) {
   std::mt19937_64 rng(5);
   PerceptionConfig config;
   config.background = BackgroundMethod::ground_height;
-  config.correction_method = CorrectionMethod::algorithm1;
-  const PerceptionPipeline paper(config, s.lidar.position.head<2>());
+  config.fix.method = CorrectionMethod::algorithm1;
+  const PerceptionPipeline paper(config, s.lidar.position);
   const auto result = paper.process(test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
   ASSERT_GE(result.objects.size(), 1U);  // the front, and maybe the roof on its own
   const DetectedObject* front = &result.objects[0];
@@ -136,16 +138,16 @@ TEST(PerceptionPipeline, Algorithm1IsSelectable) {
       front = &o;
   }
   EXPECT_LT(std::abs(front->fit.center.x() - 12.555), 0.1);  // the front face at x = 15 - 4.89 / 2
-  const CorrectedPose fix = paper.correct(*front, {4.89, 1.92});
+  const VehicleFix fix = paper.correct(*front, AnnouncedVehicle{{4.89, 1.92}, std::nullopt});
   ASSERT_TRUE(fix.ok());
-  EXPECT_EQ(fix.resolution, AmbiguityResolution::edge_lengths);
-  EXPECT_GT(angle_distance(fix.pose.yaw, 0.0), deg_to_rad(80.0));  // the paper's off-by-90 case
+  EXPECT_EQ(fix.corrected.resolution, AmbiguityResolution::edge_lengths);
+  EXPECT_GT(angle_distance(fix.corrected.pose.yaw, 0.0), deg_to_rad(80.0));  // the paper's off-by-90 case
 }
 
 TEST(PerceptionPipeline, BadFramesAreCountedNotCrashed) {
   Street s;
   std::mt19937_64 rng(6);
-  PerceptionPipeline pipeline({}, s.lidar.position.head<2>());
+  PerceptionPipeline pipeline({}, s.lidar.position);
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.5, rng)));
   EXPECT_TRUE(pipeline.process({}).objects.empty());
   std::vector<LidarPoint> garbage(100);
@@ -160,7 +162,7 @@ TEST(PerceptionPipeline, BadFramesAreCountedNotCrashed) {
   // Before any background frame, every non-ground point counts as foreground.
   PerceptionConfig config;
   config.background = BackgroundMethod::reference_frame;
-  const PerceptionPipeline untrained(config, s.lidar.position.head<2>());
+  const PerceptionPipeline untrained(config, s.lidar.position);
   const auto frame = test::points_of(test::scan_3d(s.busy, s.lidar, 0.5, rng));
   EXPECT_GT(untrained.process(frame).stats.foreground_points, 1000U);
 }

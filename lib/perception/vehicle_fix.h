@@ -1,0 +1,52 @@
+// One connected vehicle's fix from the LiDAR points on it: the paper's per-vehicle steps (Sec. 3: L-shape
+// fitting, then size correction with the size the vehicle announced, Algorithm 1 or the improved
+// correction), with the fix's covariance or the reason why there is no fix.
+//
+// This is the one function every part that turns points into a fix calls: rsud's core (lib/rsu), the
+// pilot experiment (eval/pilot), the accuracy tests. They pass the same configuration: VehicleFixConfig's
+// defaults are what rsud runs unless its configuration file says otherwise (deploy/rsud.yaml,
+// perception.correction); an experiment that measures another setting says so in its output.
+//
+// Input: the vehicle's points in the map frame (x, y, z; z above the map's ground datum), what the
+// vehicle announced (its box size, its heading predicted to the sweep time), the LiDAR's position in the
+// map frame. Points that are not finite are ignored.
+#pragma once
+
+#include <optional>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "perception/l_shape_fitting.h"
+#include "perception/rectangle_fit.h"
+#include "perception/size_correction.h"
+
+namespace rsu::perception {
+
+enum class CorrectionMethod { algorithm1, improved };
+
+struct VehicleFixConfig {
+  LShapeFitConfig fit;
+  CorrectionMethod method = CorrectionMethod::improved;
+  CorrectionConfig correction;  // the improved correction's rules (size_correction.h)
+};
+
+// What the vehicle told the RSU, carried to the time the LiDAR swept it.
+struct AnnouncedVehicle {
+  VehicleSize size;
+  std::optional<YawPrior> yaw_prior;  // its own heading estimate at the sweep time, if it has one
+};
+
+struct VehicleFix {
+  CorrectedPose corrected;  // status (ok or why not), pose, covariance, how the yaw was resolved
+  RectangleFit fit;         // the L-shape fit the correction started from (its status says if it failed)
+  std::size_t points_used = 0;
+
+  bool ok() const { return corrected.ok(); }
+  CorrectionStatus status() const { return corrected.status; }
+};
+
+VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> points, const AnnouncedVehicle& vehicle,
+                       const Eigen::Vector3d& lidar_position, const VehicleFixConfig& config = {});
+
+}  // namespace rsu::perception
