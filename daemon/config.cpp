@@ -7,6 +7,7 @@
 #include "common/angles.h"
 #include "daemon/dds_config.h"
 #include "io/yaml_field.h"
+#include "lidar/lidar_decoder.h"
 #include "lidar/sensor_model.h"
 #include "v2i/security/key_text.h"
 
@@ -98,9 +99,8 @@ void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path
   f.expect_map({"model", "mount", "input", "max_packet_age_ms"});
   const YamlField model = f.required("model");
   c.core.sensor_model = model.text();
-  const auto resolved = sensor_model_by_name(c.core.sensor_model);
-  if (!resolved || !resolved->has_packet_format())
-    model.fail("unknown LiDAR model \"" + c.core.sensor_model + "\" (expected vlp16 or vlp32c)");
+  if (!is_decodable_model(c.core.sensor_model))
+    model.fail("unknown LiDAR model \"" + c.core.sensor_model + "\" (expected vlp16, vlp32c or hdl32e)");
   c.core.mount = read_mount(f.required("mount"));
   c.input = read_input(f.required("input"), base);
   if (const auto* u = std::get_if<VelodyneUdpInput>(&c.input))

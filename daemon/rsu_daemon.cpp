@@ -64,7 +64,9 @@ RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, std::string conf
       stats_timer_(io),
       input_timer_(io),
       object_list_timer_(io),
-      sensor_model_(*sensor_model_by_name(config_.core.sensor_model)) {}
+      sensor_model_(config_.core.sensor_options.calibrated_model
+                        ? config_.core.sensor_options.calibrated_model
+                        : sensor_model_by_name(config_.core.sensor_model)) {}
 
 RsuDaemon::~RsuDaemon() = default;
 
@@ -151,13 +153,14 @@ void RsuDaemon::start_input() {
     spdlog::info("replaying {} PCD frame(s) at {} Hz", pcd_frames_.size(), p->rate_hz);
     every(input_timer_, seconds(1.0 / p->rate_hz), &RsuDaemon::on_pcd_frame);
   } else if (const auto* d = std::get_if<DdsPointCloud2Input>(&config_.input)) {
-    dds_->start_input(*d, sensor_model_.elevation_deg,
-                      [this](std::span<const LidarPoint> points, bool whole) {
-                        if (stopping_)
-                          return;
-                        handle_lidar_result(whole ? core_.on_lidar_frame(points, now_ns())
-                                                  : core_.on_lidar_points(points, now_ns()));
-                      });
+    dds_->start_input(
+        *d, sensor_model_ ? std::span<const double>(sensor_model_->elevation_deg) : std::span<const double>(),
+        [this](std::span<const LidarPoint> points, bool whole) {
+          if (stopping_)
+            return;
+          handle_lidar_result(whole ? core_.on_lidar_frame(points, now_ns())
+                                    : core_.on_lidar_points(points, now_ns()));
+        });
   } else {
     start_simulator();
   }
@@ -178,7 +181,8 @@ void RsuDaemon::start_dds() {
   }
   if (!config_.dds.object_list_topic.empty()) {
     // Once per rotation (issue 6: the object list each rotation).
-    every(object_list_timer_, seconds(1.0 / sensor_model_.rotation_hz()), &RsuDaemon::on_object_list);
+    every(object_list_timer_, seconds(1.0 / core_.lidar_decoder().geometry().rotation_hz),
+          &RsuDaemon::on_object_list);
   }
 }
 
@@ -193,12 +197,11 @@ void RsuDaemon::receive_lidar() {
         if (ec == asio::error::operation_aborted || stopping_)
           return;
         if (!ec) {
-          const std::uint64_t accepted_before = core_.packet_stats().accepted;
           const auto result =
               core_.on_lidar_packet(std::span<const std::uint8_t>(lidar_buffer_.data(), bytes), now_ns());
-          if (core_.packet_stats().accepted == accepted_before) {
+          if (result.packet.kind == PacketKind::refused) {
             ++lidar_packets_rejected_;
-            bad_input_.report("lidar_packet",
+            bad_input_.report("lidar_packet:" + std::string(result.packet.reason),
                               std::to_string(bytes) + " bytes from " + lidar_sender_.address().to_string());
           }
           handle_lidar_result(result);
@@ -290,6 +293,8 @@ void RsuDaemon::load_background_pcd() {
 }
 
 void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
+  for (const std::string& notice : core_.take_lidar_notices())
+    spdlog::warn("LiDAR: {}", notice);
   if (result.background_became_ready) {
     spdlog::info("background learned from {} whole rotations", core_.lidar_stats().background_frames);
     become_ready_if_possible();

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -96,10 +97,10 @@ class RsuDaemon {
   boost::asio::steady_timer input_timer_;
   boost::asio::steady_timer object_list_timer_;
 
-  SensorModel sensor_model_;
-  std::unique_ptr<DdsEdge> dds_;    // when dds.enabled (after bad_input_: it reports there)
-  std::unique_ptr<PeerBus> peers_;  // when dds.peers.enabled (after dds_: it uses its participant)
-  std::uint32_t peers_seen_ = 0;    // other RSUs on the peer bus at the last housekeeping
+  std::optional<SensorModel> sensor_model_;  // the Velodyne tables in use (none for other sensors)
+  std::unique_ptr<DdsEdge> dds_;             // when dds.enabled (after bad_input_: it reports there)
+  std::unique_ptr<PeerBus> peers_;           // when dds.peers.enabled (after dds_: it uses its participant)
+  std::uint32_t peers_seen_ = 0;             // other RSUs on the peer bus at the last housekeeping
 
   // PCD replay
   std::vector<std::vector<LidarPoint>> pcd_frames_;

@@ -158,12 +158,14 @@ void write_velodyne(const fs::path& dir) {
     int count;
   };
   // Packet periods: VLP-16 1327 us, VLP-32C 664 us. The VLP-16 stream crosses its first frame cut.
+  // Flags as velodyne_packet_fuzzer.cpp reads them (bits 0-1 model, bit 2 partial frames).
   const Case cases[] = {{"vlp16_packets", rsu::make_vlp16(), 0, 1327, 4},
                         {"vlp32c_packets", rsu::make_vlp32c(), 1, 664, 4},
-                        {"vlp16_partial_frames", rsu::make_vlp16(), 2, 1327, 3}};
+                        {"vlp16_partial_frames", rsu::make_vlp16(), 4, 1327, 3}};
   for (const Case& c : cases) {
     Bytes input{c.flags};
     put_u16(input, c.step_us);
+    put_u16(input, 0);  // 1206-byte payloads
     for (const Bytes& p : packets(c.model, kNow, c.count, 0))
       input.insert(input.end(), p.begin(), p.end());
     write_file(dir / c.name, input);

@@ -9,8 +9,8 @@
 #include <utility>
 
 #include "common/angles.h"
-#include "sim/trajectory.h"
 #include "common/random.h"
+#include "sim/trajectory.h"
 
 namespace rsu::sim {
 namespace {
@@ -154,7 +154,8 @@ std::int64_t LidarSimulator::packet_index_at(TimeNs t) const {
 void LidarSimulator::run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end,
                                 const std::optional<AzimuthSector>& sector, PacketScratch& scratch) const {
   const SensorModel& m = model();
-  beam_firings(m, schedule_.packet(k), scratch.firings);
+  const PacketBlocks blocks = schedule_.packet(k);
+  beam_firings(m, blocks, packet_timing(m, blocks, nominal_degrees_per_us(m)), scratch.firings);
   const std::vector<Firing>& firings = scratch.firings;
   std::vector<Outcome>& outcomes = scratch.outcomes;
   outcomes.assign(firings.size(), Outcome{});
@@ -209,7 +210,8 @@ void LidarSimulator::run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end,
     if (carrier_) {
       // The carrier's pose at this firing: the sensor moves during the sweep.
       const Pose2 v = pose_at(*carrier_, f.time_ns);
-      const Eigen::Isometry3d sensor_to_map = Pose3{v.x, v.y, 0.0, 0.0, 0.0, v.yaw}.to_isometry() * mount_to_map_;
+      const Eigen::Isometry3d sensor_to_map =
+          Pose3{v.x, v.y, 0.0, 0.0, 0.0, v.yaw}.to_isometry() * mount_to_map_;
       ray.origin = sensor_to_map.translation();
       ray.direction = sensor_to_map.linear() * beam;
     } else {

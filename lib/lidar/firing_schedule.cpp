@@ -74,7 +74,10 @@ std::uint16_t FiringSchedule::encoder_azimuth_cdeg(TimeNs t) const {
 
 PacketBlocks FiringSchedule::packet(std::int64_t k) const {
   PacketBlocks blocks;
-  blocks.first_firing_ns = round_to_multiple(t0_ + k * packet_period_ns(), kNsPerUs);
+  // The packet's timestamp (its first firing, or its end: SensorModel) on the microsecond grid.
+  const TimeNs stamp_offset = us_to_ns(model_.first_firing_after_timestamp_us);
+  blocks.first_firing_ns =
+      round_to_multiple(t0_ + k * packet_period_ns() - stamp_offset, kNsPerUs) + stamp_offset;
   const double block_us = block_duration_us(model_);
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     blocks.azimuth_cdeg[static_cast<std::size_t>(b)] =
@@ -87,35 +90,88 @@ std::vector<Firing> FiringSchedule::firings(const PacketBlocks& blocks) const {
   return beam_firings(model_, blocks);
 }
 
+double nominal_degrees_per_us(const SensorModel& model) {
+  return 360.0 * model.rotation_hz() * 1e-6;
+}
+
+PacketTiming packet_timing(const SensorModel& model, const PacketBlocks& blocks, double degrees_per_us) {
+  require_valid(model);
+  if (!(degrees_per_us > 0.0) || !std::isfinite(degrees_per_us)) {
+    throw std::invalid_argument("packet_timing: the rotation rate must be positive");
+  }
+  const int step = blocks.dual_return ? 2 : 1;
+  const int groups = kBlocksPerPacket / step;
+  const double block_us = block_duration_us(model);
+  // A rotor at the fastest rate any of these sensors runs (1200 rpm) turns this far in one block; a
+  // larger step between two groups of one packet is a field-of-view gap.
+  const double regular_limit_deg = 1.5 * 360.0 * (1200.0 / 60.0) * block_us * 1e-6;
+
+  std::array<double, kBlocksPerPacket> step_deg{};  // group g -> g + 1 (groups indexed 0..groups-1)
+  std::array<bool, kBlocksPerPacket> regular{};
+  PacketTiming t;
+  for (int g = 0; g + 1 < groups; ++g) {
+    const int d = static_cast<int>(blocks.azimuth_cdeg[static_cast<std::size_t>((g + 1) * step)]) -
+                  static_cast<int>(blocks.azimuth_cdeg[static_cast<std::size_t>(g * step)]);
+    const auto gi = static_cast<std::size_t>(g);
+    step_deg[gi] = (((d % kCdegPerTurn) + kCdegPerTurn) % kCdegPerTurn) / 100.0;
+    regular[gi] = step_deg[gi] <= regular_limit_deg;
+    if (regular[gi]) {
+      t.regular_turn_deg += step_deg[gi];
+      t.regular_time_us += block_us;
+    } else {
+      t.field_of_view_gap = true;
+    }
+  }
+  // The difference a group interpolates with: its own step if regular, else the nearest regular one
+  // before it, else after it, else the measured rate over one block.
+  auto nearest_regular = [&](int g) {
+    for (int k = g - 1; k >= 0; --k) {
+      if (regular[static_cast<std::size_t>(k)]) {
+        return step_deg[static_cast<std::size_t>(k)];
+      }
+    }
+    for (int k = g + 1; k + 1 < groups; ++k) {
+      if (regular[static_cast<std::size_t>(k)]) {
+        return step_deg[static_cast<std::size_t>(k)];
+      }
+    }
+    return degrees_per_us * block_us;
+  };
+  TimeNs start = blocks.first_firing_ns;
+  for (int g = 0; g < groups; ++g) {
+    const auto gi = static_cast<std::size_t>(g);
+    const bool own = g + 1 < groups && regular[gi];
+    const double diff = own ? step_deg[gi] : nearest_regular(g);
+    for (int s = 0; s < step; ++s) {
+      const auto bi = static_cast<std::size_t>(g * step + s);
+      t.block_start_ns[bi] = start;
+      t.diff_deg[bi] = diff;
+    }
+    if (g + 1 < groups) {
+      start += regular[gi] ? us_to_ns(block_us) : us_to_ns(step_deg[gi] / degrees_per_us);
+    }
+  }
+  t.end_ns = t.block_start_ns[kBlocksPerPacket - 1] + us_to_ns(block_us);
+  return t;
+}
+
 std::vector<Firing> beam_firings(const SensorModel& model, const PacketBlocks& blocks) {
   std::vector<Firing> out;
-  beam_firings(model, blocks, out);
+  beam_firings(model, blocks, packet_timing(model, blocks, nominal_degrees_per_us(model)), out);
   return out;
 }
 
-void beam_firings(const SensorModel& model, const PacketBlocks& blocks, std::vector<Firing>& out) {
+void beam_firings(const SensorModel& model, const PacketBlocks& blocks, const PacketTiming& timing,
+                  std::vector<Firing>& out) {
   require_valid(model);
   out.clear();
   const int lasers = static_cast<int>(model.laser_count());
   const double block_us = block_duration_us(model);
   out.reserve(static_cast<std::size_t>(kBlocksPerPacket * model.sequences_per_block * lasers));
-
-  // Azimuth advance from block b to b + 1 in 0.01 deg, modulo a turn (the encoder wraps at 36000).
-  std::array<int, kBlocksPerPacket> diff_cdeg{};
-  for (int b = 0; b + 1 < kBlocksPerPacket; ++b) {
-    const int d = static_cast<int>(blocks.azimuth_cdeg[static_cast<std::size_t>(b + 1)]) -
-                  static_cast<int>(blocks.azimuth_cdeg[static_cast<std::size_t>(b)]);
-    diff_cdeg[static_cast<std::size_t>(b)] = ((d % kCdegPerTurn) + kCdegPerTurn) % kCdegPerTurn;
-  }
-  // The last block's successor is in the next packet, which the decoder has not seen: reuse the
-  // previous difference (as the Velodyne manuals' precision-azimuth procedure does).
-  diff_cdeg[kBlocksPerPacket - 1] = diff_cdeg[kBlocksPerPacket - 2];
-
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     const auto bi = static_cast<std::size_t>(b);
-    const TimeNs block_start_ns = blocks.first_firing_ns + us_to_ns(b * block_us);
     const double block_az_deg = blocks.azimuth_cdeg[bi] / 100.0;
-    const double diff_deg = diff_cdeg[bi] / 100.0;
+    const double diff_deg = timing.diff_deg[bi];
     for (int s = 0; s < model.sequences_per_block; ++s) {
       for (int laser = 0; laser < lasers; ++laser) {
         const auto li = static_cast<std::size_t>(laser);
@@ -127,7 +183,7 @@ void beam_firings(const SensorModel& model, const PacketBlocks& blocks, std::vec
         f.block = b;
         f.channel = s * lasers + laser;
         f.laser = static_cast<std::uint16_t>(laser);
-        f.time_ns = block_start_ns + us_to_ns(dt_us);
+        f.time_ns = timing.block_start_ns[bi] + us_to_ns(dt_us);
         f.azimuth_rad = wrap_0_2pi(deg_to_rad(az_deg));
         out.push_back(f);
       }

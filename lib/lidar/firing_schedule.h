@@ -4,13 +4,25 @@
 //
 // Firings are grouped as in a Velodyne packet: 12 data blocks per packet, each block holding
 // `sequences_per_block` firing sequences. Each block carries the encoder azimuth at its first firing,
-// quantised to 0.01 deg. A laser's beam rotation angle is interpolated between its block's azimuth and
-// the next block's (for the last block of a packet, the previous block's azimuth difference is reused,
-// as the decoder cannot see the next packet), plus the laser's azimuth offset:
-//   azimuth = block_az + diff * dt_az / block_duration + azimuth_offset[laser], wrapped to [0, 2 pi),
-// where diff = (next block az - block az) mod 360 deg and dt_az is the laser's place in the block as
+// quantised to 0.01 deg. In dual-return mode the blocks come in pairs (the last and the strongest echo
+// of the same firings, equal azimuths): the packet then holds 6 firing groups, not 12.
+//
+// Timing. Group g starts one block duration after group g - 1, as the sensor fires without pause,
+// except across a field-of-view gap: a sensor set to a limited field of view stops firing at its end
+// and resumes when the rotor reaches its start, so consecutive groups of one packet can be 180 deg and
+// 50 ms apart (a step larger than any rotation rate up to 1200 rpm explains, x 1.5). The group after
+// such a gap fired when the rotor reached its azimuth: the time before it plus the gap over the
+// measured rotation rate (PacketTiming).
+//
+// Azimuth. A laser's beam rotation angle is interpolated between its group's azimuth and the next
+// group's, plus the laser's azimuth offset:
+//   azimuth = group_az + diff * dt_az / block_duration + azimuth_offset[laser], wrapped to [0, 2 pi),
+// where diff = (next group az - group az) mod 360 deg and dt_az is the laser's place in the block as
 // the manufacturer's precision-azimuth rule puts it: its sequence's start plus
-// azimuth_interpolation_us[laser] (the firing time, except on the VLP-32C: sensor_model.h).
+// azimuth_interpolation_us[laser] (the firing time, except on the VLP-32C: sensor_model.h). The last
+// group of a packet, whose successor is in the next packet, and a group before a field-of-view gap
+// reuse the nearest regular difference of the packet (the Velodyne manuals' precision-azimuth procedure
+// reuses the previous one): nothing is interpolated across a gap.
 //
 // Channel mapping: channel = sequence * laser_count + laser. A VLP-16 block holds two sequences
 // (channels 16..31 are the second, fired 55.296 us after the first); a VLP-32C block holds one.
@@ -18,9 +30,9 @@
 // with more than 32 lasers a "block" still holds one whole sequence and channel = laser (0..N-1),
 // so such a block is wider than a Velodyne one.
 //
-// A Velodyne packet stamps its first firing in whole microseconds, so the schedule puts every
-// packet's first firing on the microsecond grid (within 0.5 us of t0 + k * period): decoding the
-// packet then recovers every firing time to the nanosecond.
+// A Velodyne packet stamps its first firing (the HDL-32E: its end) in whole microseconds, so the
+// schedule puts every packet's timestamp on the microsecond grid (its first firing within 0.5 us of
+// t0 + k * period): decoding the packet then recovers every firing time to the nanosecond.
 #pragma once
 
 #include <array>
@@ -39,7 +51,27 @@ constexpr int kChannelsPerBlock = 32;
 struct PacketBlocks {
   TimeNs first_firing_ns = 0;                                  // time of block 0's first firing
   std::array<std::uint16_t, kBlocksPerPacket> azimuth_cdeg{};  // encoder azimuth, 0.01 deg, [0, 36000)
+  bool dual_return = false;  // blocks 2k and 2k + 1 hold two echoes of the same firings
 };
+
+// When each block of a packet fired and how far the rotor turned, by the rule of the file comment.
+struct PacketTiming {
+  std::array<TimeNs, kBlocksPerPacket> block_start_ns{};  // first firing of each block (pairs equal)
+  std::array<double, kBlocksPerPacket> diff_deg{};        // azimuth difference each block interpolates
+  TimeNs end_ns = 0;               // one block duration after the last group's start: the next packet's
+  bool field_of_view_gap = false;  // the packet spans the gap of a limited field of view
+  // The regular (gap-free) steps between consecutive groups: their azimuth sum and their duration,
+  // from which a decoder measures the rotation rate.
+  double regular_turn_deg = 0.0;
+  double regular_time_us = 0.0;
+};
+
+// `degrees_per_us` is the rotation rate that times the group after a field-of-view gap (a decoder's
+// measurement; the model's nominal rate when it has none). Throws std::invalid_argument when
+// sensor_model_error(model) is not empty or the rate is not positive.
+PacketTiming packet_timing(const SensorModel& model, const PacketBlocks& blocks, double degrees_per_us);
+// The model's nominal rotation rate in degrees per microsecond.
+double nominal_degrees_per_us(const SensorModel& model);
 
 // One laser firing: which laser, when, and the beam's rotation angle.
 struct Firing {
@@ -72,12 +104,15 @@ class FiringSchedule {
   double start_azimuth_deg_;
 };
 
-// The shared interpolation rule (see the file comment). Used by FiringSchedule::firings and by the
-// packet decoder. Channels beyond the model's lasers (a VLP-16 has 16 per sequence) are not listed.
-// Throws std::invalid_argument when sensor_model_error(model) is not empty.
+// The shared timing and interpolation rule (see the file comment), at the model's nominal rate. Used by
+// FiringSchedule::firings and by the packet decoder. Channels beyond the model's lasers (a VLP-16 has
+// 16 per sequence) are not listed. Throws std::invalid_argument when sensor_model_error(model) is not
+// empty.
 std::vector<Firing> beam_firings(const SensorModel& model, const PacketBlocks& blocks);
-// The same, into `out` (cleared first), so that a decoder can reuse one buffer packet after packet.
-void beam_firings(const SensorModel& model, const PacketBlocks& blocks, std::vector<Firing>& out);
+// The same for a packet whose timing is known, into `out` (cleared first), so that a decoder can reuse
+// one buffer packet after packet.
+void beam_firings(const SensorModel& model, const PacketBlocks& blocks, const PacketTiming& timing,
+                  std::vector<Firing>& out);
 
 // Duration of one data block: sequences_per_block firing sequences, in microseconds.
 double block_duration_us(const SensorModel& model);

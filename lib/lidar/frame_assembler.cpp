@@ -132,6 +132,14 @@ std::vector<LidarFrame> FrameAssembler::add(std::span<const LidarPoint> points) 
   return done;
 }
 
+void FrameAssembler::set_rotation_hz(double rotation_hz) {
+  if (!(rotation_hz > 0.0) || !std::isfinite(rotation_hz)) {
+    return;
+  }
+  config_.rotation_hz = rotation_hz;
+  max_gap_ns_ = from_seconds(std::min(config_.max_gap_rotations / rotation_hz, 1e9));
+}
+
 std::vector<LidarFrame> FrameAssembler::flush() {
   std::vector<LidarFrame> done;
   close_passed_frames(done);

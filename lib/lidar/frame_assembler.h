@@ -53,6 +53,9 @@ class FrameAssembler {
   std::vector<LidarFrame> add(std::span<const LidarPoint> points);
   // End of stream: closes every open frame (partial) and forgets the stream.
   std::vector<LidarFrame> flush();
+  // The spin rate as measured since (lidar_decoder.h: SweepGeometry::rotation_hz), for unwrapping
+  // across gaps. Ignored unless finite and positive.
+  void set_rotation_hz(double rotation_hz);
 
   const FrameAssemblerStats& stats() const { return stats_; }
 

@@ -13,7 +13,7 @@ PacketOrder::PacketOrder(const PacketOrderConfig& config, TimeNs packet_period_n
     throw std::invalid_argument("PacketOrder: packet period and maximum gap must be positive");
 }
 
-bool PacketOrder::push(TimeNs t, std::span<const LidarPoint> points) {
+bool PacketOrder::push(TimeNs t, std::span<const LidarPoint> points, TimeNs next_due_ns) {
   if (released_any_ || !held_.empty()) {
     const TimeNs reference = held_.empty() ? last_released_ : newest_;
     if (t < reference - max_gap_ns_) {
@@ -41,6 +41,7 @@ bool PacketOrder::push(TimeNs t, std::span<const LidarPoint> points) {
   newest_ = held_.empty() && !released_any_ ? t : std::max(newest_, t);
   Held h;
   h.time = t;
+  h.next_due = next_due_ns > t ? next_due_ns : t + period_ns_;
   if (!spare_.empty()) {
     h.points = std::move(spare_.back());
     spare_.pop_back();
@@ -55,8 +56,9 @@ bool PacketOrder::pop(std::vector<LidarPoint>& out, bool everything) {
     return false;
   Held& next = held_.front();
   if (released_any_)
-    count_gap(last_released_, next.time);
+    count_gap(last_released_next_due_, next.time);
   last_released_ = next.time;
+  last_released_next_due_ = next.next_due;
   released_any_ = true;
   ++stats_.released;
   out.swap(next.points);
@@ -67,15 +69,15 @@ bool PacketOrder::pop(std::vector<LidarPoint>& out, bool everything) {
   return true;
 }
 
-void PacketOrder::count_gap(TimeNs previous, TimeNs next) {
-  const TimeNs gap = next - previous;
+void PacketOrder::count_gap(TimeNs previous_next_due, TimeNs next) {
+  const TimeNs gap = next - previous_next_due;  // 0 when nothing is missing
   if (gap > max_gap_ns_) {
     ++stats_.stream_gaps;
     return;
   }
   const auto periods = std::llround(static_cast<double>(gap) / static_cast<double>(period_ns_));
-  if (periods > 1)
-    stats_.lost += static_cast<std::uint64_t>(periods - 1);
+  if (periods > 0)
+    stats_.lost += static_cast<std::uint64_t>(periods);
 }
 
 }  // namespace rsu

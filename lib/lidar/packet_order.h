@@ -8,7 +8,8 @@
 //     (sweep_clusterer.h: time going backwards would restart it, dropping every pending point);
 //   - a packet with the time of one already taken is a DUPLICATE, dropped;
 //   - between two released packets, every missing period is a LOST packet (late ones included: their
-//     place was empty when released);
+//     place was empty when released), counted from when the earlier one said its successor was due
+//     (lidar_decoder.h: PacketOutcome::next_ns; past a field-of-view gap, not one period later);
 //   - a jump of more than `max_gap_ns` either way is the stream STOPPING or restarting (a sensor
 //     power cycle, a cable), not loss: the order restarts from that packet.
 // Holding packets delays every point by `depth` packet periods, so the depth is 0 by default: a LiDAR
@@ -47,12 +48,19 @@ class PacketOrder {
   // is not positive.
   PacketOrder(const PacketOrderConfig& config, TimeNs packet_period_ns, TimeNs max_gap_ns);
 
-  // One packet: its first firing time and its points (copied). Returns false if it was dropped
-  // (late or duplicate).
-  bool push(TimeNs first_firing_ns, std::span<const LidarPoint> points);
+  // One packet: its first firing time, when its successor is due (0: one packet period later) and its
+  // points (copied). Returns false if it was dropped (late or duplicate).
+  bool push(TimeNs first_firing_ns, std::span<const LidarPoint> points, TimeNs next_due_ns = 0);
   // The next packet in time order once more than `depth` are held, or any held one if `everything`
   // (the end of the stream). Its points replace `out`'s content. False when none is due.
   bool pop(std::vector<LidarPoint>& out, bool everything = false);
+
+  // The sensor's packet period as it changes (a dual-return stream's packets span half the time).
+  // Ignored unless positive.
+  void set_packet_period(TimeNs packet_period_ns) {
+    if (packet_period_ns > 0)
+      period_ns_ = packet_period_ns;
+  }
 
   std::size_t held() const { return held_.size(); }
   const PacketOrderStats& stats() const { return stats_; }
@@ -60,9 +68,10 @@ class PacketOrder {
  private:
   struct Held {
     TimeNs time = 0;
+    TimeNs next_due = 0;
     std::vector<LidarPoint> points;
   };
-  void count_gap(TimeNs previous, TimeNs next);
+  void count_gap(TimeNs previous_next_due, TimeNs next);
 
   PacketOrderConfig config_;
   TimeNs period_ns_;
@@ -71,6 +80,7 @@ class PacketOrder {
   std::vector<std::vector<LidarPoint>> spare_;  // released buffers, reused
   bool released_any_ = false;
   TimeNs last_released_ = 0;
+  TimeNs last_released_next_due_ = 0;
   TimeNs newest_ = 0;  // newest time pushed
   PacketOrderStats stats_;
 };

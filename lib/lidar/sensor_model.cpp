@@ -15,6 +15,20 @@ namespace {
 constexpr double kFiringIntervalUs = 2.304;
 constexpr double kVelodyneSequenceUs = 55.296;
 
+// The packet-format constants every Velodyne model sets. No manual gives a minimum range for the
+// VLP-32C or the HDL-32E; 1.0 m, as for the VLP-16 (below), is an assumption for them: it only bounds
+// what the simulator reports, the decoder keeps every return.
+void set_packet_format(SensorModel& m, double sequence_us, int sequences_per_block, double distance_unit_m,
+                       double max_range_m, std::uint8_t product_id) {
+  m.sequence_period_us = sequence_us;
+  m.sequences_per_block = sequences_per_block;
+  m.distance_unit_m = distance_unit_m;
+  m.min_range_m = 1.0;
+  m.max_range_m = max_range_m;
+  m.product_id = product_id;
+  m.rpm = 600.0;
+}
+
 }  // namespace
 
 Eigen::Vector3d SensorModel::beam_direction(std::size_t laser, double azimuth_rad) const {
@@ -43,6 +57,9 @@ std::string sensor_model_error(const SensorModel& model) {
   }
   if (!(model.rpm > 0.0) || !std::isfinite(model.rpm)) {
     return "sensor model '" + model.name + "': rpm must be positive";
+  }
+  if (!std::isfinite(model.first_firing_after_timestamp_us)) {
+    return "sensor model '" + model.name + "': the timestamp's place in the packet must be finite";
   }
   if (!(model.distance_unit_m > 0.0) || !std::isfinite(model.distance_unit_m)) {
     return "sensor model '" + model.name + "': distance unit must be positive";
@@ -73,15 +90,10 @@ SensorModel make_vlp16() {
     m.firing_offset_us.push_back(i * kFiringIntervalUs);
   }
   m.azimuth_interpolation_us = m.firing_offset_us;
-  m.sequence_period_us = kVelodyneSequenceUs;
-  m.sequences_per_block = 2;  // 16 lasers x 2 sequences fill the 32 channels of a data block
-  m.distance_unit_m = 0.002;
-  // The VLP-16 manual (63-9243, p. 3 of early revisions) quotes a range "from 1 m to 100 m", and
-  // users of the ROS velodyne driver saw no returns below about 0.9 m (ros-drivers/velodyne#60).
-  m.min_range_m = 1.0;
-  m.max_range_m = 100.0;
-  m.product_id = 0x22;
-  m.rpm = 600.0;
+  // 16 lasers x 2 sequences fill the 32 channels of a data block. The VLP-16 manual (63-9243, p. 3 of
+  // early revisions) quotes a range "from 1 m to 100 m", and users of the ROS velodyne driver saw no
+  // returns below about 0.9 m (ros-drivers/velodyne#60).
+  set_packet_format(m, kVelodyneSequenceUs, 2, 0.002, 100.0, 0x22);
   return m;
 }
 
@@ -105,15 +117,28 @@ SensorModel make_vlp32c() {
     // ours within 2 cm (beyond 10 m), with the manual's rule 0.4 %.
     m.azimuth_interpolation_us.push_back((i - i % 2) * kFiringIntervalUs);
   }
-  m.sequence_period_us = kVelodyneSequenceUs;
-  m.sequences_per_block = 1;
-  m.distance_unit_m = 0.004;
-  // No minimum range figure found in the VLP-32C manual (63-9325); 1.0 m, as for the VLP-16, is an
-  // assumption.
-  m.min_range_m = 1.0;
-  m.max_range_m = 200.0;
-  m.product_id = 0x28;
-  m.rpm = 600.0;
+  set_packet_format(m, kVelodyneSequenceUs, 1, 0.004, 200.0, 0x28);
+  return m;
+}
+
+SensorModel make_hdl32e() {
+  SensorModel m;
+  m.name = "hdl32e";
+  // HDL-32E user manual (63-9113), "Laser Firing Sequence" and "Vertical angle" in firing order; the
+  // same as the drivers' factory calibration file (HDL32.yaml: vert_correction, rot_correction 0).
+  m.elevation_deg = {-30.67, -9.33,  -29.33, -8.00,  -28.00, -6.67,  -26.67, -5.33,  -25.33, -4.00,  -24.00,
+                     -2.67,  -22.67, -1.33,  -21.33, 0.00,   -20.00, 1.33,   -18.67, 2.67,   -17.33, 4.00,
+                     -16.00, 5.33,   -14.67, 6.67,   -13.33, 8.00,   -12.00, 9.33,   -10.67, 10.67};
+  m.azimuth_offset_deg.assign(32, 0.0);
+  // One laser at a time every 1.152 us, a sequence of all 32 every 46.08 us, one sequence per block.
+  for (int i = 0; i < 32; ++i) {
+    m.firing_offset_us.push_back(i * 1.152);
+  }
+  m.azimuth_interpolation_us = m.firing_offset_us;
+  set_packet_format(m, 46.08, 1, 0.002, 100.0, 0x21);  // the manual quotes 80-100 m
+  // The manual's Ethernet transit timing: the timestamp is written at the end of the packet; a point's
+  // time is timestamp - 542.592 + block x 46.08 + laser x 1.152 us.
+  m.first_firing_after_timestamp_us = -542.592;
   return m;
 }
 
@@ -147,6 +172,9 @@ std::optional<SensorModel> sensor_model_by_name(std::string_view name) {
   }
   if (name == "vlp32c") {
     return make_vlp32c();
+  }
+  if (name == "hdl32e") {
+    return make_hdl32e();
   }
   constexpr std::string_view kGeneric = "generic";
   if (name.starts_with(kGeneric)) {

@@ -40,7 +40,10 @@ struct SensorModel {
   double min_range_m = 0.5;
   double max_range_m = 100.0;
   std::uint8_t product_id = 0;  // packet byte 1205; 0 = no Velodyne packet format
-  double rpm = 600.0;
+  double rpm = 600.0;           // nominal; a decoder measures the real rate from the packets
+  // The packet's first firing relative to its timestamp, microseconds: 0 where the timestamp is the
+  // first firing (VLP-16, VLP-32C), negative where it is written at the end of the packet (HDL-32E).
+  double first_firing_after_timestamp_us = 0.0;
 
   std::size_t laser_count() const { return elevation_deg.size(); }
   bool has_packet_format() const { return product_id != 0; }
@@ -59,12 +62,14 @@ std::string sensor_model_error(const SensorModel& model);
 
 SensorModel make_vlp16();
 SensorModel make_vlp32c();
+SensorModel make_hdl32e();
 // A generic N-ring model for scaling tests: elevations evenly from -25 deg to +15 deg, every laser
 // fires within one 55.296 us sequence, no packet format. Throws std::invalid_argument unless
 // 2 <= rings <= 256.
 SensorModel make_generic(int rings);
 
-// "vlp16", "vlp32c", "generic64", "generic128" (any "genericN" with 2 <= N <= 256); nullopt otherwise.
+// "vlp16", "vlp32c", "hdl32e", "generic64", "generic128" (any "genericN" with 2 <= N <= 256); nullopt
+// otherwise.
 std::optional<SensorModel> sensor_model_by_name(std::string_view name);
 
 }  // namespace rsu

@@ -18,9 +18,19 @@ constexpr std::uint16_t kAzimuthLimitCdeg = 36000;
 constexpr TimeNs kHourNs = 3600 * kNsPerSecond;
 constexpr std::uint32_t kHourUs = 3'600'000'000U;
 
-// Product ids from the Velodyne manuals' "Factory Bytes" table: HDL-32E, VLP-16 / Puck LITE,
-// Puck Hi-Res, VLP-32C, Velarray, VLS-128.
-constexpr std::array<std::uint8_t, 6> kKnownProducts = {0x21, 0x22, 0x24, 0x28, 0x31, 0x63};
+// Product ids from the Velodyne manuals' "Factory Bytes" table.
+struct Product {
+  std::uint8_t id;
+  std::string_view name;
+};
+constexpr std::array<Product, 6> kKnownProducts = {{{0x21, "HDL-32E"},
+                                                    {0x22, "VLP-16"},
+                                                    {0x24, "Puck Hi-Res"},
+                                                    {0x28, "VLP-32C"},
+                                                    {0x31, "Velarray"},
+                                                    {0x63, "VLS-128"}}};
+constexpr std::size_t kPositionTimestampOffset = 198;
+constexpr std::size_t kPositionNmeaOffset = 206;
 
 std::uint16_t read_u16(std::span<const std::uint8_t> b, std::size_t at) {
   return static_cast<std::uint16_t>(b[at] | (b[at + 1] << 8));
@@ -52,27 +62,6 @@ std::size_t channel_offset(std::size_t block, std::size_t channel) {
 TimeNs floor_div(TimeNs a, TimeNs b) {
   const TimeNs q = a / b;
   return (a % b != 0 && (a < 0) != (b < 0)) ? q - 1 : q;
-}
-
-// The time of `ns_past_hour` in the hour that puts it nearest `reference_ns`.
-TimeNs resolve_hour(TimeNs ns_past_hour, TimeNs reference_ns) {
-  // Keep clear of int64 overflow for absurd references (2^63 ns is ~292 years).
-  constexpr TimeNs kLimit = std::numeric_limits<TimeNs>::max() - 3 * kHourNs;
-  reference_ns = std::clamp(reference_ns, -kLimit, kLimit);
-  TimeNs t = floor_div(reference_ns, kHourNs) * kHourNs + ns_past_hour;
-  if (t - reference_ns > kHourNs / 2) {
-    t -= kHourNs;
-  } else if (reference_ns - t > kHourNs / 2) {
-    t += kHourNs;
-  }
-  return t;
-}
-
-// LidarPoint stores the azimuth as float; a double just below 2 pi can round up to float(2 pi),
-// outside [0, 2 pi). That direction is azimuth 0.
-float to_float_azimuth(double azimuth_rad) {
-  const auto a = static_cast<float>(azimuth_rad);
-  return a >= static_cast<float>(2.0 * std::numbers::pi) ? 0.0F : a;
 }
 
 void require_packet_format(const SensorModel& model) {
@@ -107,10 +96,11 @@ void encode_packet(const SensorModel& model, const PacketReturns& returns,
       out[channel_offset(b, c) + 2] = returns.reflectivity[b][c];
     }
   }
-  const TimeNs ns_past_hour =
-      returns.blocks.first_firing_ns - floor_div(returns.blocks.first_firing_ns, kHourNs) * kHourNs;
+  const TimeNs stamp_ns =
+      returns.blocks.first_firing_ns - std::llround(model.first_firing_after_timestamp_us * 1e3);
+  const TimeNs ns_past_hour = stamp_ns - floor_div(stamp_ns, kHourNs) * kHourNs;
   write_u32(out, kTimestampOffset, static_cast<std::uint32_t>(ns_past_hour / kNsPerUs));
-  out[kReturnModeOffset] = returns.return_mode;
+  out[kReturnModeOffset] = returns.blocks.dual_return ? kReturnDual : returns.return_mode;
   out[kProductIdOffset] = model.product_id;
 }
 
@@ -122,8 +112,6 @@ std::string_view to_string(DecodeResult result) {
       return "wrong_size";
     case DecodeResult::unknown_product:
       return "unknown_product";
-    case DecodeResult::product_mismatch:
-      return "product_mismatch";
     case DecodeResult::unsupported_return_mode:
       return "unsupported_return_mode";
     case DecodeResult::bad_block_flag:
@@ -132,13 +120,32 @@ std::string_view to_string(DecodeResult result) {
       return "azimuth_out_of_range";
     case DecodeResult::timestamp_out_of_range:
       return "timestamp_out_of_range";
+    case DecodeResult::dual_pair_mismatch:
+      return "dual_pair_mismatch";
   }
   return "unknown";
 }
 
-std::uint64_t DecodeStats::packets() const {
-  return accepted + wrong_size + unknown_product + product_mismatch + unsupported_return_mode +
-         bad_block_flag + azimuth_out_of_range + timestamp_out_of_range;
+std::string_view product_name(std::uint8_t product_id) {
+  for (const Product& p : kKnownProducts) {
+    if (p.id == product_id) {
+      return p.name;
+    }
+  }
+  return {};
+}
+
+TimeNs resolve_hour(TimeNs ns_past_hour, TimeNs reference_ns) {
+  // Keep clear of int64 overflow for absurd references (2^63 ns is ~292 years).
+  constexpr TimeNs kLimit = std::numeric_limits<TimeNs>::max() - 3 * kHourNs;
+  reference_ns = std::clamp(reference_ns, -kLimit, kLimit);
+  TimeNs t = floor_div(reference_ns, kHourNs) * kHourNs + ns_past_hour;
+  if (t - reference_ns > kHourNs / 2) {
+    t -= kHourNs;
+  } else if (reference_ns - t > kHourNs / 2) {
+    t += kHourNs;
+  }
+  return t;
 }
 
 DecodeResult parse_packet(const SensorModel& model, std::span<const std::uint8_t> payload,
@@ -147,14 +154,11 @@ DecodeResult parse_packet(const SensorModel& model, std::span<const std::uint8_t
     return DecodeResult::wrong_size;
   }
   const std::uint8_t product = payload[kProductIdOffset];
-  if (std::find(kKnownProducts.begin(), kKnownProducts.end(), product) == kKnownProducts.end()) {
+  if (product_name(product).empty()) {
     return DecodeResult::unknown_product;
   }
-  if (product != model.product_id) {
-    return DecodeResult::product_mismatch;
-  }
   const std::uint8_t mode = payload[kReturnModeOffset];
-  if (mode != kReturnStrongest && mode != kReturnLast) {
+  if (mode != kReturnStrongest && mode != kReturnLast && mode != kReturnDual) {
     return DecodeResult::unsupported_return_mode;
   }
   for (std::size_t b = 0; b < kBlocksPerPacket; ++b) {
@@ -171,9 +175,17 @@ DecodeResult parse_packet(const SensorModel& model, std::span<const std::uint8_t
   if (timestamp_us >= kHourUs) {
     return DecodeResult::timestamp_out_of_range;
   }
+  if (mode == kReturnDual) {
+    for (std::size_t b = 0; b < kBlocksPerPacket; b += 2) {
+      if (read_u16(payload, block_offset(b) + 2) != read_u16(payload, block_offset(b + 1) + 2)) {
+        return DecodeResult::dual_pair_mismatch;
+      }
+    }
+  }
 
   // Valid: only now touch `out`.
-  out.blocks.first_firing_ns = resolve_hour(static_cast<TimeNs>(timestamp_us) * kNsPerUs, reference_ns);
+  out.blocks.first_firing_ns = resolve_hour(static_cast<TimeNs>(timestamp_us) * kNsPerUs, reference_ns) +
+                               std::llround(model.first_firing_after_timestamp_us * 1e3);
   for (std::size_t b = 0; b < kBlocksPerPacket; ++b) {
     out.blocks.azimuth_cdeg[b] = read_u16(payload, block_offset(b) + 2);
     for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
@@ -181,79 +193,116 @@ DecodeResult parse_packet(const SensorModel& model, std::span<const std::uint8_t
       out.reflectivity[b][c] = payload[channel_offset(b, c) + 2];
     }
   }
+  out.blocks.dual_return = mode == kReturnDual;
   out.return_mode = mode;
+  out.product_id = product;
   return DecodeResult::accepted;
 }
 
-PacketDecoder::PacketDecoder(const SensorModel& model) : model_(model) {
-  require_packet_format(model_);
-  for (const double elevation_deg : model_.elevation_deg) {
-    const double w = elevation_deg * std::numbers::pi / 180.0;
-    cos_elevation_.push_back(std::cos(w));
-    sin_elevation_.push_back(std::sin(w));
+std::optional<PositionPacket> parse_position_packet(std::span<const std::uint8_t> payload) {
+  if (payload.size() != kPositionPacketBytes) {
+    return std::nullopt;
   }
+  PositionPacket p;
+  p.timestamp_us = read_u32(payload, kPositionTimestampOffset);
+  if (p.timestamp_us >= kHourUs) {
+    return std::nullopt;
+  }
+  const auto text = payload.subspan(kPositionNmeaOffset);
+  std::size_t n = 0;
+  while (n < text.size() && text[n] != 0 && text[n] != '\r' && text[n] != '\n') {
+    ++n;
+  }
+  // The bytes are the packet's own: a view of them stays valid as long as the caller's payload does.
+  p.nmea = std::string_view(reinterpret_cast<const char*>(text.data()), n);
+  return p;
 }
 
-void PacketDecoder::count(DecodeResult result) {
-  switch (result) {
-    case DecodeResult::accepted:
-      ++stats_.accepted;
-      break;
-    case DecodeResult::wrong_size:
-      ++stats_.wrong_size;
-      break;
-    case DecodeResult::unknown_product:
-      ++stats_.unknown_product;
-      break;
-    case DecodeResult::product_mismatch:
-      ++stats_.product_mismatch;
-      break;
-    case DecodeResult::unsupported_return_mode:
-      ++stats_.unsupported_return_mode;
-      break;
-    case DecodeResult::bad_block_flag:
-      ++stats_.bad_block_flag;
-      break;
-    case DecodeResult::azimuth_out_of_range:
-      ++stats_.azimuth_out_of_range;
-      break;
-    case DecodeResult::timestamp_out_of_range:
-      ++stats_.timestamp_out_of_range;
-      break;
-  }
+namespace {
+
+// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant's days_from_civil).
+std::int64_t days_from_civil(std::int64_t y, unsigned m, unsigned d) {
+  y -= m <= 2 ? 1 : 0;
+  const std::int64_t era = (y >= 0 ? y : y - 399) / 400;
+  const auto yoe = static_cast<unsigned>(y - era * 400);
+  const unsigned doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+  const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return era * 146097 + static_cast<std::int64_t>(doe) - 719468;
 }
 
-DecodeResult PacketDecoder::decode(std::span<const std::uint8_t> payload, TimeNs reference_ns,
-                                   std::vector<LidarPoint>& out) {
-  const DecodeResult result = parse_packet(model_, payload, reference_ns, returns_);
-  count(result);
-  if (result != DecodeResult::accepted) {
-    return result;
+// The digits text[at, at + n) as a number; nullopt if any is not a digit.
+std::optional<unsigned> digits(std::string_view text, std::size_t at, std::size_t n) {
+  if (at + n > text.size()) {
+    return std::nullopt;
   }
-  beam_firings(model_, returns_.blocks, firings_);
-  for (const Firing& f : firings_) {
-    const auto b = static_cast<std::size_t>(f.block);
-    const auto c = static_cast<std::size_t>(f.channel);
-    const std::uint16_t raw = returns_.distance_raw[b][c];
-    if (raw == 0) {
-      ++stats_.no_return;
-      continue;
+  unsigned v = 0;
+  for (std::size_t i = at; i < at + n; ++i) {
+    if (text[i] < '0' || text[i] > '9') {
+      return std::nullopt;
     }
-    const double range = raw * model_.distance_unit_m;
-    const double horizontal = range * cos_elevation_[f.laser];
-    // Sensor frame x forward, y left, z up; Velodyne azimuth is clockwise (sensor_model.h).
-    LidarPoint p;
-    p.x = static_cast<float>(horizontal * std::cos(f.azimuth_rad));
-    p.y = static_cast<float>(-horizontal * std::sin(f.azimuth_rad));
-    p.z = static_cast<float>(range * sin_elevation_[f.laser]);
-    p.intensity = returns_.reflectivity[b][c];
-    p.ring = f.laser;
-    p.azimuth_rad = to_float_azimuth(f.azimuth_rad);
-    p.time_ns = f.time_ns;
-    out.push_back(p);
-    ++stats_.points_decoded;
+    v = v * 10 + static_cast<unsigned>(text[i] - '0');
   }
-  return result;
+  return v;
+}
+
+}  // namespace
+
+std::optional<TimeNs> nmea_rmc_utc(std::string_view s) {
+  // $ttRMC,hhmmss[.sss],A,lat,N,lon,E,speed,course,ddmmyy,...*CS
+  if (s.size() < 7 || s[0] != '$' || s.substr(3, 4) != "RMC,") {
+    return std::nullopt;
+  }
+  const std::size_t star = s.rfind('*');
+  if (star == std::string_view::npos || star + 3 > s.size()) {
+    return std::nullopt;
+  }
+  unsigned sum = 0;
+  for (std::size_t i = 1; i < star; ++i) {
+    sum ^= static_cast<unsigned char>(s[i]);
+  }
+  unsigned stated = 0;
+  for (std::size_t i = star + 1; i < star + 3; ++i) {
+    const char c = s[i];
+    const int v = c >= '0' && c <= '9' ? c - '0' : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+    if (v < 0) {
+      return std::nullopt;
+    }
+    stated = stated * 16 + static_cast<unsigned>(v);
+  }
+  if (stated != sum) {
+    return std::nullopt;
+  }
+  // Fields after the sentence name: 1 time, 2 status, ..., 9 date.
+  std::array<std::string_view, 10> field{};
+  std::size_t begin = 7;
+  for (std::size_t f = 1; f < field.size(); ++f) {
+    const std::size_t comma = s.find(',', begin);
+    const std::size_t end = comma == std::string_view::npos ? star : std::min(comma, star);
+    field[f] = s.substr(begin, end - begin);
+    if (end == star && f + 1 < field.size()) {
+      return std::nullopt;  // fewer fields than a date needs
+    }
+    begin = end + 1;
+  }
+  const std::string_view time = field[1];
+  const std::string_view date = field[9];
+  if (field[2] != "A" || time.size() < 6 || date.size() != 6) {
+    return std::nullopt;
+  }
+  const auto hh = digits(time, 0, 2);
+  const auto mm = digits(time, 2, 2);
+  const auto ss = digits(time, 4, 2);
+  const auto day = digits(date, 0, 2);
+  const auto month = digits(date, 2, 2);
+  const auto yy = digits(date, 4, 2);
+  if (!hh || !mm || !ss || !day || !month || !yy || *hh > 23 || *mm > 59 || *ss > 60 || *day < 1 ||
+      *day > 31 || *month < 1 || *month > 12) {
+    return std::nullopt;
+  }
+  // Two-digit years: 1980-2079 (GPS time begins in 1980).
+  const std::int64_t year = *yy >= 80 ? 1900 + *yy : 2000 + *yy;
+  const std::int64_t days = days_from_civil(year, *month, *day);
+  return (days * 86400 + std::int64_t{*hh} * 3600 + std::int64_t{*mm} * 60 + *ss) * kNsPerSecond;
 }
 
 }  // namespace rsu

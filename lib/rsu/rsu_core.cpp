@@ -23,15 +23,8 @@ namespace rsu::core {
 
 namespace {
 
-SensorModel resolve_model(const RsuCoreConfig& config) {
-  const auto model = sensor_model_by_name(config.sensor_model);
-  if (!model) {
-    throw std::invalid_argument("unknown LiDAR model \"" + config.sensor_model +
-                                "\" (expected vlp16 or vlp32c)");
-  }
-  if (!model->has_packet_format()) {
-    throw std::invalid_argument("LiDAR model \"" + config.sensor_model + "\" has no Velodyne packet format");
-  }
+// The configured sensor's decoder, after checking the rest of the configuration it depends on.
+std::unique_ptr<LidarDecoder> make_decoder(const RsuCoreConfig& config) {
   const Pose3& m = config.mount;
   for (const double v : {m.x, m.y, m.z, m.roll, m.pitch, m.yaw}) {
     if (!std::isfinite(v))
@@ -43,27 +36,29 @@ SensorModel resolve_model(const RsuCoreConfig& config) {
     throw std::invalid_argument("learning frames must be >= 0");
   if (config.security.mode == v2i::SecurityMode::kSigned && !config.signing_key)
     throw std::invalid_argument("signed mode needs the RSU's signing key (security.key_file)");
-  return *model;
+  return make_lidar_decoder(config.sensor_model, config.sensor_options);
 }
 
-double azimuth_spread_rad(const SensorModel& model) {
-  if (model.azimuth_offset_deg.empty())
+double azimuth_spread_rad(const SweepGeometry& geometry) {
+  const std::vector<double>& offsets = geometry.ring_azimuth_offset_rad;
+  if (offsets.empty())
     return 0.0;
-  const auto [lo, hi] = std::minmax_element(model.azimuth_offset_deg.begin(), model.azimuth_offset_deg.end());
-  return deg_to_rad(*hi - *lo);
+  const auto [lo, hi] = std::minmax_element(offsets.begin(), offsets.end());
+  return *hi - *lo;
 }
 
-// The per-laser azimuth offsets in radians, channel order: the sweep clusterer's laser-aware closure rule.
-std::vector<double> laser_offsets_rad(const SensorModel& model) {
-  std::vector<double> out;
-  for (const double deg : model.azimuth_offset_deg)
-    out.push_back(deg_to_rad(deg));
-  return out;
+// The release rule's margin grows by how far beams may lead the rotor at their firing (the VLP-32C's
+// precision azimuth: sensor_model.h), so that the exact rule stays exact.
+SweepConfig sweep_config(const RsuCoreConfig& config, const SweepGeometry& geometry) {
+  SweepConfig c = config.sweep;
+  c.release_margin_deg += rad_to_deg(geometry.azimuth_lead_rad);
+  return c;
 }
 
-FrameAssemblerConfig assembler_config(const SensorModel& model) {
+FrameAssemblerConfig assembler_config(const SweepGeometry& geometry) {
   FrameAssemblerConfig c;
-  c.rotation_hz = model.rotation_hz();
+  c.rotation_hz = geometry.rotation_hz;
+  c.cut_azimuth_deg = rad_to_deg(geometry.rotation_start_azimuth_rad);
   return c;
 }
 
@@ -95,10 +90,25 @@ bool same_pose(const Pose3& a, const Pose3& b) {
 
 // Whether a learned background stays valid under `b`: it depends on the sensor, its pose and the
 // background model's parameters only.
+// Whether the sensor is decoded the same way under both (the decoder, its counters and its measured
+// rate carry over a reload then).
+bool same_sensor_setup(const RsuCoreConfig& a, const RsuCoreConfig& b) {
+  const LidarDecoderOptions& x = a.sensor_options;
+  const LidarDecoderOptions& y = b.sensor_options;
+  const bool same_tables =
+      x.calibrated_model.has_value() == y.calibrated_model.has_value() &&
+      (!x.calibrated_model ||
+       (x.calibrated_model->elevation_deg == y.calibrated_model->elevation_deg &&
+        x.calibrated_model->azimuth_offset_deg == y.calibrated_model->azimuth_offset_deg &&
+        x.calibrated_model->distance_unit_m == y.calibrated_model->distance_unit_m));
+  return a.sensor_model == b.sensor_model && same_tables && x.metadata_text == y.metadata_text &&
+         x.returns == y.returns && x.rotation_start_azimuth_deg == y.rotation_start_azimuth_deg;
+}
+
 bool same_background_setup(const RsuCoreConfig& a, const RsuCoreConfig& b) {
   const auto& p = a.perception;
   const auto& q = b.perception;
-  return a.sensor_model == b.sensor_model && same_pose(a.mount, b.mount) && p.background == q.background &&
+  return same_sensor_setup(a, b) && same_pose(a.mount, b.mount) && p.background == q.background &&
          p.ground_prefilter == q.ground_prefilter && p.ground.ground_z == q.ground.ground_z &&
          p.ground.min_height == q.ground.min_height &&
          p.reference_frame.match_radius_m == q.reference_frame.match_radius_m &&
@@ -120,10 +130,9 @@ bool same_registry_setup(const v2i::VehicleRegistryConfig& a, const v2i::Vehicle
 
 // The packet stream's order rule: the sensor's packet period, and a silence as long as the sweep
 // clusterer's restart rule (SweepConfig::max_gap_rotations) is a restart of the stream.
-PacketOrder packet_order_for(const RsuCoreConfig& config, const SensorModel& model) {
-  const auto max_gap = static_cast<TimeNs>(config.sweep.max_gap_rotations / model.rotation_hz() * 1e9);
-  return PacketOrder(config.packet_order, FiringSchedule(model, 0).packet_period_ns(),
-                     std::max<TimeNs>(1, max_gap));
+PacketOrder packet_order_for(const RsuCoreConfig& config, const SweepGeometry& geometry) {
+  const auto max_gap = static_cast<TimeNs>(config.sweep.max_gap_rotations / geometry.rotation_hz * 1e9);
+  return PacketOrder(config.packet_order, geometry.packet_period_ns, std::max<TimeNs>(1, max_gap));
 }
 
 void append(LidarStepResult& into, LidarStepResult&& step) {
@@ -144,16 +153,15 @@ TimeNs mean_time(const std::vector<LidarPoint>& points) {
 
 RsuCore::RsuCore(const RsuCoreConfig& config)
     : config_(config),
-      model_(resolve_model(config)),
+      decoder_(make_decoder(config)),
       sensor_to_map_(config.mount.to_isometry()),
       lidar_xy_(config.mount.x, config.mount.y),
-      rotation_period_ns_(static_cast<TimeNs>(1e9 / model_.rotation_hz())),
-      decoder_(model_),
-      packet_order_(packet_order_for(config, model_)),
-      assembler_(assembler_config(model_)),
+      rotation_hz_(decoder_->geometry().rotation_hz),
+      packet_order_(packet_order_for(config, decoder_->geometry())),
+      assembler_(assembler_config(decoder_->geometry())),
       background_(perception::background_model_config(config.perception), lidar_xy_),
-      clusterer_(config.sweep, config.perception.clustering, lidar_xy_, model_.rotation_hz(),
-                 laser_offsets_rad(model_)),
+      clusterer_(sweep_config(config, decoder_->geometry()), config.perception.clustering, lidar_xy_,
+                 decoder_->geometry().rotation_hz, decoder_->geometry().ring_azimuth_offset_rad),
       background_ready_(config.background.learning_frames == 0),
       flood_limiter_(config.datagram_flood),
       peer_flood_limiter_(config.peers.flood),
@@ -289,21 +297,36 @@ LidarStepResult RsuCore::learn(std::span<const LidarPoint> map_points, bool whol
   return result;
 }
 
+void RsuCore::follow_geometry() {
+  const SweepGeometry& g = decoder_->geometry();
+  packet_order_.set_packet_period(g.packet_period_ns);
+  // A rotation rate measured anew (the decoder smooths it packet by packet): passed on when it moved
+  // by more than 0.1 %, which is what unwrapping across gaps and the rotation period need.
+  if (std::abs(g.rotation_hz - rotation_hz_) <= 1e-3 * rotation_hz_)
+    return;
+  rotation_hz_ = g.rotation_hz;
+  assembler_.set_rotation_hz(rotation_hz_);
+  clusterer_.set_rotation_hz(rotation_hz_);
+}
+
 LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now) {
   sensor_scratch_.clear();
-  if (decoder_.decode(payload, now, sensor_scratch_) != DecodeResult::accepted) {
-    return {};  // counted by the decoder, by reason
+  LidarStepResult result;
+  result.packet = decoder_->decode(payload, now, sensor_scratch_);
+  if (!result.packet.is_data()) {
+    return result;  // counted by the decoder, by kind and reason
   }
-  if (config_.max_packet_age > 0 && now - decoder_.last_first_firing_ns() > config_.max_packet_age) {
+  follow_geometry();
+  if (config_.max_packet_age > 0 && now - result.packet.first_ns > config_.max_packet_age) {
     ++lidar_stats_.packets_too_late;  // behind: shed (RsuCoreConfig::max_packet_age)
     if (!shedding_)
       clusterer_.restart();  // what is open now lacks the shed points: never fitted as whole
     shedding_ = true;
-    return {};
+    return result;
   }
   shedding_ = false;
-  packet_order_.push(decoder_.last_first_firing_ns(), sensor_scratch_);  // a late one is counted
-  LidarStepResult result;
+  // A late one is counted.
+  packet_order_.push(result.packet.first_ns, sensor_scratch_, result.packet.next_ns);
   while (packet_order_.pop(ordered_scratch_))
     append(result, on_lidar_points(ordered_scratch_, now));
   return result;
@@ -385,12 +408,14 @@ TimeNs RsuCore::passed_time(const std::vector<Eigen::Vector2d>& outline) const {
   // past it, and future firings lag the sweep by the offset spread plus the margin.
   const double d = config_.perception.clustering.tolerance_m;
   const double closing = nearest > d ? std::asin(d / nearest) : std::numbers::pi / 2.0;
-  const double lag = azimuth_spread_rad(model_) + deg_to_rad(config_.sweep.release_margin_deg);
+  const SweepGeometry& geometry = decoder_->geometry();
+  const double lag =
+      azimuth_spread_rad(geometry) + geometry.azimuth_lead_rad + deg_to_rad(config_.sweep.release_margin_deg);
   const double target = reference + ahead + closing + lag;
   const double forward = wrap_angle_positive(target - static_cast<double>(sweep_point_.azimuth_rad));
   if (forward > std::numbers::pi)
     return sweep_point_.time_ns;  // already behind the sweep
-  const double radians_per_ns = 2.0 * std::numbers::pi / static_cast<double>(rotation_period_ns_);
+  const double radians_per_ns = 2.0 * std::numbers::pi / static_cast<double>(rotation_period_ns());
   return sweep_point_.time_ns + static_cast<TimeNs>(forward / radians_per_ns);
 }
 
@@ -451,7 +476,7 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
   for (const v2i::RegisteredVehicle* v : registry_.active(now)) {
     const auto it = channels_.find(v->announcement.vehicle_id);
     if (it != channels_.end() && it->second.matched &&
-        std::abs(batch_time - it->second.last_matched_sweep) < rotation_period_ns_ / 2) {
+        std::abs(batch_time - it->second.last_matched_sweep) < rotation_period_ns() / 2) {
       continue;
     }
     vehicles.push_back(v);
@@ -606,7 +631,7 @@ void RsuCore::gather(std::vector<SweptCluster>&& clusters, TimeNs now) {
                   held.release_at,
                   std::min(passed_time(far ? outline
                                            : std::vector<Eigen::Vector2d>(grown[j].begin(), grown[j].end())),
-                           held.first_time + rotation_period_ns_ / 2))
+                           held.first_time + rotation_period_ns() / 2))
             : held.first_time;
   }
 }
@@ -753,6 +778,8 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
     fresh.background_ready_ = background_ready_;
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }
+  if (same_sensor_setup(config_, next))
+    fresh.decoder_ = std::move(decoder_);  // its counters and measured rate go on
   fresh.channels_ = std::move(channels_);
   fresh.authenticator_ = std::move(authenticator_);
   fresh.authenticator_.reconfigure(next.security, next.trust_list);
@@ -810,15 +837,13 @@ std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
   }
   out.emplace_back("registry.expired", registry_.stats().expired);
   out.emplace_back("registry.vehicles", registry_.size());
-  const DecodeStats& p = decoder_.stats();
-  out.emplace_back("packet.accepted", p.accepted);
-  out.emplace_back("packet.wrong_size", p.wrong_size);
-  out.emplace_back("packet.unknown_product", p.unknown_product);
-  out.emplace_back("packet.product_mismatch", p.product_mismatch);
-  out.emplace_back("packet.unsupported_return_mode", p.unsupported_return_mode);
-  out.emplace_back("packet.bad_block_flag", p.bad_block_flag);
-  out.emplace_back("packet.azimuth_out_of_range", p.azimuth_out_of_range);
-  out.emplace_back("packet.timestamp_out_of_range", p.timestamp_out_of_range);
+  // The decoder's outcomes as packet.<outcome>, its informational counts as decoder.<name>.
+  for (const auto& [name, value] : decoder_->counters()) {
+    if (name.starts_with("note."))
+      out.emplace_back("decoder." + name.substr(5), value);
+    else
+      out.emplace_back("packet." + name, value);
+  }
   const PacketOrderStats& o = packet_order_.stats();
   out.emplace_back("packet.lost", o.lost);
   out.emplace_back("packet.reordered", o.reordered);

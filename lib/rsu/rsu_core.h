@@ -24,6 +24,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -36,9 +37,9 @@
 
 #include "common/time.h"
 #include "lidar/frame_assembler.h"
+#include "lidar/lidar_decoder.h"
 #include "lidar/packet_order.h"
 #include "lidar/point.h"
-#include "lidar/velodyne_packet.h"
 #include "perception/background_model.h"
 #include "perception/vehicle_fix.h"
 #include "rsu/datagram_outcome.h"
@@ -78,6 +79,8 @@ struct OutgoingCorrection {
 struct LidarStepResult {
   std::vector<OutgoingCorrection> corrections;
   bool background_became_ready = false;  // learning finished during this step (log it)
+  // on_lidar_packet: what the decoder made of the payload (refused ones: the reason, to log).
+  PacketOutcome packet;
 };
 
 struct LidarStats {
@@ -123,8 +126,9 @@ class RsuCore {
   DatagramOutcome on_peer_announcement(std::span<const std::uint8_t> datagram, const PeerProvenance& from,
                                        TimeNs now);
 
-  // One Velodyne data packet (UDP payload). `now` is its receive time: it resolves the packet's hour.
-  // Packets pass a reorder stage first (RsuCoreConfig::packet_order): held ones are processed later.
+  // One UDP payload of the LiDAR (lidar/lidar_decoder.h: the configured sensor's decoder). `now` is its
+  // receive time: it resolves what the packet's own time leaves ambiguous. Data packets pass a reorder
+  // stage first (RsuCoreConfig::packet_order): held ones are processed later.
   LidarStepResult on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now);
   // Points in the SENSOR frame, in firing order, from a streaming source (a part of a rotation).
   LidarStepResult on_lidar_points(std::span<const LidarPoint> points_in_sensor_frame, TimeNs now);
@@ -159,7 +163,10 @@ class RsuCore {
   const v2i::EnumCounter<v2i::DecodeStatus>& decode_counts() const { return decode_counts_; }
   const v2i::EnumCounter<v2i::AnnouncementReason>& validation_counts() const { return validator_.counts(); }
   const v2i::MessageAuthenticator& authenticator() const { return authenticator_; }
-  const DecodeStats& packet_stats() const { return decoder_.stats(); }
+  // The configured sensor's packet decoder (its counters, geometry and notices).
+  const LidarDecoder& lidar_decoder() const { return *decoder_; }
+  // Notices the decoder queued for the operator (log them once each).
+  std::vector<std::string> take_lidar_notices() { return decoder_->take_notices(); }
   const PacketOrderStats& packet_order_stats() const { return packet_order_.stats(); }
   const SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
   const LidarStats& lidar_stats() const { return lidar_stats_; }
@@ -173,6 +180,9 @@ class RsuCore {
   };
 
   void to_map_frame(std::span<const LidarPoint> in, std::vector<LidarPoint>& out) const;
+  // Passes a changed rotation rate or packet period measured by the decoder on to the stages.
+  void follow_geometry();
+  TimeNs rotation_period_ns() const { return static_cast<TimeNs>(1e9 / rotation_hz_); }
   LidarStepResult learn(std::span<const LidarPoint> map_points, bool whole_frame);
   void add_background_frame(std::span<const LidarPoint> map_points);
   // The clusters gathered for one matched vehicle in this rotation, waiting for the sweep to pass the
@@ -218,12 +228,11 @@ class RsuCore {
   DatagramOutcome finish_peer(DatagramOutcome outcome);
 
   RsuCoreConfig config_;
-  SensorModel model_;
+  std::unique_ptr<LidarDecoder> decoder_;
   Eigen::Isometry3d sensor_to_map_;
   Eigen::Vector2d lidar_xy_;
-  TimeNs rotation_period_ns_;
+  double rotation_hz_;  // as last applied to the stages below (follow_geometry)
 
-  PacketDecoder decoder_;
   PacketOrder packet_order_;
   FrameAssembler assembler_;  // whole rotations for background learning
   perception::BackgroundModel background_;

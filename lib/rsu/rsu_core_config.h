@@ -9,6 +9,7 @@
 
 #include "common/pose.h"
 #include "common/time.h"
+#include "lidar/lidar_decoder.h"
 #include "lidar/packet_order.h"
 #include "lidar/sensor_model.h"
 #include "perception/pipeline.h"
@@ -76,8 +77,10 @@ struct PeerConfig {
 struct RsuCoreConfig {
   std::uint64_t rsu_id = 1;
 
-  // The LiDAR: its model and its surveyed pose in the map frame (sensor -> map).
+  // The LiDAR: its model, what else its decoder needs (calibration, metadata, returns used, rotation
+  // start: lidar/lidar_decoder.h) and its surveyed pose in the map frame (sensor -> map).
   std::string sensor_model = "vlp16";
+  LidarDecoderOptions sensor_options;
   Pose3 mount;
 
   BackgroundLearningConfig background;

@@ -74,6 +74,14 @@ void SweepClusterer::init(double rotation_hz) {
   lag_rad_ += deg_to_rad(config_.release_margin_deg);
 }
 
+void SweepClusterer::set_rotation_hz(double rotation_hz) {
+  if (!(rotation_hz > 0.0) || !std::isfinite(rotation_hz)) {
+    return;
+  }
+  radians_per_ns_ = kTwoPi * rotation_hz * 1e-9;
+  max_gap_ns_ = static_cast<TimeNs>(config_.max_gap_rotations / rotation_hz * 1e9);
+}
+
 void SweepClusterer::restart() {
   stats_.points_dropped_restart += points_.size();
   points_.clear();

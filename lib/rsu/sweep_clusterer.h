@@ -99,6 +99,10 @@ class SweepClusterer {
   // the clusters open at that moment are truncated and must not be fitted as whole vehicles.
   void restart();
 
+  // The spin rate as measured since (lidar_decoder.h: SweepGeometry::rotation_hz). Ignored unless
+  // finite and positive.
+  void set_rotation_hz(double rotation_hz);
+
   std::size_t pending_points() const { return points_.size(); }
   const SweepClustererStats& stats() const { return stats_; }
 

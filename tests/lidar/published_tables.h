@@ -20,6 +20,12 @@ constexpr std::array<double, 32> kVlp32cRotCorrectionDeg = {
     -1.4, 4.2, -1.4, 1.4, -1.4, 1.4, -4.2, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 1.4,
     -1.4, 4.2, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4, -1.4, 1.4, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4};
 
+// HDL-32E, firing order (user manual 63-9113; the drivers' HDL32.yaml).
+constexpr std::array<double, 32> kHdl32eElevationDeg = {
+    -30.67, -9.33,  -29.33, -8.00,  -28.00, -6.67,  -26.67, -5.33,  -25.33, -4.00,  -24.00,
+    -2.67,  -22.67, -1.33,  -21.33, 0.00,   -20.00, 1.33,   -18.67, 2.67,   -17.33, 4.00,
+    -16.00, 5.33,   -14.67, 6.67,   -13.33, 8.00,   -12.00, 9.33,   -10.67, 10.67};
+
 constexpr double kSequenceUs = 55.296;
 constexpr double kFiringIntervalUs = 2.304;
 

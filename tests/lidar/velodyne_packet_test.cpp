@@ -1,5 +1,7 @@
 #include "lidar/velodyne_packet.h"
 
+#include "lidar/velodyne_decoder.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,6 +9,7 @@
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 #include "packet_stream.h"
 #include "published_tables.h"
@@ -22,6 +25,9 @@ std::uint16_t le16(const std::array<std::uint8_t, kPacketBytes>& b, std::size_t 
 }
 
 double elevation_deg(const SensorModel& m, std::size_t laser) {
+  if (m.name == "hdl32e") {
+    return test::kHdl32eElevationDeg[laser];
+  }
   return m.name == "vlp16" ? test::kVlp16ElevationDeg[laser] : test::kVlp32cElevationDeg[laser];
 }
 
@@ -74,14 +80,14 @@ TEST(LidarVelodynePacket, EncodedByteLayout) {
 void check_round_trip(const SensorModel& model) {
   std::mt19937_64 rng(17);
   const FiringSchedule schedule(model, 1'700'000'000 * kNsPerSecond + 55'555, 250.0);
-  PacketDecoder decoder(model);
+  VelodyneDecoder decoder(model);
   std::uint64_t expected_points = 0;
   std::uint64_t expected_none = 0;
   for (std::int64_t k = 0; k < 60; ++k) {
     const test::EncodedPacket packet = test::make_packet(schedule, k, rng, 0.2);
     std::vector<LidarPoint> points;
     const TimeNs received = packet.returns.blocks.first_firing_ns + 2 * kNsPerMs;
-    ASSERT_EQ(decoder.decode(packet.bytes, received, points), DecodeResult::accepted);
+    ASSERT_EQ(decoder.decode(packet.bytes, received, points).reason, "accepted");
     std::size_t next = 0;
     for (std::size_t i = 0; i < packet.firings.size(); ++i) {
       const Firing& f = packet.firings[i];
@@ -111,7 +117,7 @@ void check_round_trip(const SensorModel& model) {
   }
   EXPECT_EQ(decoder.stats().accepted, 60U);
   EXPECT_EQ(decoder.stats().rejected(), 0U);
-  EXPECT_EQ(decoder.stats().points_decoded, expected_points);
+  EXPECT_EQ(decoder.stats().points, expected_points);
   EXPECT_EQ(decoder.stats().no_return, expected_none);
 }
 
@@ -120,6 +126,10 @@ TEST(LidarVelodynePacket, RoundTripVlp16) {
 }
 TEST(LidarVelodynePacket, RoundTripVlp32c) {
   check_round_trip(make_vlp32c());
+}
+
+TEST(LidarVelodynePacket, RoundTripHdl32e) {
+  check_round_trip(make_hdl32e());
 }
 
 TEST(LidarVelodynePacket, ParseReproducesRawContent) {
@@ -143,7 +153,7 @@ TEST(LidarVelodynePacket, TopOfHourWrap) {
   // The stream crosses 06:00:00 a few packets in; packet 1 itself straddles the hour.
   const TimeNs hour = 123'456 * kHour;
   const FiringSchedule schedule(model, hour - 900 * kNsPerUs);
-  PacketDecoder decoder(model);
+  VelodyneDecoder decoder(model);
   for (std::int64_t k = 0; k < 6; ++k) {
     const test::EncodedPacket packet = test::make_packet(schedule, k, rng, 0.0);
     const TimeNs truth = packet.returns.blocks.first_firing_ns;
@@ -151,7 +161,7 @@ TEST(LidarVelodynePacket, TopOfHourWrap) {
     for (const TimeNs delta :
          {TimeNs{0}, 3 * kNsPerMs, -3 * kNsPerMs, 29 * 60 * kNsPerSecond, -29 * 60 * kNsPerSecond}) {
       std::vector<LidarPoint> points;
-      ASSERT_EQ(decoder.decode(packet.bytes, truth + delta, points), DecodeResult::accepted);
+      ASSERT_TRUE(decoder.decode(packet.bytes, truth + delta, points).is_data());
       ASSERT_EQ(points.size(), packet.firings.size());
       for (std::size_t i = 0; i < points.size(); ++i) {
         ASSERT_EQ(points[i].time_ns, packet.firings[i].time_ns) << "packet " << k << " delta " << delta;
@@ -159,7 +169,7 @@ TEST(LidarVelodynePacket, TopOfHourWrap) {
     }
     // More than half an hour away, the nearest hour is the wrong one: documented, not hidden.
     std::vector<LidarPoint> points;
-    ASSERT_EQ(decoder.decode(packet.bytes, truth + 31 * 60 * kNsPerSecond, points), DecodeResult::accepted);
+    ASSERT_TRUE(decoder.decode(packet.bytes, truth + 31 * 60 * kNsPerSecond, points).is_data());
     EXPECT_EQ(points.front().time_ns, packet.firings.front().time_ns + kHour);
   }
 }
@@ -168,64 +178,84 @@ TEST(LidarVelodynePacket, RejectsWrongSizes) {
   const SensorModel model = make_vlp16();
   std::mt19937_64 rng(1);
   const test::EncodedPacket packet = test::make_packet(FiringSchedule(model, 0), 0, rng, 0.0);
-  PacketDecoder decoder(model);
+  VelodyneDecoder decoder(model);
   std::vector<LidarPoint> points(3);  // pre-existing content must survive rejections
   std::vector<std::uint8_t> longer(packet.bytes.begin(), packet.bytes.end());
   longer.push_back(0);
   for (const std::size_t n : {0UL, 1UL, 100UL, 1200UL, 1205UL}) {
-    EXPECT_EQ(decoder.decode(std::span(packet.bytes).first(n), 0, points), DecodeResult::wrong_size) << n;
+    const PacketOutcome outcome = decoder.decode(std::span(packet.bytes).first(n), 0, points);
+    EXPECT_EQ(outcome.kind, PacketKind::refused) << n;
+    EXPECT_EQ(outcome.reason, "wrong_size") << n;
   }
-  EXPECT_EQ(decoder.decode(longer, 0, points), DecodeResult::wrong_size);
+  EXPECT_EQ(decoder.decode(longer, 0, points).reason, "wrong_size");
   EXPECT_EQ(points.size(), 3U);
-  EXPECT_EQ(decoder.stats().wrong_size, 6U);
+  EXPECT_EQ(decoder.stats().refused_count(DecodeResult::wrong_size), 6U);
   EXPECT_EQ(decoder.stats().accepted, 0U);
 }
 
+// The operator's model wins over a contradicting (known) factory byte, with one notice naming both;
+// unknown bytes and return modes are refused.
 TEST(LidarVelodynePacket, FactoryBytes) {
   std::mt19937_64 rng(2);
   const test::EncodedPacket packet = test::make_packet(FiringSchedule(make_vlp16(), 0), 0, rng, 0.0);
   std::vector<LidarPoint> points;
 
-  PacketDecoder vlp32c_decoder(make_vlp32c());
-  EXPECT_EQ(vlp32c_decoder.decode(packet.bytes, 0, points), DecodeResult::product_mismatch);
+  VelodyneDecoder hdl_decoder(make_hdl32e());
+  EXPECT_TRUE(hdl_decoder.decode(packet.bytes, 0, points).is_data());
+  EXPECT_TRUE(hdl_decoder.decode(packet.bytes, 0, points).is_data());
+  EXPECT_EQ(hdl_decoder.stats().product_overridden, 2U);
+  const std::vector<std::string> notices = hdl_decoder.take_notices();
+  ASSERT_EQ(notices.size(), 1U);
+  EXPECT_NE(notices[0].find("VLP-16 (0x22)"), std::string::npos) << notices[0];
+  EXPECT_NE(notices[0].find("hdl32e"), std::string::npos) << notices[0];
+  EXPECT_TRUE(hdl_decoder.take_notices().empty());
 
-  PacketDecoder decoder(make_vlp16());
+  VelodyneDecoder decoder(make_vlp16());
   auto bytes = packet.bytes;
   bytes[1205] = 0x99;
-  EXPECT_EQ(decoder.decode(bytes, 0, points), DecodeResult::unknown_product);
+  EXPECT_EQ(decoder.decode(bytes, 0, points).reason, "unknown_product");
   bytes = packet.bytes;
-  bytes[1204] = kReturnDual;
-  EXPECT_EQ(decoder.decode(bytes, 0, points), DecodeResult::unsupported_return_mode);
+  bytes[1204] = 0x3A;
+  EXPECT_EQ(decoder.decode(bytes, 0, points).reason, "unsupported_return_mode");
   bytes[1204] = 0x00;
-  EXPECT_EQ(decoder.decode(bytes, 0, points), DecodeResult::unsupported_return_mode);
+  EXPECT_EQ(decoder.decode(bytes, 0, points).reason, "unsupported_return_mode");
+  points.clear();
   bytes[1204] = kReturnLast;
-  EXPECT_EQ(decoder.decode(bytes, 0, points), DecodeResult::accepted);
+  EXPECT_TRUE(decoder.decode(bytes, 0, points).is_data());
   EXPECT_EQ(points.size(), 384U);
-  EXPECT_EQ(decoder.stats().unknown_product, 1U);
-  EXPECT_EQ(decoder.stats().unsupported_return_mode, 2U);
+  for (const LidarPoint& p : points) {
+    EXPECT_EQ(p.echo, kLastReturn);
+  }
+  EXPECT_EQ(decoder.stats().refused_count(DecodeResult::unknown_product), 1U);
+  EXPECT_EQ(decoder.stats().refused_count(DecodeResult::unsupported_return_mode), 2U);
   EXPECT_EQ(decoder.stats().accepted, 1U);
+  EXPECT_EQ(decoder.stats().product_overridden, 0U);
+  EXPECT_TRUE(decoder.take_notices().empty());
 }
 
 TEST(LidarVelodynePacket, RejectsBadBlocksWholeWithoutPartialOutput) {
   std::mt19937_64 rng(4);
   const test::EncodedPacket packet = test::make_packet(FiringSchedule(make_vlp16(), 0), 0, rng, 0.0);
-  PacketDecoder decoder(make_vlp16());
+  VelodyneDecoder decoder(make_vlp16());
   std::vector<LidarPoint> points;
   auto bytes = packet.bytes;
   bytes[100 * 11 + 1] = 0xDD;  // the last block's flag: earlier blocks are fine, yet nothing is appended
-  EXPECT_EQ(decoder.decode(bytes, 0, points), DecodeResult::bad_block_flag);
+  EXPECT_EQ(decoder.decode(bytes, 0, points).reason, "bad_block_flag");
   bytes = packet.bytes;
   bytes[100 * 7 + 2] = 0xA0;  // azimuth 36000 = 0x8CA0
   bytes[100 * 7 + 3] = 0x8C;
-  EXPECT_EQ(decoder.decode(bytes, 0, points), DecodeResult::azimuth_out_of_range);
+  EXPECT_EQ(decoder.decode(bytes, 0, points).reason, "azimuth_out_of_range");
   bytes = packet.bytes;
   bytes[1203] = 0xFF;  // timestamp >= 3.6e9 us
-  EXPECT_EQ(decoder.decode(bytes, 0, points), DecodeResult::timestamp_out_of_range);
+  EXPECT_EQ(decoder.decode(bytes, 0, points).reason, "timestamp_out_of_range");
+  bytes = packet.bytes;
+  bytes[1204] = kReturnDual;  // the schedule's blocks have 12 different azimuths: no pairs
+  EXPECT_EQ(decoder.decode(bytes, 0, points).reason, "dual_pair_mismatch");
   EXPECT_TRUE(points.empty());
 }
 
 TEST(LidarVelodynePacket, ModelsWithoutPacketFormatAreRefused) {
-  EXPECT_THROW(PacketDecoder(make_generic(64)), std::invalid_argument);
+  EXPECT_THROW(VelodyneDecoder(make_generic(64)), std::invalid_argument);
   std::array<std::uint8_t, kPacketBytes> bytes{};
   EXPECT_THROW(encode_packet(make_generic(32), PacketReturns{}, bytes), std::invalid_argument);
 }

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "geometry_checks.h"
-#include "lidar/velodyne_packet.h"
+#include "lidar/velodyne_decoder.h"
 #include "sim/trajectory.h"
 
 namespace rsu::sim {
@@ -240,13 +240,13 @@ TEST(SimLidarSimulator, FramePointsEqualDecodedPackets) {
     const std::int64_t k1 = 40;
     const TimeNs start = sim.schedule().packet(k0).first_firing_ns;
     const TimeNs stop = sim.schedule().packet(k1 + 1).first_firing_ns;
-    PacketDecoder decoder(model);
+    VelodyneDecoder decoder(model);
     std::vector<LidarPoint> decoded;
     for (std::int64_t k = k0; k <= k1; ++k) {
       const PacketReturns returns = sim.simulate_packet(k);
       std::array<std::uint8_t, kPacketBytes> bytes{};
       encode_packet(model, returns, bytes);
-      ASSERT_EQ(decoder.decode(bytes, returns.blocks.first_firing_ns, decoded), DecodeResult::accepted);
+      ASSERT_TRUE(decoder.decode(bytes, returns.blocks.first_firing_ns, decoded).is_data());
     }
     const SimulatedFrame f = sim.simulate_frame(start);
     std::vector<LidarPoint> framed;
@@ -291,7 +291,7 @@ TEST(SimLidarSimulator, Vlp32cPacketsDecodeToPointsOnTheCalibratedBeams) {
   const Pose3 mount{0.0, 0.0, 2.0, 0.0, 0.0, 0.0};
   const SensorModel model = make_vlp32c();
   const LidarSimulator sim(model, mount, no_noise(), rc, 0, 300.0);
-  PacketDecoder decoder(model);
+  VelodyneDecoder decoder(model);
   const Eigen::Vector2d normal(std::cos(0.6), std::sin(0.6));
   int on_wall = 0;
   for (std::int64_t k = 0; k < 300; ++k) {  // 0.2 s: the wall at about 0..70 deg azimuth clockwise
@@ -299,7 +299,7 @@ TEST(SimLidarSimulator, Vlp32cPacketsDecodeToPointsOnTheCalibratedBeams) {
     std::array<std::uint8_t, kPacketBytes> bytes{};
     encode_packet(model, returns, bytes);
     std::vector<LidarPoint> points;
-    ASSERT_EQ(decoder.decode(bytes, returns.blocks.first_firing_ns, points), DecodeResult::accepted);
+    ASSERT_TRUE(decoder.decode(bytes, returns.blocks.first_firing_ns, points).is_data());
     std::size_t next = 0;
     for (int b = 0; b < kBlocksPerPacket; ++b) {
       const auto bi = static_cast<std::size_t>(b);

@@ -1,0 +1,55 @@
+// The decoder seam (see lidar_decoder.h): names, counts and the factory.
+#include "lidar/lidar_decoder.h"
+
+#include <stdexcept>
+
+#include "lidar/velodyne_decoder.h"
+
+namespace rsu {
+
+std::string_view to_string(ReturnSelection selection) {
+  switch (selection) {
+    case ReturnSelection::both:
+      return "both";
+    case ReturnSelection::strongest:
+      return "strongest";
+    case ReturnSelection::last:
+      return "last";
+  }
+  return "unknown";
+}
+
+std::optional<ReturnSelection> return_selection_by_name(std::string_view name) {
+  for (const ReturnSelection s : {ReturnSelection::both, ReturnSelection::strongest, ReturnSelection::last}) {
+    if (name == to_string(s)) {
+      return s;
+    }
+  }
+  return std::nullopt;
+}
+
+std::uint64_t LidarDecoder::packets_seen() const {
+  std::uint64_t n = 0;
+  for (const auto& [name, count] : counters()) {
+    if (!name.starts_with("note.")) {
+      n += count;
+    }
+  }
+  return n;
+}
+
+bool is_decodable_model(std::string_view model) {
+  const auto velodyne = sensor_model_by_name(model);
+  return velodyne && velodyne->has_packet_format();
+}
+
+std::unique_ptr<LidarDecoder> make_lidar_decoder(std::string_view model, const LidarDecoderOptions& options) {
+  if (const auto velodyne = sensor_model_by_name(model); velodyne && velodyne->has_packet_format()) {
+    const SensorModel& tables = options.calibrated_model ? *options.calibrated_model : *velodyne;
+    return std::make_unique<VelodyneDecoder>(tables, options.returns, options.rotation_start_azimuth_deg);
+  }
+  throw std::invalid_argument("unknown LiDAR model \"" + std::string(model) +
+                              "\" (expected vlp16, vlp32c or hdl32e)");
+}
+
+}  // namespace rsu
