@@ -7,9 +7,11 @@
 #      out/corridor/keys/; prints the paper's table and writes the figures;
 #   2. the same experiment in the degraded corridor, the paper's street as it describes it (a road between
 #      two tall buildings where NDT degrades along the road): its table beside the paper's, its figures;
-#   3. the paper's pilot experiment (Sec. 3.1): heat maps over distance x yaw, both LiDAR models;
-#   4. one simulated frame of the street as PCD, pcap and a top-down picture;
-#   5. two RSUs on one DDS bus hand a driving vehicle over: two rsud, two simulated LiDARs 40 m apart, one
+#   3. the V2I link impaired there: a relay between rsud and the vehicle delays, loses, jitters and
+#      reorders datagrams both ways (the one-factor sweeps and 200 ms with 30 % loss); a table, a figure;
+#   4. the paper's pilot experiment (Sec. 3.1): heat maps over distance x yaw, both LiDAR models;
+#   5. one simulated frame of the street as PCD, pcap and a top-down picture;
+#   6. two RSUs on one DDS bus hand a driving vehicle over: two rsud, two simulated LiDARs 40 m apart, one
 #      rsu-vehicle announcing to the first RSU only; prints corrections per RSU, gaps, jumps, errors.
 # Everything goes to out/ (override with OUT=...).
 set -euo pipefail
@@ -20,7 +22,7 @@ PY=/usr/bin/python3  # Debian's python3, which has python3-matplotlib and python
 scripts/install-deps.sh
 echo "== building (Release) =="
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle rsu-keygen
+cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle rsu-keygen rsu-link-relay
 
 echo "== 1. realistic experiment: corridor street, NDT vs RSU vs fused (paper Sec. 4) =="
 $PY eval/corridor/run_experiment.py --build build --out "$OUT/corridor"
@@ -29,16 +31,19 @@ echo "== 2. realistic experiment in the degraded corridor: NDT degrades between 
 $PY eval/corridor/run_experiment.py --build build --experiment scenarios/corridor_degraded_experiment.yaml \
   --out "$OUT/corridor_degraded"
 
-echo "== 3. pilot experiment: 75 distances x 180 yaw angles, VLP-16 and VLP-32C (paper Sec. 3.1) =="
+echo "== 3. the V2I link impaired between rsud and the vehicle, degraded corridor (12 live runs) =="
+$PY eval/corridor/run_link_impairment.py --build build --quick --out "$OUT/link_impairment" | tail -1
+
+echo "== 4. pilot experiment: 75 distances x 180 yaw angles, VLP-16 and VLP-32C (paper Sec. 3.1) =="
 build/eval/rsu-pilot --out "$OUT/pilot"
 $PY eval/plots/pilot_heatmaps.py "$OUT/pilot" >/dev/null
 echo "heat maps: $OUT/pilot/<model>_<metric>.png; every cell: $OUT/pilot/cells.csv; $OUT/pilot/summary.json"
 
-echo "== 4. one frame of the street: PCD, Velodyne pcap, top-down picture =="
+echo "== 5. one frame of the street: PCD, Velodyne pcap, top-down picture =="
 build/tools/rsu-sim simulate scenarios/corridor.yaml --out "$OUT/sim" | tail -3
 $PY eval/plots/topdown.py "$OUT/sim"
 
-echo "== 5. two RSUs on one DDS bus hand a driving vehicle over (issue 6) =="
+echo "== 6. two RSUs on one DDS bus hand a driving vehicle over (issue 6) =="
 $PY tests/integration/handover_integration.py --rsud build/daemon/rsud --rsu-sim build/tools/rsu-sim \
   --vehicle build/vehicle_client/rsu-vehicle --keygen build/tools/rsu-keygen --work "$OUT/handover" |
   tee "$OUT/handover_summary.txt"
@@ -50,3 +55,7 @@ for street in corridor corridor_degraded; do
   cat "$OUT/$street/table.txt" "$OUT/$street/paper_comparison.txt"
   echo "figures: $OUT/$street/error_vs_position.png, $OUT/$street/error_boxplot.png"
 done
+echo
+echo "== the V2I link impaired (also $OUT/link_impairment/table.txt) =="
+cat "$OUT/link_impairment/table.txt"
+echo "figure: $OUT/link_impairment/fused_error_vs_link.png"
