@@ -261,125 +261,154 @@ std::string_view to_string(PcapError error) {
   return "unknown";
 }
 
-namespace {
-
-void count(FrameKind kind, UdpDatagram&& datagram, PcapParseResult& result) {
-  switch (kind) {
-    case FrameKind::udp:
-      result.datagrams.push_back(std::move(datagram));
-      break;
-    case FrameKind::not_ipv4:
-      ++result.skipped.not_ipv4;
-      break;
-    case FrameKind::not_udp:
-      ++result.skipped.not_udp;
-      break;
-    case FrameKind::fragment:  // handled by the caller
-      break;
-    case FrameKind::malformed:
-      ++result.skipped.malformed;
-      break;
+void PcapReader::feed(std::span<const std::uint8_t> bytes) {
+  // Drop what was read once it is most of the buffer, so that the buffer stays about one chunk long.
+  if (at_ > 0 && at_ >= buffer_.size() / 2) {
+    buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at_));
+    at_ = 0;
   }
+  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
 }
 
-void finish_reassembly(Ipv4Reassembler& reassembler, PcapParseResult& result) {
-  reassembler.finish();
-  const ReassemblyStats& s = reassembler.stats();
-  result.skipped.fragmented = s.timed_out + s.overlapping + s.too_large;
-  result.reassembled = s.reassembled;
-}
-
-struct FileFormat {
-  bool big_endian = false;
-  TimeNs ns_per_fraction = kNsPerUs;
-  std::uint32_t link_type = kLinkEthernet;
-};
-
-// The records after the file header; stops at the first that does not fit (result.error).
-void read_records(std::span<const std::uint8_t> bytes, const FileFormat& format, PcapParseResult& result) {
-  const TimeNs fraction_limit = kNsPerSecond / format.ns_per_fraction;
-  Ipv4Reassembler reassembler;
-
-  std::size_t at = kFileHeaderBytes;
-  while (at < bytes.size()) {
-    if (bytes.size() - at < kRecordHeaderBytes) {
-      result.error = PcapError::truncated_record_header;
-      break;
-    }
-    const std::uint32_t seconds = get_u32(bytes, at, format.big_endian);
-    const std::uint32_t fraction = get_u32(bytes, at + 4, format.big_endian);
-    const std::uint32_t captured = get_u32(bytes, at + 8, format.big_endian);
-    if (captured > kMaxCapturedLength) {
-      result.error = PcapError::bad_record_length;
-      break;
-    }
-    at += kRecordHeaderBytes;
-    if (bytes.size() - at < captured) {
-      result.error = PcapError::truncated_record;
-      break;
-    }
-    const std::span<const std::uint8_t> frame = bytes.subspan(at, captured);
-    at += captured;
-
-    if (TimeNs{fraction} >= fraction_limit) {
-      ++result.skipped.malformed;
-      continue;
-    }
-    UdpDatagram datagram;
-    datagram.time_ns = TimeNs{seconds} * kNsPerSecond + TimeNs{fraction} * format.ns_per_fraction;
-    Ipv4Fragment fragment;
-    fragment.time_ns = datagram.time_ns;
-    FrameKind kind = parse_frame(frame, format.link_type, datagram, fragment);
-    if (kind == FrameKind::fragment) {
-      const std::optional<Ipv4Datagram> whole = reassembler.add(fragment);
-      if (!whole) {
-        continue;  // waiting for the rest (or counted by the reassembler)
-      }
-      kind = whole->protocol == kProtocolUdp ? parse_udp(whole->src, whole->dst, whole->payload, datagram)
-                                             : FrameKind::not_udp;
-    }
-    count(kind, std::move(datagram), result);
-  }
-  finish_reassembly(reassembler, result);
-}
-
-}  // namespace
-
-PcapParseResult parse_pcap(std::span<const std::uint8_t> bytes) {
-  PcapParseResult result;
-  if (bytes.size() < kFileHeaderBytes) {
-    result.error = PcapError::truncated_file_header;
-    return result;
-  }
-  bool big_endian = false;
-  TimeNs ns_per_fraction = kNsPerUs;
+bool PcapReader::read_header() {
+  const std::span<const std::uint8_t> bytes(buffer_);
   switch (get_u32(bytes, 0, false)) {
     case kMagicMicro:
       break;
     case kMagicNano:
-      ns_per_fraction = 1;
+      ns_per_fraction_ = 1;
       break;
     case kMagicMicroSwapped:
-      big_endian = true;
+      big_endian_ = true;
       break;
     case kMagicNanoSwapped:
-      big_endian = true;
-      ns_per_fraction = 1;
+      big_endian_ = true;
+      ns_per_fraction_ = 1;
       break;
     case kMagicPcapng:
-      result.error = PcapError::pcapng_not_supported;
-      return result;
+      error_ = PcapError::pcapng_not_supported;
+      return false;
     default:
-      result.error = PcapError::bad_magic;
-      return result;
+      error_ = PcapError::bad_magic;
+      return false;
   }
   // The link type is the low 16 bits; newer writers may put FCS information in the top bits.
-  const std::uint32_t link_type = get_u32(bytes, 20, big_endian) & 0xFFFF;
-  if (link_type != kLinkEthernet && link_type != kLinkLinuxCooked) {
-    result.error = PcapError::unsupported_link_type;
-    return result;
+  link_type_ = get_u32(bytes, 20, big_endian_) & 0xFFFF;
+  if (link_type_ != kLinkEthernet && link_type_ != kLinkLinuxCooked) {
+    error_ = PcapError::unsupported_link_type;
+    return false;
   }
-  read_records(bytes, {big_endian, ns_per_fraction, link_type}, result);
+  at_ = kFileHeaderBytes;
+  header_read_ = true;
+  return true;
+}
+
+PcapReader::Next PcapReader::next(UdpDatagram& out) {
+  if (error_ != PcapError::none) {
+    return Next::error;
+  }
+  if (!header_read_) {
+    if (buffer_.size() < kFileHeaderBytes) {
+      return Next::need_more;
+    }
+    if (!read_header()) {
+      return Next::error;
+    }
+  }
+  for (;;) {  // until a datagram, a counted skip or the end of the bytes: fragments only gather
+    const std::span<const std::uint8_t> bytes(buffer_);
+    if (bytes.size() - at_ < kRecordHeaderBytes) {
+      return Next::need_more;
+    }
+    const std::uint32_t seconds = get_u32(bytes, at_, big_endian_);
+    const std::uint32_t fraction = get_u32(bytes, at_ + 4, big_endian_);
+    const std::uint32_t captured = get_u32(bytes, at_ + 8, big_endian_);
+    if (captured > kMaxCapturedLength) {
+      error_ = PcapError::bad_record_length;
+      return Next::error;
+    }
+    if (bytes.size() - at_ - kRecordHeaderBytes < captured) {
+      return Next::need_more;
+    }
+    const std::span<const std::uint8_t> frame = bytes.subspan(at_ + kRecordHeaderBytes, captured);
+    at_ += kRecordHeaderBytes + captured;
+    ++records_;
+
+    if (TimeNs{fraction} >= kNsPerSecond / ns_per_fraction_) {
+      ++skipped_.malformed;
+      return Next::skipped;
+    }
+    out.time_ns = TimeNs{seconds} * kNsPerSecond + TimeNs{fraction} * ns_per_fraction_;
+    Ipv4Fragment fragment;
+    fragment.time_ns = out.time_ns;
+    FrameKind kind = parse_frame(frame, link_type_, out, fragment);
+    if (kind == FrameKind::fragment) {
+      const std::optional<Ipv4Datagram> whole = reassembler_.add(fragment);
+      if (!whole) {
+        continue;  // waiting for the rest (or counted by the reassembler)
+      }
+      out.time_ns = whole->time_ns;
+      kind = whole->protocol == kProtocolUdp ? parse_udp(whole->src, whole->dst, whole->payload, out)
+                                             : FrameKind::not_udp;
+    }
+    switch (kind) {
+      case FrameKind::udp:
+        return Next::datagram;
+      case FrameKind::not_ipv4:
+        ++skipped_.not_ipv4;
+        break;
+      case FrameKind::not_udp:
+        ++skipped_.not_udp;
+        break;
+      case FrameKind::fragment:  // handled above
+        break;
+      case FrameKind::malformed:
+        ++skipped_.malformed;
+        break;
+    }
+    return Next::skipped;
+  }
+}
+
+PcapError PcapReader::finish() {
+  reassembler_.finish();
+  if (error_ != PcapError::none) {
+    return error_;
+  }
+  const std::size_t left = buffer_.size() - at_;
+  if (!header_read_) {
+    error_ = PcapError::truncated_file_header;
+  } else if (left > 0 && left < kRecordHeaderBytes) {
+    error_ = PcapError::truncated_record_header;
+  } else if (left > 0) {
+    error_ = PcapError::truncated_record;
+  }
+  return error_;
+}
+
+PcapSkipped PcapReader::skipped() const {
+  PcapSkipped s = skipped_;
+  const ReassemblyStats& r = reassembler_.stats();
+  s.fragmented = r.timed_out + r.overlapping + r.too_large;
+  return s;
+}
+
+PcapParseResult parse_pcap(std::span<const std::uint8_t> bytes) {
+  PcapReader reader;
+  reader.feed(bytes);
+  PcapParseResult result;
+  UdpDatagram datagram;
+  for (;;) {
+    const PcapReader::Next next = reader.next(datagram);
+    if (next == PcapReader::Next::datagram) {
+      result.datagrams.push_back(std::move(datagram));
+    } else if (next != PcapReader::Next::skipped) {
+      break;
+    }
+  }
+  result.error = reader.finish();
+  result.skipped = reader.skipped();
+  result.reassembled = reader.reassembled();
   return result;
 }
 

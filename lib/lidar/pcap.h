@@ -1,5 +1,5 @@
 // Classic pcap files (the libpcap format, as `tcpdump -w` and VeloView write them) as pure byte
-// formatting and parsing: the daemon replays recorded Velodyne traffic and tests write captures,
+// formatting and parsing: rsud and rsu-decode replay recorded LiDAR traffic and tests write captures,
 // with no file or socket here.
 //
 // Written: magic 0xa1b2c3d4 (microsecond timestamps) in little-endian order, version 2.4, snaplen
@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/time.h"
+#include "lidar/ipv4_reassembly.h"
 
 namespace rsu {
 
@@ -78,8 +79,47 @@ struct PcapParseResult {
   bool ok() const { return error == PcapError::none; }
 };
 
-// Checksums are not verified: captures of locally sent traffic carry unfilled checksums when the
-// NIC offloads them.
+// Reads a capture record by record from its bytes handed in piece by piece (a file read in chunks, so
+// that a long recording never has to fit in memory). IPv4 fragments are put back together
+// (ipv4_reassembly.h). Checksums are not verified: captures of locally sent traffic carry unfilled
+// checksums when the NIC offloads them.
+class PcapReader {
+ public:
+  enum class Next {
+    datagram,   // `out` holds the next UDP datagram
+    skipped,    // a record that is not an intact IPv4 UDP datagram (counted in skipped())
+    need_more,  // feed() more bytes (or finish() at the end of the file)
+    error,      // the file is not usable from here on (error())
+  };
+
+  // The next part of the file.
+  void feed(std::span<const std::uint8_t> bytes);
+  Next next(UdpDatagram& out);
+  // The end of the file: gives up fragments still incomplete (counted) and sets and returns the error
+  // if bytes are left that make no whole record.
+  PcapError finish();
+
+  PcapError error() const { return error_; }
+  PcapSkipped skipped() const;
+  std::uint64_t reassembled() const { return reassembler_.stats().reassembled; }
+  std::uint64_t records() const { return records_; }  // records read, whatever they held
+
+ private:
+  bool read_header();
+
+  std::vector<std::uint8_t> buffer_;
+  std::size_t at_ = 0;  // first unread byte of buffer_
+  bool header_read_ = false;
+  bool big_endian_ = false;
+  TimeNs ns_per_fraction_ = kNsPerUs;
+  std::uint32_t link_type_ = 0;
+  PcapError error_ = PcapError::none;
+  PcapSkipped skipped_;  // without the reassembler's
+  Ipv4Reassembler reassembler_;
+  std::uint64_t records_ = 0;
+};
+
+// A whole capture in memory (tests, small files): PcapReader over all of `bytes`.
 PcapParseResult parse_pcap(std::span<const std::uint8_t> bytes);
 
 }  // namespace rsu

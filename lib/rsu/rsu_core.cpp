@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <numbers>
@@ -139,6 +140,18 @@ void append(LidarStepResult& into, LidarStepResult&& step) {
   for (OutgoingCorrection& c : step.corrections)
     into.corrections.push_back(std::move(c));
   into.background_became_ready = into.background_became_ready || step.background_became_ready;
+}
+
+// "52.312 s behind" / "0.8 ms ahead of": how the sensor's clock stands to the host's (offset = host -
+// sensor).
+std::string describe_clock_offset(TimeNs offset_ns) {
+  const double magnitude = std::abs(static_cast<double>(offset_ns));
+  char amount[48];
+  if (magnitude >= 1e9)
+    std::snprintf(amount, sizeof amount, "%.3f s", magnitude * 1e-9);
+  else
+    std::snprintf(amount, sizeof amount, "%.1f ms", magnitude * 1e-6);
+  return std::string(amount) + (offset_ns >= 0 ? " behind" : " ahead of");
 }
 
 TimeNs mean_time(const std::vector<LidarPoint>& points) {
@@ -297,6 +310,57 @@ LidarStepResult RsuCore::learn(std::span<const LidarPoint> map_points, bool whol
   return result;
 }
 
+bool RsuCore::check_clock(const PacketOutcome& packet, TimeNs now) {
+  sensor_clock_.observe(packet.next_ns, now);
+  const TimeNs offset = *sensor_clock_.offset_ns();
+  const bool beyond = std::abs(static_cast<double>(offset)) > static_cast<double>(config_.clock_tolerance);
+  const bool sensor_time = config_.time_source == TimeSource::kSensor;
+  if (beyond != clock_beyond_) {
+    clock_beyond_ = beyond;
+    const std::string where = "the LiDAR's clock is " + describe_clock_offset(offset) + " the host's";
+    const std::string tolerance = std::to_string(config_.clock_tolerance / kNsPerMs) + " ms";
+    if (beyond && sensor_time) {
+      notices_.push_back(where + " (beyond lidar.clock_tolerance_ms, " + tolerance +
+                         "): its packets are REFUSED (packet.clock_offset) while this lasts. Synchronise the "
+                         "LiDAR to the RSU's clock (PTP or GNSS PPS), or set lidar.time_source: host_receive "
+                         "to stamp its points by arrival");
+    } else if (beyond) {
+      notices_.push_back(
+          where + " (beyond " + tolerance +
+          "): lidar.time_source host_receive stamps its points by arrival, the offset removed");
+    } else {
+      notices_.push_back(where + ": within lidar.clock_tolerance_ms (" + tolerance + ") again" +
+                         (sensor_time ? ", its packets are used" : ""));
+    }
+  }
+  return !(beyond && sensor_time);
+}
+
+std::vector<std::string> RsuCore::take_lidar_notices() {
+  std::vector<std::string> out = decoder_->take_notices();
+  for (std::string& n : notices_)
+    out.push_back(std::move(n));
+  notices_.clear();
+  return out;
+}
+
+SensorClockReport RsuCore::sensor_clock() const {
+  SensorClockReport r;
+  if (const auto offset = sensor_clock_.offset_ns()) {
+    r.known = true;
+    r.offset_ns = *offset;
+    r.beyond_tolerance = clock_beyond_;
+  }
+  return r;
+}
+
+std::vector<std::pair<std::string, double>> RsuCore::gauges() const {
+  const auto offset = sensor_clock_.offset_ns();
+  return {{"clock.offset_ms", offset ? static_cast<double>(*offset) * 1e-6 : std::nan("")},
+          {"clock.steps", static_cast<double>(sensor_clock_.steps())},
+          {"lidar.rotation_hz", decoder_->geometry().rotation_hz}};
+}
+
 void RsuCore::follow_geometry() {
   const SweepGeometry& g = decoder_->geometry();
   packet_order_.set_packet_period(g.packet_period_ns);
@@ -317,6 +381,19 @@ LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, 
     return result;  // counted by the decoder, by kind and reason
   }
   follow_geometry();
+  if (!check_clock(result.packet, now)) {
+    ++lidar_stats_.packets_clock_offset;
+    return result;
+  }
+  if (config_.time_source == TimeSource::kHostReceive) {
+    // On the host clock: the packet's sensor times moved by the measured offset (its arrival minus its
+    // known duration, the smallest delay seen: sensor_clock.h); relative times stay the sensor's.
+    const TimeNs shift = *sensor_clock_.offset_ns();
+    for (LidarPoint& p : sensor_scratch_)
+      p.time_ns += shift;
+    result.packet.first_ns += shift;
+    result.packet.next_ns += shift;
+  }
   if (config_.max_packet_age > 0 && now - result.packet.first_ns > config_.max_packet_age) {
     ++lidar_stats_.packets_too_late;  // behind: shed (RsuCoreConfig::max_packet_age)
     if (!shedding_)
@@ -851,6 +928,7 @@ std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
   out.emplace_back("packet.duplicate", o.duplicate);
   out.emplace_back("packet.stream_gaps", o.stream_gaps);
   out.emplace_back("packet.too_late", lidar_stats_.packets_too_late);
+  out.emplace_back("packet.clock_offset", lidar_stats_.packets_clock_offset);
   const SweepClustererStats& s = clusterer_.stats();
   out.emplace_back("sweep.foreground_points", s.foreground_points);
   out.emplace_back("sweep.clusters_released", s.clusters_released);

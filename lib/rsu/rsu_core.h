@@ -40,6 +40,7 @@
 #include "lidar/lidar_decoder.h"
 #include "lidar/packet_order.h"
 #include "lidar/point.h"
+#include "lidar/sensor_clock.h"
 #include "perception/background_model.h"
 #include "perception/vehicle_fix.h"
 #include "rsu/datagram_outcome.h"
@@ -96,7 +97,15 @@ struct LidarStats {
   std::uint64_t corrections_inconsistent = 0;
   std::uint64_t corrections_encode_failed = 0;
   std::uint64_t corrections = 0;
-  std::uint64_t packets_too_late = 0;  // older than RsuCoreConfig::max_packet_age when processed
+  std::uint64_t packets_too_late = 0;      // older than RsuCoreConfig::max_packet_age when processed
+  std::uint64_t packets_clock_offset = 0;  // time_source sensor: the sensor's clock beyond the tolerance
+};
+
+// The LiDAR's clock against the host's (lidar/sensor_clock.h), as the stats and the log report it.
+struct SensorClockReport {
+  bool known = false;    // a data packet has arrived
+  TimeNs offset_ns = 0;  // host - sensor (transit included): positive when the sensor is behind
+  bool beyond_tolerance = false;
 };
 
 struct ReloadSummary {
@@ -165,8 +174,13 @@ class RsuCore {
   const v2i::MessageAuthenticator& authenticator() const { return authenticator_; }
   // The configured sensor's packet decoder (its counters, geometry and notices).
   const LidarDecoder& lidar_decoder() const { return *decoder_; }
-  // Notices the decoder queued for the operator (log them once each).
-  std::vector<std::string> take_lidar_notices() { return decoder_->take_notices(); }
+  // Notices for the operator (log them once each, as warnings): the decoder's, and the sensor clock
+  // crossing the tolerance (and what RsuCore then does).
+  std::vector<std::string> take_lidar_notices();
+  SensorClockReport sensor_clock() const;
+  // Measured values (not counts) as ("area.name", value), in a stable order: the sensor clock's offset
+  // in ms (NaN before any packet) and the measured rotation rate.
+  std::vector<std::pair<std::string, double>> gauges() const;
   const PacketOrderStats& packet_order_stats() const { return packet_order_.stats(); }
   const SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
   const LidarStats& lidar_stats() const { return lidar_stats_; }
@@ -182,6 +196,9 @@ class RsuCore {
   void to_map_frame(std::span<const LidarPoint> in, std::vector<LidarPoint>& out) const;
   // Passes a changed rotation rate or packet period measured by the decoder on to the stages.
   void follow_geometry();
+  // Measures the clock on a data packet and says whether its points may be used (time_source sensor,
+  // clock beyond the tolerance: no), queueing a notice when the clock crosses the tolerance.
+  bool check_clock(const PacketOutcome& packet, TimeNs now);
   TimeNs rotation_period_ns() const { return static_cast<TimeNs>(1e9 / rotation_hz_); }
   LidarStepResult learn(std::span<const LidarPoint> map_points, bool whole_frame);
   void add_background_frame(std::span<const LidarPoint> map_points);
@@ -233,6 +250,9 @@ class RsuCore {
   Eigen::Vector2d lidar_xy_;
   double rotation_hz_;  // as last applied to the stages below (follow_geometry)
 
+  SensorClock sensor_clock_;
+  bool clock_beyond_ = false;
+  std::vector<std::string> notices_;
   PacketOrder packet_order_;
   FrameAssembler assembler_;  // whole rotations for background learning
   perception::BackgroundModel background_;

@@ -74,6 +74,12 @@ struct PeerConfig {
   v2i::RateLimitConfig flood{.bucket = {.rate_per_s = 1000.0, .burst = 1000.0}, .max_sources = 256};
 };
 
+// Which clock the LiDAR's points are stamped on (README, "Sensor time").
+enum class TimeSource {
+  kSensor,       // the packets' own time: a real RSU synchronises its LiDAR to GNSS (PPS) or PTP
+  kHostReceive,  // arrival on the host clock minus the packet's known duration (an unsynchronised sensor)
+};
+
 struct RsuCoreConfig {
   std::uint64_t rsu_id = 1;
 
@@ -91,6 +97,14 @@ struct RsuCoreConfig {
   // that late are of little use, and worse, they would be associated with the vehicles' announcements
   // made since, predicted back over the lag: in a queue that picks the car behind (issue 7). 0: never.
   TimeNs max_packet_age = 150 * kNsPerMs;
+  // The LiDAR's points: on its own clock or stamped by arrival (TimeSource). Either way the offset
+  // between its clock and the host's is measured on every packet (lidar/sensor_clock.h).
+  TimeSource time_source = TimeSource::kSensor;
+  // With time_source kSensor, packets of a sensor whose clock is further than this from the host's
+  // are refused and counted (packet.clock_offset): stamped on a clock that far off, their points
+  // would be associated with the vehicles' announcements of another moment. The measured offset
+  // includes the packets' transit (a millisecond on a direct link).
+  TimeNs clock_tolerance = 100 * kNsPerMs;
   SweepConfig sweep;
   GatheringConfig gathering;
   // Background, clustering and the per-vehicle fix (perception::fix_vehicle): the library's defaults,

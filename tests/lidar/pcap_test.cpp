@@ -95,6 +95,37 @@ TEST(LidarPcap, RoundTrip) {
   }
 }
 
+// Fed in pieces of any size (a file read in chunks), the reader yields exactly what the whole-file
+// parse does.
+TEST(LidarPcap, ReaderFedInPiecesEqualsTheWholeFile) {
+  std::vector<std::uint8_t> file = pcap_global_header();
+  for (int i = 0; i < 40; ++i) {
+    append_udp_record(file, kNsPerSecond + i * 1000, kSensor, kHost,
+                      payload_of(static_cast<std::size_t>(17 * i % 1300), static_cast<std::uint8_t>(i)));
+  }
+  const PcapParseResult whole = parse_pcap(file);
+  ASSERT_TRUE(whole.ok());
+  for (const std::size_t piece : {1UL, 7UL, 24UL, 1000UL, 4096UL}) {
+    PcapReader reader;
+    std::vector<UdpDatagram> got;
+    UdpDatagram d;
+    for (std::size_t at = 0; at < file.size(); at += piece) {
+      reader.feed(std::span(file).subspan(at, std::min(piece, file.size() - at)));
+      for (PcapReader::Next n = reader.next(d); n != PcapReader::Next::need_more; n = reader.next(d)) {
+        ASSERT_EQ(n, PcapReader::Next::datagram);
+        got.push_back(d);
+      }
+    }
+    EXPECT_EQ(reader.finish(), PcapError::none);
+    EXPECT_EQ(reader.records(), 40U);
+    ASSERT_EQ(got.size(), whole.datagrams.size()) << piece;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].time_ns, whole.datagrams[i].time_ns);
+      EXPECT_EQ(got[i].payload, whole.datagrams[i].payload);
+    }
+  }
+}
+
 TEST(LidarPcap, TruncatedFilesAreRejectedKeepingCompleteRecords) {
   std::vector<std::uint8_t> file = pcap_global_header();
   std::vector<std::size_t> record_ends;

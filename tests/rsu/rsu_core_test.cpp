@@ -411,6 +411,45 @@ TEST(RsuCore, PacketsProcessedTooLateAreShedNotFixedFrom) {
   EXPECT_EQ(patient.lidar_stats().packets_too_late, 0U);
 }
 
+// A sensor whose clock is 52 s behind the host's (as in a real capture): with time_source sensor every
+// packet is refused as clock_offset (not silently shed as too late) and one notice says so and what to
+// do; with host_receive the packets are stamped by arrival and used.
+TEST(RsuCore, ASensorClockFarOffIsRefusedLoudlyOrStampedByArrival) {
+  const TimeNs offset = 52 * kNsPerSecond;
+  const TimeNs t = 100 * kNsPerSecond;
+  for (const TimeSource source : {TimeSource::kSensor, TimeSource::kHostReceive}) {
+    RsuCoreConfig config = test_config();
+    config.time_source = source;
+    RsuCore core(config);
+    for (int k = 0; k < 20; ++k) {
+      const TimeNs first = t + k * 1'327'104;
+      core.on_lidar_packet(empty_packet(first), first + offset + 2 * kNsPerMs);
+    }
+    const bool refused = source == TimeSource::kSensor;
+    EXPECT_EQ(counter(core, "packet.accepted"), 20U);
+    EXPECT_EQ(counter(core, "packet.clock_offset"), refused ? 20U : 0U);
+    EXPECT_EQ(counter(core, "packet.too_late"), 0U);
+    ASSERT_TRUE(core.sensor_clock().known);
+    EXPECT_NEAR(static_cast<double>(core.sensor_clock().offset_ns),
+                static_cast<double>(offset + 2 * kNsPerMs - 1'327'104), 1e3);
+    EXPECT_TRUE(core.sensor_clock().beyond_tolerance);
+    const std::vector<std::string> notices = core.take_lidar_notices();
+    ASSERT_EQ(notices.size(), 1U);
+    EXPECT_NE(notices[0].find("52.001 s behind the host's"), std::string::npos) << notices[0];
+    EXPECT_EQ(notices[0].find("REFUSED") != std::string::npos, refused) << notices[0];
+    EXPECT_TRUE(core.take_lidar_notices().empty());  // once
+    // The sensor's clock is set right: said once more, and its packets are used.
+    for (int k = 20; k < 25; ++k) {
+      const TimeNs first = t + offset + k * 1'327'104;
+      core.on_lidar_packet(empty_packet(first), first + 2 * kNsPerMs);
+    }
+    EXPECT_EQ(counter(core, "packet.clock_offset"), refused ? 20U : 0U);
+    const std::vector<std::string> again = core.take_lidar_notices();
+    ASSERT_EQ(again.size(), 1U);
+    EXPECT_NE(again[0].find("within"), std::string::npos) << again[0];
+  }
+}
+
 TEST(RsuCore, GarbageLidarPacketsAreCountedNotFatal) {
   RsuCore core(test_config());
   std::vector<std::uint8_t> short_packet(100, 0xff);

@@ -1,0 +1,46 @@
+// The offset between a LiDAR's clock and the host's, measured on every data packet (issue 11: sensor
+// time). A packet leaves the sensor after its last firing, so arrival - end of the packet (on the
+// sensor clock) = clock offset + transit and queueing delay. The delays only add, so the estimate is
+// the smallest such value seen, allowed to creep up by the drift two free-running crystal clocks can
+// have (100 ppm) so that it follows a slowly drifting sensor clock; a jump of more than
+// `step_threshold` either way (the sensor's clock was set, or restarted from zero) starts the estimate
+// afresh. A host that falls behind (packets queued in its socket) raises the raw value but not the
+// estimate: the lag stays visible as raw - estimate.
+// Pure: the caller passes both times in.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "common/time.h"
+
+namespace rsu {
+
+struct SensorClockConfig {
+  double max_drift = 1e-4;                    // s/s the estimate may rise by
+  TimeNs step_threshold = 10 * kNsPerSecond;  // a larger change is a new clock, not drift or lag
+};
+
+class SensorClock {
+ public:
+  explicit SensorClock(const SensorClockConfig& config = {});
+
+  // One data packet: the end of its firings on the sensor's clock, its arrival on the host's.
+  void observe(TimeNs sensor_end_ns, TimeNs arrival_ns);
+
+  // host - sensor: add to a sensor time to get host time. nullopt before the first packet.
+  std::optional<TimeNs> offset_ns() const { return known_ ? std::optional<TimeNs>(estimate_) : std::nullopt; }
+  // The last packet's arrival - end: the offset plus that packet's delay.
+  TimeNs last_raw_ns() const { return last_raw_; }
+  std::uint64_t steps() const { return steps_; }  // times the estimate started afresh
+
+ private:
+  SensorClockConfig config_;
+  bool known_ = false;
+  TimeNs estimate_ = 0;
+  TimeNs last_raw_ = 0;
+  TimeNs last_arrival_ = 0;
+  std::uint64_t steps_ = 0;
+};
+
+}  // namespace rsu
