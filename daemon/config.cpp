@@ -8,7 +8,9 @@
 #include "daemon/dds_config.h"
 #include "io/yaml_field.h"
 #include "lidar/lidar_decoder.h"
+#include "lidar/ouster/ouster_lidar_decoder.h"
 #include "lidar/sensor_model.h"
+#include "lidar/velodyne_packet.h"
 #include "v2i/security/key_text.h"
 
 namespace rsu::daemon {
@@ -58,17 +60,18 @@ Pose3 read_mount(const YamlField& f) {
 }
 
 LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
-  f.expect_map({"velodyne_udp", "pcd", "simulator", "dds_pointcloud2"});
-  const int kinds = int{f.has("velodyne_udp")} + int{f.has("pcd")} + int{f.has("simulator")} +
-                    int{f.has("dds_pointcloud2")};
+  f.expect_map({"udp", "velodyne_udp", "pcd", "simulator", "dds_pointcloud2"});
+  const int kinds = int{f.has("udp")} + int{f.has("velodyne_udp")} + int{f.has("pcd")} +
+                    int{f.has("simulator")} + int{f.has("dds_pointcloud2")};
   if (kinds != 1)
-    f.fail("exactly one of velodyne_udp, pcd, simulator, dds_pointcloud2 is required");
+    f.fail("exactly one of udp (velodyne_udp), pcd, simulator, dds_pointcloud2 is required");
   if (f.has("dds_pointcloud2"))
     return read_dds_pointcloud2_input(f.child("dds_pointcloud2"));
-  if (f.has("velodyne_udp")) {
-    const YamlField u = f.child("velodyne_udp");
+  if (f.has("udp") || f.has("velodyne_udp")) {  // velodyne_udp: the name before other sensors
+    const YamlField u = f.child(f.has("udp") ? "udp" : "velodyne_udp");
     u.expect_map({"bind_address", "port", "reorder_packets"});
     VelodyneUdpInput in;
+    in.port = 0;  // the sensor's data port, once its decoder is made (read_lidar)
     if (u.has("bind_address"))
       in.bind_address = address_of(u.child("bind_address"));
     if (u.has("port"))
@@ -96,15 +99,30 @@ LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
 }
 
 void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
-  f.expect_map({"model", "mount", "input", "max_packet_age_ms"});
+  f.expect_map({"model", "metadata", "mount", "input", "max_packet_age_ms"});
   const YamlField model = f.required("model");
   c.core.sensor_model = model.text();
   if (!is_decodable_model(c.core.sensor_model))
-    model.fail("unknown LiDAR model \"" + c.core.sensor_model + "\" (expected vlp16, vlp32c or hdl32e)");
+    model.fail("unknown LiDAR model \"" + c.core.sensor_model + "\" (expected " +
+               std::string(kDecodableModels) + ")");
+  // An Ouster's metadata JSON (its beams and packet format); read by load_lidar_files().
+  const bool ouster = ouster::is_ouster_model(c.core.sensor_model);
+  if (f.has("metadata")) {
+    if (!ouster)
+      f.child("metadata")
+          .fail("the metadata JSON is for Ouster sensors; " + c.core.sensor_model + " has none");
+    c.core.sensor_options.metadata_source = path_of(f.child("metadata"), base);
+  } else if (ouster) {
+    model.fail(
+        "an Ouster needs lidar.metadata: the JSON the sensor (or the Ouster SDK, next to a recording) wrote");
+  }
   c.core.mount = read_mount(f.required("mount"));
   c.input = read_input(f.required("input"), base);
-  if (const auto* u = std::get_if<VelodyneUdpInput>(&c.input))
+  if (auto* u = std::get_if<VelodyneUdpInput>(&c.input)) {
     c.core.packet_order.depth = u->reorder_packets;
+    if (u->port == 0 && !ouster)
+      u->port = kVelodyneDataPort;  // an Ouster's comes from its metadata (rsud resolves it)
+  }
   if (f.has("max_packet_age_ms")) {
     const double ms = f.non_negative_or("max_packet_age_ms", 0.0);
     if (ms > 60000)
@@ -363,6 +381,17 @@ void load_security(DaemonConfig& c) {
   }
 }
 
+void load_lidar_files(DaemonConfig& c) {
+  LidarDecoderOptions& o = c.core.sensor_options;
+  if (o.metadata_source.empty())
+    return;
+  try {
+    o.metadata_text = io::read_text_file(o.metadata_source);
+  } catch (const io::YamlError& e) {
+    throw ConfigError(c.source + ": lidar.metadata: " + e.what());
+  }
+}
+
 DaemonConfig load_config(const std::string& path) {
   std::string text;
   try {
@@ -371,6 +400,7 @@ DaemonConfig load_config(const std::string& path) {
     throw ConfigError(e.what());
   }
   DaemonConfig config = parse_config(text, path);
+  load_lidar_files(config);
   load_security(config);
   return config;
 }
@@ -382,8 +412,11 @@ std::string summarize(const DaemonConfig& c) {
   out << "lidar " << c.core.sensor_model << " at (" << m.x << ", " << m.y << ", " << m.z << ") m, yaw "
       << rad_to_deg(m.yaw) << " deg, pitch " << rad_to_deg(m.pitch) << " deg, roll " << rad_to_deg(m.roll)
       << " deg\n";
+  if (!c.core.sensor_options.metadata_source.empty())
+    out << "lidar metadata " << c.core.sensor_options.metadata_source << "\n";
   if (const auto* u = std::get_if<VelodyneUdpInput>(&c.input)) {
-    out << "input velodyne_udp " << u->bind_address << ":" << u->port << "\n";
+    out << "input udp " << u->bind_address << ":"
+        << (u->port != 0 ? std::to_string(u->port) : std::string("the metadata's udp_port_lidar")) << "\n";
   } else if (const auto* p = std::get_if<PcdInput>(&c.input)) {
     out << "input pcd " << p->files.size() << " file(s) at " << p->rate_hz << " Hz\n";
   } else if (const auto* s = std::get_if<SimulatorInput>(&c.input)) {

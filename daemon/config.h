@@ -18,9 +18,11 @@
 
 namespace rsu::daemon {
 
+// The sensor's UDP packets (lidar.input.udp; velodyne_udp is its older name), any decoded sensor.
 struct VelodyneUdpInput {
   std::string bind_address = "0.0.0.0";
-  std::uint16_t port = 2368;  // DESIGN.md §2: the Velodyne data port
+  // Velodyne: 2368 unless set (DESIGN.md §2); Ouster: 0 unless set, the metadata's udp_port_lidar.
+  std::uint16_t port = 2368;
   // Packets held to put reordered ones back in time order (lidar/packet_order.h); each adds one
   // packet period of latency (VLP-32C 0.66 ms). 0: a late packet is dropped and counted.
   std::size_t reorder_packets = 0;
@@ -135,7 +137,10 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
 // insecure mode nothing is read). Throws ConfigError naming the file (and line) when one is missing,
 // unreadable or malformed.
 void load_security(DaemonConfig& config);
-// parse_config + load_security.
+// Reads the LiDAR's own files named in the configuration (lidar.metadata) into config.core.sensor_options
+// (the decoder checks their content when RsuCore makes it). Throws ConfigError naming a missing file.
+void load_lidar_files(DaemonConfig& config);
+// parse_config + load_lidar_files + load_security.
 DaemonConfig load_config(const std::string& path);
 
 // A few lines describing the configuration (for --check-config and the start-up log).

@@ -47,7 +47,7 @@ void check_config(const rsu::daemon::DaemonConfig& config) {
   for (const auto& f : config.background_pcd_files)
     check_file(f, "background.pcd_files");
   if (const auto* u = std::get_if<rsu::daemon::VelodyneUdpInput>(&config.input)) {
-    check_address(u->bind_address, "lidar.input.velodyne_udp.bind_address");
+    check_address(u->bind_address, "lidar.input.udp.bind_address");
   } else if (const auto* p = std::get_if<rsu::daemon::PcdInput>(&config.input)) {
     for (const auto& f : p->files)
       check_file(f, "lidar.input.pcd.files");

@@ -133,13 +133,13 @@ void RsuDaemon::every(asio::steady_timer& timer, steady::duration period, void (
 
 void RsuDaemon::start_input() {
   if (const auto* u = std::get_if<VelodyneUdpInput>(&config_.input)) {
-    const udp::endpoint endpoint(parse_address(u->bind_address, "lidar.input.velodyne_udp.bind_address"),
-                                 u->port);
-    bind_udp(lidar_socket_, endpoint, "Velodyne");
+    const std::uint16_t port = u->port != 0 ? u->port : core_.lidar_decoder().default_ports().data;
+    const udp::endpoint endpoint(parse_address(u->bind_address, "lidar.input.udp.bind_address"), port);
+    bind_udp(lidar_socket_, endpoint, "LiDAR");
     boost::system::error_code ignored;
     // ~1500 packets/s (VLP-32C): 4 MB holds over 2 s of them should the loop ever stall.
     lidar_socket_.set_option(asio::socket_base::receive_buffer_size(4 << 20), ignored);
-    spdlog::info("receiving Velodyne {} packets on {}:{}", config_.core.sensor_model,
+    spdlog::info("receiving {} packets on {}:{}", core_.lidar_decoder().model_name(),
                  endpoint.address().to_string(), endpoint.port());
     receive_lidar();
   } else if (const auto* p = std::get_if<PcdInput>(&config_.input)) {

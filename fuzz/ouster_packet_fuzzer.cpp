@@ -1,4 +1,4 @@
-// Fuzzes the Ouster lidar packet decoder (lib/lidar/ouster/ouster_decoder.h) in each profile: whatever
+// Fuzzes the Ouster lidar packet decoder (lib/lidar/ouster/ouster_lidar_decoder.h) in each profile: whatever
 // arrives on the lidar port must be accepted, recognised as an IMU packet or refused with a counted
 // reason, and every point it yields must be finite, of a real ring and a proper azimuth.
 //
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "fuzz_input.h"
-#include "lidar/ouster/ouster_decoder.h"
+#include "lidar/ouster/ouster_lidar_decoder.h"
 
 namespace {
 
@@ -57,12 +57,15 @@ Metadata format(std::uint8_t which) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   rsu::fuzz::FuzzInput in(data, size);
   const Metadata m = format(in.u8());
-  rsu::ouster::Decoder decoder(m);
+  rsu::ouster::OusterLidarDecoder decoder(m, "fuzz.json");  // through the decoder seam
   std::vector<rsu::LidarPoint> points;
   std::uint64_t fed = 0;
   while (!in.empty()) {
     const std::size_t before = points.size();
-    (void)rsu::ouster::to_string(decoder.decode(in.record(), points));
+    const rsu::PacketOutcome outcome = decoder.decode(in.record(), 0, points);
+    if (!outcome.is_data() && points.size() != before) {
+      std::abort();  // points only from data packets
+    }
     ++fed;
     for (std::size_t i = before; i < points.size(); ++i) {
       const rsu::LidarPoint& p = points[i];
@@ -74,7 +77,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }
     }
   }
-  if (decoder.stats().packets() != fed || decoder.stats().points != points.size()) {
+  if (decoder.packets_seen() != fed || decoder.decoder().stats().packets() != fed ||
+      decoder.decoder().stats().points != points.size()) {
     std::abort();  // every packet counted once; every point counted
   }
   return 0;

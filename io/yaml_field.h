@@ -24,8 +24,15 @@ class YamlError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Parses YAML text; a syntax error becomes a YamlError "<source>:<line>: <syntax>: ...".
-YAML::Node parse_yaml(const std::string& text, const std::string& source_name);
+// Parses YAML text; a syntax error becomes a YamlError "<source>:<line>: <syntax>: ...". Inline (pure,
+// no file): lib/ parsers of text the caller read (the Ouster metadata) use it without linking rsu_yaml.
+inline YAML::Node parse_yaml(const std::string& text, const std::string& source_name) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw YamlError(source_name + ":" + std::to_string(e.mark.line + 1) + ": <syntax>: " + e.msg);
+  }
+}
 // Reads a file; a missing file becomes "<path>:0: <file>: cannot open".
 std::string read_text_file(const std::string& path);
 

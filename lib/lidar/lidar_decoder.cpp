@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 
+#include "lidar/ouster/ouster_lidar_decoder.h"
 #include "lidar/velodyne_decoder.h"
 
 namespace rsu {
@@ -40,7 +41,7 @@ std::uint64_t LidarDecoder::packets_seen() const {
 
 bool is_decodable_model(std::string_view model) {
   const auto velodyne = sensor_model_by_name(model);
-  return velodyne && velodyne->has_packet_format();
+  return (velodyne && velodyne->has_packet_format()) || ouster::is_ouster_model(model);
 }
 
 std::unique_ptr<LidarDecoder> make_lidar_decoder(std::string_view model, const LidarDecoderOptions& options) {
@@ -48,8 +49,16 @@ std::unique_ptr<LidarDecoder> make_lidar_decoder(std::string_view model, const L
     const SensorModel& tables = options.calibrated_model ? *options.calibrated_model : *velodyne;
     return std::make_unique<VelodyneDecoder>(tables, options.returns, options.rotation_start_azimuth_deg);
   }
-  throw std::invalid_argument("unknown LiDAR model \"" + std::string(model) +
-                              "\" (expected vlp16, vlp32c or hdl32e)");
+  if (ouster::is_ouster_model(model)) {
+    if (options.calibrated_model) {
+      throw std::invalid_argument("a Velodyne calibration does not apply to an Ouster (" +
+                                  std::string(model) + ")");
+    }
+    return ouster::make_ouster_decoder(model, options.metadata_text, options.metadata_source,
+                                       options.rotation_start_azimuth_deg);
+  }
+  throw std::invalid_argument("unknown LiDAR model \"" + std::string(model) + "\" (expected " +
+                              std::string(kDecodableModels) + ")");
 }
 
 }  // namespace rsu

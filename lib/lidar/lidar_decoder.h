@@ -127,7 +127,13 @@ struct LidarDecoderOptions {
   double rotation_start_azimuth_deg = 0.0;
 };
 
-// The decoder for `model` ("vlp16", "vlp32c", "hdl32e", ...). Throws std::invalid_argument naming the
+// The models make_lidar_decoder knows, as said in errors.
+inline constexpr std::string_view kDecodableModels =
+    "vlp16, vlp32c, hdl32e, or an Ouster: os0-, os1-, os2- with 16, 32, 64 or 128 beams (os1-128), or ouster "
+    "(the model its metadata names)";
+
+// The decoder for `model` ("vlp16", "vlp32c", "hdl32e", "os1-128", ...). An Ouster needs
+// options.metadata_text. Throws std::invalid_argument naming the
 // problem for an unknown model or unusable options.
 std::unique_ptr<LidarDecoder> make_lidar_decoder(std::string_view model, const LidarDecoderOptions& options);
 // Whether make_lidar_decoder knows `model` (for configuration checks before any file is read).

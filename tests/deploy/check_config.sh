@@ -57,4 +57,23 @@ sed '/^security:/,/^$/d' "$config" > "$work/no_security.yaml"  # signed by defau
 if [ ! -e /etc/rsud/keys/rsu.key ]; then
   expect_refused no_security "security.key_file: /etc/rsud/keys/rsu.key"
 fi
+# An Ouster: lidar.model with the sensor's metadata JSON; the UDP port is the metadata's unless set.
+metadata=$(dirname "$shipped")/../tests/data/real/ouster/OS-1-128_v2.3.0_1024x10.json
+cp "$metadata" "$work/os1_128.json"
+sed -e "s|^  model: vlp32c.*|  model: os1-128\n  metadata: os1_128.json|" \
+    -e '/^      port: 2368/d' "$config" > "$work/ouster.yaml"
+out=$("$rsud" --check-config --config "$work/ouster.yaml") || { echo "FAIL: the Ouster configuration is refused"; "$rsud" --check-config --config "$work/ouster.yaml"; exit 1; }
+case "$out" in *"lidar os1-128"*"lidar metadata $work/os1_128.json"*"input udp 0.0.0.0:the metadata's udp_port_lidar"*) ;;
+  *) echo "FAIL: Ouster summary: $out"; exit 1 ;; esac
+sed 's/^  model: os1-128/  model: os1-64/' "$work/ouster.yaml" > "$work/ouster_other_model.yaml"
+expect_refused ouster_other_model "LiDAR model os1-64, but $work/os1_128.json describes an os1-128"
+sed '/^  metadata: /d' "$work/ouster.yaml" > "$work/ouster_no_metadata.yaml"
+expect_refused ouster_no_metadata "lidar.model: an Ouster needs lidar.metadata"
+sed 's/^  metadata: os1_128.json/  metadata: missing.json/' "$work/ouster.yaml" > "$work/ouster_missing.yaml"
+expect_refused ouster_missing "lidar.metadata: $work/missing.json:0: <file>: cannot open"
+sed 's/"lidar_mode": "1024x10"/"lidar_mode": "1024x15"/' "$work/os1_128.json" > "$work/os1_128_broken.json"
+sed 's/^  metadata: os1_128.json/  metadata: os1_128_broken.json/' "$work/ouster.yaml" > "$work/ouster_broken.yaml"
+expect_refused ouster_broken "os1_128_broken.json:$(grep -n '"lidar_mode"' "$work/os1_128.json" | cut -d: -f1): lidar_mode: unknown lidar_mode \"1024x15\""
+sed "s|^  model: vlp32c.*|  model: vlp32c\n  metadata: os1_128.json|" "$config" > "$work/velodyne_metadata.yaml"
+expect_refused velodyne_metadata "lidar.metadata: the metadata JSON is for Ouster sensors"
 echo "OK"

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/angles.h"
+#include "core_counter.h"
 #include "sim_stream.h"
 #include "v2i/wire_codec.h"
 
@@ -20,18 +21,9 @@ namespace rsu::core {
 namespace {
 
 using testing::announce;
+using testing::counter;
 using testing::SimStream;
 using testing::static_vehicle;
-
-// One of RsuCore::counters() by name (fails the test if there is none).
-std::uint64_t counter(const RsuCore& core, const std::string& name) {
-  for (const auto& [n, v] : core.counters()) {
-    if (n == name)
-      return v;
-  }
-  ADD_FAILURE() << "no counter " << name;
-  return 0;
-}
 
 constexpr int kEmptyRotations = 5;  // the scene without vehicles: enough for 3 whole learning frames
 

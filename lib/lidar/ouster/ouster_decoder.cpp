@@ -53,6 +53,34 @@ std::uint64_t DecoderStats::packets() const {
   return accepted + imu_packets + rejected();
 }
 
+std::uint64_t& DecoderStats::of(PacketResult result) {
+  switch (result) {
+    case PacketResult::accepted:
+      return accepted;
+    case PacketResult::imu_packet:
+      return imu_packets;
+    case PacketResult::wrong_size:
+      return wrong_size;
+    case PacketResult::not_lidar_packet:
+      return not_lidar_packet;
+    case PacketResult::wrong_serial:
+      return wrong_serial;
+    case PacketResult::wrong_init_id:
+      return wrong_init_id;
+    case PacketResult::bad_timestamp:
+      return bad_timestamp;
+    case PacketResult::bad_measurement_id:
+      return bad_measurement_id;
+    case PacketResult::frame_id_mismatch:
+      return frame_id_mismatch;
+    case PacketResult::frame_behind:
+      return frame_behind;
+    case PacketResult::column_behind:
+      break;
+  }
+  return column_behind;
+}
+
 std::uint64_t DecoderStats::rejected() const {
   return wrong_size + not_lidar_packet + wrong_serial + wrong_init_id + bad_timestamp + bad_measurement_id +
          frame_id_mismatch + frame_behind + column_behind;
@@ -77,41 +105,7 @@ Decoder::Decoder(Metadata metadata, DecoderConfig config)
 
 void Decoder::count(PacketResult result) {
   last_.result = result;
-  switch (result) {
-    case PacketResult::accepted:
-      ++stats_.accepted;
-      break;
-    case PacketResult::imu_packet:
-      ++stats_.imu_packets;
-      break;
-    case PacketResult::wrong_size:
-      ++stats_.wrong_size;
-      break;
-    case PacketResult::not_lidar_packet:
-      ++stats_.not_lidar_packet;
-      break;
-    case PacketResult::wrong_serial:
-      ++stats_.wrong_serial;
-      break;
-    case PacketResult::wrong_init_id:
-      ++stats_.wrong_init_id;
-      break;
-    case PacketResult::bad_timestamp:
-      ++stats_.bad_timestamp;
-      break;
-    case PacketResult::bad_measurement_id:
-      ++stats_.bad_measurement_id;
-      break;
-    case PacketResult::frame_id_mismatch:
-      ++stats_.frame_id_mismatch;
-      break;
-    case PacketResult::frame_behind:
-      ++stats_.frame_behind;
-      break;
-    case PacketResult::column_behind:
-      ++stats_.column_behind;
-      break;
-  }
+  ++stats_.of(result);
 }
 
 PacketResult Decoder::check_header(std::span<const std::uint8_t> payload) const {
@@ -150,11 +144,13 @@ PacketResult Decoder::check_columns(std::span<const std::uint8_t> payload, Packe
     }
     if (previous_slot < 0) {
       info.first_column = m;
+      info.first_time_ns = static_cast<TimeNs>(col.timestamp_ns);
       info.frame_id = col.frame_id;
     } else if (col.frame_id != info.frame_id) {
       return PacketResult::frame_id_mismatch;
     }
     info.last_column = m;
+    info.last_time_ns = static_cast<TimeNs>(col.timestamp_ns);
     previous_slot = c;
   }
   return PacketResult::accepted;

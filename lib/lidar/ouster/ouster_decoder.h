@@ -66,6 +66,9 @@ struct DecoderStats {
 
   std::uint64_t packets() const;  // all, IMU packets included
   std::uint64_t rejected() const;
+  // The count of packets with this outcome.
+  std::uint64_t& of(PacketResult result);
+  std::uint64_t of(PacketResult result) const { return const_cast<DecoderStats&>(*this).of(result); }
 };
 
 struct DecoderConfig {
@@ -85,6 +88,8 @@ struct PacketInfo {
   std::uint16_t frame_id = 0;
   int first_column = -1;  // measurement ids of its first and last valid column; -1 if none
   int last_column = -1;
+  TimeNs first_time_ns = 0;  // their timestamps (sensor clock)
+  TimeNs last_time_ns = 0;
   std::size_t points = 0;
 };
 
