@@ -1,15 +1,38 @@
 #include "vehicle_client/ndt_csv.h"
 
+#include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
-#include <vector>
+#include <utility>
 
 namespace rsu::vehicle_client {
 
 namespace {
 
-constexpr const char* kShortHeader = "time_ns,x,y,yaw";
-constexpr const char* kLongHeader = "time_ns,x,y,yaw,sxx,syy,syaw";
+using Column = NdtCsvParser::Column;
+
+constexpr std::array<std::pair<const char*, Column>, 10> kColumnNames = {{
+    {"time_ns", Column::kTime},
+    {"x", Column::kX},
+    {"y", Column::kY},
+    {"yaw", Column::kYaw},
+    {"sxx", Column::kSxx},
+    {"syy", Column::kSyy},
+    {"syaw", Column::kSyaw},
+    {"converged", Column::kConverged},
+    {"iterations", Column::kIterations},
+    {"fitness", Column::kFitness},
+}};
+
+const char* name_of(Column column) {
+  for (const auto& [name, c] : kColumnNames) {
+    if (c == column) {
+      return name;
+    }
+  }
+  return "?";
+}
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) {
@@ -55,6 +78,90 @@ std::optional<T> parse_number(std::string_view field) {
 NdtCsvError::NdtCsvError(std::size_t line, const std::string& what)
     : std::runtime_error("line " + std::to_string(line) + ": " + what), line_(line) {}
 
+bool NdtCsvParser::has_variances() const {
+  return std::find(columns_.begin(), columns_.end(), Column::kSxx) != columns_.end();
+}
+
+void NdtCsvParser::parse_header(const std::vector<std::string_view>& fields, std::string_view line) {
+  std::vector<Column> columns;
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const auto known = std::find_if(kColumnNames.begin(), kColumnNames.end(),
+                                    [&](const auto& entry) { return fields[i] == entry.first; });
+    const bool in_place = known != kColumnNames.end() && (i >= 4 || known->second == static_cast<Column>(i));
+    if (!in_place || (i >= 4 && static_cast<int>(known->second) < 4)) {
+      throw NdtCsvError(line_number_,
+                        "expected a header \"time_ns,x,y,yaw\" followed by any of sxx,syy,syaw (all three), "
+                        "converged, iterations, fitness; got \"" +
+                            std::string(line) + "\"");
+    }
+    if (std::find(columns.begin(), columns.end(), known->second) != columns.end()) {
+      throw NdtCsvError(line_number_, "column \"" + std::string(fields[i]) + "\" appears twice");
+    }
+    columns.push_back(known->second);
+  }
+  const auto count = [&](Column c) { return std::count(columns.begin(), columns.end(), c); };
+  if (columns.size() < 4 || count(Column::kSxx) != count(Column::kSyy) ||
+      count(Column::kSxx) != count(Column::kSyaw)) {
+    throw NdtCsvError(line_number_,
+                      "the header needs time_ns,x,y,yaw first and sxx,syy,syaw all three or none; got \"" +
+                          std::string(line) + "\"");
+  }
+  columns_ = std::move(columns);
+}
+
+void NdtCsvParser::parse_field(Column column, std::string_view field, NdtPoseRow& row,
+                               double& variance) const {
+  const std::string name = name_of(column);
+  if (column == Column::kTime) {
+    const auto time = parse_number<TimeNs>(field);
+    if (!time) {
+      throw NdtCsvError(line_number_, "time_ns \"" + std::string(field) + "\" is not an integer (ns)");
+    }
+    row.time = *time;
+    return;
+  }
+  if (column == Column::kConverged || column == Column::kIterations) {
+    const auto value = parse_number<int>(field);
+    if (!value || *value < 0 || (column == Column::kConverged && *value > 1)) {
+      throw NdtCsvError(line_number_, name + " \"" + std::string(field) + "\" is not " +
+                                          (column == Column::kConverged ? "0 or 1" : "a count"));
+    }
+    if (column == Column::kConverged) {
+      row.quality.converged = *value == 1;
+    } else {
+      row.quality.iterations = *value;
+    }
+    return;
+  }
+  const auto value = parse_number<double>(field);
+  if (!value || !std::isfinite(*value)) {
+    throw NdtCsvError(line_number_, name + " \"" + std::string(field) + "\" is not a finite number");
+  }
+  switch (column) {
+    case Column::kX:
+      row.pose.x = *value;
+      return;
+    case Column::kY:
+      row.pose.y = *value;
+      return;
+    case Column::kYaw:
+      row.pose.yaw = *value;
+      return;
+    case Column::kFitness:
+      if (*value < 0.0) {
+        throw NdtCsvError(line_number_, "fitness must not be negative, got " + std::string(field));
+      }
+      row.quality.fitness_m2 = *value;
+      return;
+    default:
+      if (!(*value > 0.0)) {
+        throw NdtCsvError(line_number_, name + " must be a positive variance, got " + std::string(field));
+      }
+      variance = *value;
+      return;
+  }
+}
+
 std::optional<NdtPoseRow> NdtCsvParser::parse_line(std::string_view raw) {
   ++line_number_;
   const std::string_view line = trim(raw);
@@ -62,48 +169,26 @@ std::optional<NdtPoseRow> NdtCsvParser::parse_line(std::string_view raw) {
     return std::nullopt;
   }
   const std::vector<std::string_view> fields = split_fields(line);
-  if (columns_ == 0) {
-    std::string header;
-    for (std::size_t i = 0; i < fields.size(); ++i) {
-      if (i > 0) {
-        header += ',';
-      }
-      header.append(fields[i]);
-    }
-    if (header == kShortHeader || header == kLongHeader) {
-      columns_ = fields.size();
-      return std::nullopt;
-    }
-    throw NdtCsvError(line_number_, "expected the header \"" + std::string(kShortHeader) + "\" or \"" +
-                                        kLongHeader + "\", got \"" + std::string(line) + "\"");
+  if (columns_.empty()) {
+    parse_header(fields, line);
+    return std::nullopt;
   }
-  if (fields.size() != columns_) {
-    throw NdtCsvError(line_number_, "expected " + std::to_string(columns_) + " comma-separated fields, got " +
-                                        std::to_string(fields.size()));
+  if (fields.size() != columns_.size()) {
+    throw NdtCsvError(line_number_, "expected " + std::to_string(columns_.size()) +
+                                        " comma-separated fields, got " + std::to_string(fields.size()));
   }
   NdtPoseRow row;
-  const auto time = parse_number<TimeNs>(fields[0]);
-  if (!time) {
-    throw NdtCsvError(line_number_, "time_ns \"" + std::string(fields[0]) + "\" is not an integer (ns)");
-  }
-  row.time = *time;
-  static constexpr const char* kNames[] = {"time_ns", "x", "y", "yaw", "sxx", "syy", "syaw"};
-  double values[7] = {};
-  for (std::size_t i = 1; i < columns_; ++i) {
-    const auto value = parse_number<double>(fields[i]);
-    if (!value || !std::isfinite(*value)) {
-      throw NdtCsvError(line_number_, std::string(kNames[i]) + " \"" + std::string(fields[i]) +
-                                          "\" is not a finite number");
+  Eigen::Vector3d variances = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const Column column = columns_[i];
+    double variance = 0.0;
+    parse_field(column, fields[i], row, variance);
+    if (column == Column::kSxx || column == Column::kSyy || column == Column::kSyaw) {
+      variances[static_cast<int>(column) - static_cast<int>(Column::kSxx)] = variance;
     }
-    if (i >= 4 && !(*value > 0.0)) {
-      throw NdtCsvError(line_number_, std::string(kNames[i]) + " must be a positive variance, got " +
-                                          std::string(fields[i]));
-    }
-    values[i] = *value;
   }
-  row.pose = {values[1], values[2], values[3]};
-  if (columns_ == 7) {
-    row.variances = Eigen::Vector3d(values[4], values[5], values[6]);
+  if (has_variances()) {
+    row.variances = variances;
   }
   return row;
 }

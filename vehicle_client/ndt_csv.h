@@ -1,8 +1,11 @@
-// The rsu-vehicle CLI's input: the vehicle's NDT poses as CSV, one pose a line, after a header line:
-//   time_ns,x,y,yaw                 or   time_ns,x,y,yaw,sxx,syy,syaw
-// time_ns: common clock (DESIGN.md §3); x, y: map frame ENU, m; yaw: rad CCW from east; sxx, syy,
-// syaw: variances of x (m^2), y (m^2) and yaw (rad^2). Blank lines and lines starting with '#' are
-// skipped. Every error names the line. Pure parsing: the caller reads the lines.
+// The rsu-vehicle CLI's input: the vehicle's NDT poses as CSV, one pose a line, after a header line
+// naming the columns: time_ns,x,y,yaw first, then any of
+//   sxx,syy,syaw                 variances of x (m^2), y (m^2) and yaw (rad^2), all three or none
+//   converged,iterations,fitness  the match's quality indicator (vehicle/ndt_quality.h), each optional:
+//                                converged 0 or 1, iterations a count, fitness PCL's score in m^2
+// in any order. time_ns: the common clock (ns); x, y: map frame ENU, m; yaw: rad CCW from east. Blank
+// lines and lines starting with '#' are skipped. Every error names the line. Pure parsing: the caller
+// reads the lines.
 #pragma once
 
 #include <Eigen/Core>
@@ -11,9 +14,11 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "common/pose.h"
 #include "common/time.h"
+#include "vehicle/ndt_quality.h"
 
 namespace rsu::vehicle_client {
 
@@ -21,6 +26,7 @@ struct NdtPoseRow {
   TimeNs time = 0;
   Pose2 pose;
   std::optional<Eigen::Vector3d> variances;  // (x, y, yaw), when the file has the columns
+  vehicle::NdtQuality quality;               // the indicators the file has
 };
 
 class NdtCsvError : public std::runtime_error {
@@ -39,12 +45,18 @@ class NdtCsvParser {
   std::optional<NdtPoseRow> parse_line(std::string_view line);
 
   std::size_t line_number() const { return line_number_; }
-  bool has_header() const { return columns_ != 0; }
-  bool has_variances() const { return columns_ == 7; }
+  bool has_header() const { return !columns_.empty(); }
+  bool has_variances() const;
+
+  // What each column holds.
+  enum class Column { kTime, kX, kY, kYaw, kSxx, kSyy, kSyaw, kConverged, kIterations, kFitness };
 
  private:
+  void parse_header(const std::vector<std::string_view>& fields, std::string_view line);
+  void parse_field(Column column, std::string_view field, NdtPoseRow& row, double& variance) const;
+
   std::size_t line_number_ = 0;
-  std::size_t columns_ = 0;  // 0 until the header was read; then 4 or 7
+  std::vector<Column> columns_;  // empty until the header was read
 };
 
 }  // namespace rsu::vehicle_client

@@ -88,8 +88,8 @@ NdtResult NdtLocalizer::align(const std::vector<LidarPoint>& scan, const Pose3& 
   pcl::PointCloud<pcl::PointXYZ> aligned;
   impl_->ndt.align(aligned, initial);
   const Eigen::Matrix4f t = impl_->ndt.getFinalTransformation();
-  result.converged = impl_->ndt.hasConverged();
   result.iterations = impl_->ndt.getFinalNumIteration();
+  result.converged = impl_->ndt.hasConverged() && result.iterations < config_.max_iterations;
   result.fitness = impl_->ndt.getFitnessScore();
   result.pose = Pose2{t(0, 3), t(1, 3), std::atan2(t(1, 0), t(0, 0))};
   result.covariance.diagonal() << config_.output_sigma_xy_m * config_.output_sigma_xy_m,

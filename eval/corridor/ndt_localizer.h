@@ -34,12 +34,16 @@ struct NdtConfig {
   double self_filter_radius_m = 3.0;
 };
 
+// The match and how it went: the quality indicator the vehicle passes on with each pose
+// (vehicle/ndt_quality.h), so that it knows when its own localization is the one that failed.
 struct NdtResult {
   Pose2 pose;  // the vehicle's footprint centre and yaw, map frame
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  // Stopped because a step fell below the transformation epsilon, not at the iteration cap (PCL's own
+  // hasConverged() is true at the cap as well).
   bool converged = false;
   int iterations = 0;
-  double fitness = 0.0;  // PCL's mean squared distance of the aligned scan to the map
+  double fitness = 0.0;  // PCL's fitness score: mean squared distance of the aligned scan to the map, m^2
   std::size_t scan_points = 0;
 };
 

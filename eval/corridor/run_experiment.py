@@ -150,8 +150,11 @@ logging:
     first_ndt_ns = None
     with open(os.path.join(out, "ndt.csv")) as src, open(shifted, "w") as dst:
         header = src.readline().strip().split(",")
-        idx = [header.index(c) for c in ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw")]
-        dst.write("time_ns,x,y,yaw,sxx,syy,syaw\n")
+        # The pose, its covariance and the match's quality indicator (the vehicle lets RSU fixes take
+        # over its pose only when its own NDT says it failed).
+        columns = ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw", "converged", "iterations", "fitness")
+        idx = [header.index(c) for c in columns]
+        dst.write(",".join(columns) + "\n")
         for line in src:
             cells = line.strip().split(",")
             t = int(cells[idx[0]])

@@ -105,6 +105,7 @@ std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
     s.covariance = r.covariance;
     s.converged = r.converged;
     s.iterations = r.iterations;
+    s.fitness = r.fitness;
     s.truth = sim::pose_at(vehicle.trajectory, t_ref);
     samples.push_back(s);
     if (progress)

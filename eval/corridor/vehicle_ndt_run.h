@@ -17,6 +17,7 @@ struct NdtSample {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   bool converged = false;
   int iterations = 0;
+  double fitness = 0.0;  // m^2 (NdtResult)
   Pose2 truth;  // the true pose at time_ns
 };
 

@@ -28,7 +28,7 @@ MeasurementOutcome PoseFuser::add_ndt(const Pose2& pose, const Eigen::Matrix3d& 
   return outcome;
 }
 
-MeasurementOutcome PoseFuser::add_rsu(const v2i::Correction& correction) {
+MeasurementOutcome PoseFuser::add_rsu(const v2i::Correction& correction, Reanchor reanchor) {
   const MeasurementOutcome outcome = ekf_.add(
       {correction.sweep_time, fusion::MeasurementSource::kRsu, correction.pose, correction.pose_covariance});
   switch (outcome) {
@@ -40,7 +40,13 @@ MeasurementOutcome PoseFuser::add_rsu(const v2i::Correction& correction) {
       break;
     case MeasurementOutcome::kRejectedGate:
       ++stats_.rsu_rejected_gate;
-      track_rejected_fix(correction);
+      if (reanchor == Reanchor::kNow ||
+          (reanchor == Reanchor::kAfterAgreeingRun && completes_agreeing_run(correction))) {
+        reanchor_at(correction);
+      } else if (reanchor == Reanchor::kNever) {
+        rejected_run_ = 0;
+        last_rejected_.reset();
+      }
       break;
     case MeasurementOutcome::kRejectedYawBranch:
       ++stats_.rsu_rejected_yaw_branch;
@@ -52,10 +58,11 @@ MeasurementOutcome PoseFuser::add_rsu(const v2i::Correction& correction) {
   return outcome;
 }
 
-void PoseFuser::track_rejected_fix(const v2i::Correction& correction) {
+bool PoseFuser::completes_agreeing_run(const v2i::Correction& correction) {
   const auto estimate = ekf_.estimate_at(correction.sweep_time);
-  if (!estimate)
-    return;
+  if (!estimate) {
+    return false;
+  }
   bool continues_run = false;
   if (last_rejected_) {
     const TimeNs gap = correction.sweep_time - last_rejected_->sweep_time;
@@ -72,15 +79,19 @@ void PoseFuser::track_rejected_fix(const v2i::Correction& correction) {
   }
   rejected_run_ = continues_run ? rejected_run_ + 1 : 1;
   last_rejected_ = correction;
-  if (rejected_run_ < config_.reanchor_after)
-    return;
+  return rejected_run_ >= config_.reanchor_after;
+}
 
-  // Re-initialise at the fix: its box centre back to the reference point, its box yaw on the branch
-  // nearest the filter's heading (a box has no front), speed and yaw rate kept.
+void PoseFuser::reanchor_at(const v2i::Correction& correction) {
+  const auto estimate = ekf_.estimate_at(correction.sweep_time);
+  if (!estimate) {
+    return;
+  }
   fusion::StateEstimate anchored = *estimate;
   double yaw = correction.pose.yaw;
-  if (std::abs(wrap_angle(yaw - heading_of(*estimate))) > kPi / 2)
+  if (std::abs(wrap_angle(yaw - heading_of(*estimate))) > kPi / 2) {
     yaw = wrap_angle(yaw + kPi);
+  }
   const Eigen::Vector2d offset = Eigen::Rotation2Dd(yaw) * config_.ekf.reference_offset;
   anchored.time = correction.sweep_time;
   // The inverse of fusion::box_centre_from_reference: reference = centre + R(yaw) * offset.

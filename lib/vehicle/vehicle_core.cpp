@@ -1,11 +1,42 @@
 #include "vehicle/vehicle_core.h"
 
+#include <algorithm>
+#include <cstdlib>
+
 namespace rsu::vehicle {
 
-VehicleCore::VehicleCore(const VehicleCoreConfig& config) : config_(config), fuser_(config.fuser) {}
+const char* CorrectionStep::label() const {
+  if (outcome) {
+    return fusion::to_string(*outcome);
+  }
+  if (check && !check->use()) {
+    return to_string(check->verdict);
+  }
+  return "not_fused";
+}
+
+VehicleCore::VehicleCore(const VehicleCoreConfig& config)
+    : config_(config), fuser_(config.fuser), own_(config.fuser.ekf), monitor_(config.integrity) {}
 
 NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
-  fuser_.add_ndt(ndt.pose, ndt.covariance, ndt.time);
+  ++stats_.ndt_poses;
+  Eigen::Matrix3d covariance = ndt.covariance;
+  const bool degraded = assess(ndt.quality, config_.ndt_quality) == NdtHealth::kDegraded;
+  if (degraded) {
+    // The match says it failed: its pose is no 0.15 m estimate, in either filter.
+    covariance *= config_.degraded_ndt_variance_scale;
+    ++stats_.ndt_degraded;
+  }
+  if (!degraded) {
+    own_.add({ndt.time, fusion::MeasurementSource::kNdt, ndt.pose, covariance});
+  } else if (!previous_degraded_) {
+    doubt_own_at(ndt.time, covariance);
+  }
+  previous_degraded_ = degraded;
+  if (degraded) {
+    last_degraded_ndt_ = ndt.time;
+  }
+  fuser_.add_ndt(ndt.pose, covariance, ndt.time);
   NdtStep step;
   step.fused = fuser_.pose_at(ndt.time);
   step.announce = state_to_announce(ndt, step.fused);
@@ -17,11 +48,84 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& correction) {
   if (!config_.fuse_corrections) {
     return step;
   }
-  step.outcome = fuser_.add_rsu(correction);
-  if (*step.outcome == fusion::MeasurementOutcome::kAccepted) {
+  Reanchor reanchor = Reanchor::kNever;
+  const auto own = own_.estimate_at(correction.sweep_time);
+  if (config_.check_integrity && own) {
+    const OwnEstimate status = own_status_at(correction.sweep_time);
+    const bool own_failed = status != OwnEstimate::kHealthy;
+    stats_.fixes_own_failed += own_failed ? 1 : 0;
+    step.check = monitor_.check(correction, *own, status, config_.fuser.ekf.reference_offset);
+    if (step.check->peers_agree_against_own) {
+      peers_against_own_until_ = correction.sweep_time + config_.peer_agreement_hold;
+    }
+    if (!step.check->use()) {
+      hold_back(correction, *step.check);
+      return step;
+    }
+    if (step.check->admitted_now) {
+      fuse_held_back(correction.rsu_id);
+    }
+    reanchor = step.check->peers_agree_against_own ? Reanchor::kNow
+               : own_failed                        ? Reanchor::kAfterAgreeingRun
+                                                   : Reanchor::kNever;
+  } else if (!own) {
+    ++stats_.fixes_without_own;  // the fused filter refuses it too (not initialised)
+  }
+  const std::uint64_t reanchors = fuser_.stats().rsu_reanchors;
+  step.outcome = fuser_.add_rsu(correction, reanchor);
+  step.reanchored = fuser_.stats().rsu_reanchors > reanchors;
+  if (*step.outcome == fusion::MeasurementOutcome::kAccepted || step.reanchored) {
     step.fused = fuser_.pose_at(correction.sweep_time);
   }
   return step;
+}
+
+void VehicleCore::hold_back(const v2i::Correction& correction, const FixCheck& check) {
+  if (check.excluded_now || check.verdict != FixVerdict::kProbation) {
+    held_back_.erase(correction.rsu_id);
+    return;
+  }
+  if (held_back_.size() >= monitor_.config().max_sources && held_back_.count(correction.rsu_id) == 0) {
+    std::erase_if(held_back_, [&](const auto& entry) { return monitor_.sources().count(entry.first) == 0; });
+  }
+  auto& fixes = held_back_[correction.rsu_id];
+  fixes.push_back(correction);
+  while (fixes.size() > static_cast<std::size_t>(std::max(config_.integrity.admit_after_fixes, 1))) {
+    fixes.pop_front();
+  }
+}
+
+void VehicleCore::fuse_held_back(std::uint64_t rsu_id) {
+  const auto it = held_back_.find(rsu_id);
+  if (it == held_back_.end()) {
+    return;
+  }
+  for (const v2i::Correction& fix : it->second) {
+    fuser_.add_rsu(fix);
+    ++stats_.fixes_fused_after_probation;
+  }
+  held_back_.erase(it);
+}
+
+OwnEstimate VehicleCore::own_status_at(TimeNs t) const {
+  if (peers_against_own_until_ && t <= *peers_against_own_until_) {
+    return OwnEstimate::kOverruled;
+  }
+  if (last_degraded_ndt_ && std::llabs(t - *last_degraded_ndt_) <= config_.ndt_degraded_hold) {
+    return OwnEstimate::kDegraded;
+  }
+  return OwnEstimate::kHealthy;
+}
+
+void VehicleCore::doubt_own_at(TimeNs time, const Eigen::Matrix3d& covariance) {
+  auto estimate = own_.estimate_at(time);
+  if (!estimate) {
+    return;
+  }
+  estimate->covariance.topLeftCorner<3, 3>() += covariance;
+  const double speed_sigma = config_.degraded_speed_sigma_mps;
+  estimate->covariance(fusion::kSpeed, fusion::kSpeed) += speed_sigma * speed_sigma;
+  own_.initialize(*estimate);
 }
 
 VehicleState VehicleCore::state_to_announce(const NdtPose& ndt,

@@ -2,9 +2,18 @@
 // caller passes the data in with their times): its own NDT poses and the RSU corrections it accepted
 // (CorrectionFilter) are fused (PoseFuser over lib/fusion's EKF), and each NDT pose yields the state to
 // announce next (Announcer sends it). rsu-vehicle and the rsu_vehicle_client library are I/O around it.
+//
+// An RSU is never let to make the vehicle worse (issue 18): beside the fused filter runs the vehicle's
+// own estimate, a filter over its NDT poses alone, and every correction is checked against it by the
+// IntegrityMonitor before it may be fused. The own estimate counts as failed only when the vehicle's
+// NDT says so (NdtQuality: the pose's covariance is then inflated in the fused filter, the own filter
+// dead-reckons without it, and RSU fixes may re-anchor the fused filter) or when two RSUs agree against
+// it; never because one RSU keeps disagreeing.
 #pragma once
 
 #include <Eigen/Core>
+#include <deque>
+#include <map>
 #include <optional>
 
 #include "common/pose.h"
@@ -12,6 +21,8 @@
 #include "fusion/vehicle_ekf.h"
 #include "v2i/messages.h"
 #include "vehicle/announcer.h"
+#include "vehicle/integrity_monitor.h"
+#include "vehicle/ndt_quality.h"
 #include "vehicle/pose_fuser.h"
 
 namespace rsu::vehicle {
@@ -21,12 +32,25 @@ struct NdtPose {
   TimeNs time = 0;
   Pose2 pose;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  // (x, y, yaw)
+  NdtQuality quality;                                        // how the match went, when the localization says
 };
 
 struct VehicleCoreConfig {
   PoseFuserConfig fuser;
   // False: corrections are recorded but not fused, so the output is the NDT-only filter (a baseline).
   bool fuse_corrections = true;
+  // False: every correction goes to the fused filter unchecked (its gate only): for comparison only.
+  bool check_integrity = true;
+  IntegrityConfig integrity;
+  NdtQualityLimits ndt_quality;
+  // A degraded NDT pose's covariance is multiplied by this (x100: a 0.15 m sigma becomes 1.5 m) ...
+  double degraded_ndt_variance_scale = 100.0;
+  // ... and the own estimate counts as failed from this long before to this long after it.
+  TimeNs ndt_degraded_hold = 1 * kNsPerSecond;
+  // The own estimate's speed may have followed the failing match before it said so.
+  double degraded_speed_sigma_mps = 1.0;
+  // Two RSUs agreeing against the own estimate: it counts as failed this long after.
+  TimeNs peer_agreement_hold = 1 * kNsPerSecond;
   // The filter's motion estimate is announced once it has settled to these standard deviations (loose
   // but honest); until then speed and yaw rate are announced as unknown.
   double announce_speed_sigma_mps = 1.0;
@@ -40,11 +64,24 @@ struct NdtStep {
   VehicleState announce;
 };
 
-// What became of a correction.
+// What became of a correction: refused by the integrity check (`check` says why), or given to the fused
+// filter (`outcome`; `fused`: the estimate at its sweep time, when it was accepted).
 struct CorrectionStep {
-  std::optional<fusion::MeasurementOutcome> outcome;  // empty when corrections are not fused
-  std::optional<fusion::StateEstimate> fused;         // at its sweep time, when it was fused
-  const char* label() const { return outcome ? fusion::to_string(*outcome) : "not_fused"; }
+  std::optional<FixCheck> check;                      // empty when not checked
+  std::optional<fusion::MeasurementOutcome> outcome;  // empty when not given to the fused filter
+  std::optional<fusion::StateEstimate> fused;
+  bool reanchored = false;  // the fused filter was re-initialised at this fix
+  // "accepted", "rejected_gate", ... (the fused filter's outcome); "probation", "excluded", "barred",
+  // "inconsistent" (refused by the integrity check); "not_fused" (corrections not fused at all).
+  const char* label() const;
+};
+
+struct VehicleCoreStats {
+  std::uint64_t ndt_poses = 0;
+  std::uint64_t ndt_degraded = 0;                 // poses whose quality said the match failed
+  std::uint64_t fixes_own_failed = 0;             // fixes checked while the own estimate counted as failed
+  std::uint64_t fixes_without_own = 0;            // fixes before the own estimate existed
+  std::uint64_t fixes_fused_after_probation = 0;  // held back on probation, fused once admitted
 };
 
 class VehicleCore {
@@ -55,13 +92,34 @@ class VehicleCore {
   CorrectionStep on_correction(const v2i::Correction& correction);
 
   std::optional<fusion::StateEstimate> pose_at(TimeNs time) const { return fuser_.pose_at(time); }
+  // The own estimate (NDT poses alone), the integrity reference.
+  std::optional<fusion::StateEstimate> own_pose_at(TimeNs time) const { return own_.estimate_at(time); }
   PoseFuserStats fuser_stats() const { return fuser_.stats(); }
+  const IntegrityMonitor& integrity() const { return monitor_; }
+  const VehicleCoreStats& stats() const { return stats_; }
 
  private:
   VehicleState state_to_announce(const NdtPose& ndt, const std::optional<fusion::StateEstimate>& fused) const;
+  OwnEstimate own_status_at(TimeNs t) const;
+  // The first degraded NDT pose after healthy ones: the match may have been failing before it said so,
+  // so the own estimate's pose uncertainty grows by the degraded pose's covariance and its speed
+  // uncertainty by degraded_speed_sigma_mps; while NDT stays degraded the own estimate takes none of its
+  // poses (it dead-reckons, its uncertainty growing with the motion model's).
+  void doubt_own_at(TimeNs time, const Eigen::Matrix3d& covariance);
+  // A source on probation moves nothing, but its latest fixes (which its admission will have shown
+  // consistent) are kept and fused, late, the moment it is admitted.
+  void hold_back(const v2i::Correction& correction, const FixCheck& check);
+  void fuse_held_back(std::uint64_t rsu_id);
 
   VehicleCoreConfig config_;
   PoseFuser fuser_;
+  fusion::VehicleEkf own_;
+  IntegrityMonitor monitor_;
+  VehicleCoreStats stats_;
+  std::optional<TimeNs> last_degraded_ndt_;
+  bool previous_degraded_ = false;
+  std::optional<TimeNs> peers_against_own_until_;
+  std::map<std::uint64_t, std::deque<v2i::Correction>> held_back_;  // per RSU on probation
 };
 
 }  // namespace rsu::vehicle

@@ -145,33 +145,77 @@ TEST(PoseFuser, AnOffBy90DegreeFixNeverMovesThePose) {
 }
 
 // NDT has drifted 2 m across the road while claiming 0.1 m, and the filter believes it; then the vehicle
-// comes into the RSU's view and its fixes are right. The gate first refuses them, but a run of fixes that
-// agree with each other re-anchors the filter, and from then on the fused pose follows the RSU.
-TEST(PoseFuser, ReanchorsAtAgreeingRsuFixesWhenNdtHasDrifted) {
+// comes into the RSU's view and its fixes are right. The gate first refuses them. When the caller knows
+// the filter is the one that failed (its NDT said so: Reanchor::kAfterAgreeingRun), a run of fixes that
+// agree with each other re-anchors the filter, and from then on the fused pose follows the RSU. Without
+// that knowledge (kNever, the default) the same run never re-anchors: one RSU's consistency with itself
+// is no proof that the vehicle's own estimate failed (issue 18).
+struct DriftResult {
+  PoseFuserStats stats;
+  double last_fused_error = 0.0;
+  double last_ndt_error = 0.0;
+};
+
+DriftResult drift_across_road(Reanchor reanchor) {
   PoseFuser fuser(fuser_config());
   const Eigen::Vector2d across(-std::sin(kHeading), std::cos(kHeading));
   const Eigen::Matrix3d ndt_cov = diagonal(0.1, 0.01);
+  DriftResult r;
   int k = 0;
-  double last_fused_error = 0.0, last_ndt_error = 0.0;
   for (TimeNs t = kStart; t < kStart + 5 * kNsPerSecond; t += kStep, ++k) {
     const double drift = std::min(2.0, 2.0 * to_seconds(t - kStart));  // m, grows for 1 s then stays
     const Eigen::Vector2d ndt = truth_reference(t) + drift * across;
     fuser.add_ndt({ndt.x(), ndt.y(), kHeading}, ndt_cov, t);
     if (t >= kStart + 3 * kNsPerSecond)
-      fuser.add_rsu(rsu_fix(t + 40 * kNsPerMs, k));
+      fuser.add_rsu(rsu_fix(t + 40 * kNsPerMs, k), reanchor);
     const auto fused = fuser.pose_at(t + 40 * kNsPerMs);
-    ASSERT_TRUE(fused.has_value());
-    last_fused_error = (Eigen::Vector2d(fused->state(fusion::kX), fused->state(fusion::kY)) -
-                        truth_reference(t + 40 * kNsPerMs))
-                           .norm();
-    last_ndt_error = drift;
+    EXPECT_TRUE(fused.has_value());
+    if (!fused)
+      break;
+    r.last_fused_error = (Eigen::Vector2d(fused->state(fusion::kX), fused->state(fusion::kY)) -
+                          truth_reference(t + 40 * kNsPerMs))
+                             .norm();
+    r.last_ndt_error = drift;
   }
-  const PoseFuserStats stats = fuser.stats();
-  EXPECT_GE(stats.rsu_reanchors, 1u) << "accepted " << stats.rsu_accepted << " gate "
-                                     << stats.rsu_rejected_gate << " yaw " << stats.rsu_rejected_yaw_branch
-                                     << " other " << stats.rsu_rejected_other;
-  EXPECT_GT(last_ndt_error, 1.9);
-  EXPECT_LT(last_fused_error, 0.5);
+  r.stats = fuser.stats();
+  return r;
+}
+
+TEST(PoseFuser, ReanchorsAtAgreeingRsuFixesWhenNdtHasDrifted) {
+  const DriftResult r = drift_across_road(Reanchor::kAfterAgreeingRun);
+  EXPECT_GE(r.stats.rsu_reanchors, 1u)
+      << "accepted " << r.stats.rsu_accepted << " gate " << r.stats.rsu_rejected_gate << " yaw "
+      << r.stats.rsu_rejected_yaw_branch << " other " << r.stats.rsu_rejected_other;
+  EXPECT_GT(r.last_ndt_error, 1.9);
+  EXPECT_LT(r.last_fused_error, 0.5);
+}
+
+TEST(PoseFuser, NeverReanchorsOnOneRsusConsistencyWithItself) {
+  const DriftResult r = drift_across_road(Reanchor::kNever);
+  EXPECT_EQ(r.stats.rsu_reanchors, 0u);
+  EXPECT_GE(r.stats.rsu_rejected_gate, 15u);  // 20 fixes, refused once the filter had settled on NDT
+  EXPECT_GT(r.last_fused_error, 1.5);         // the fused pose stays with the vehicle's own estimate
+}
+
+// Told that independent RSUs agree (Reanchor::kNow), the first refused fix re-anchors the filter.
+TEST(PoseFuser, ReanchorsAtOnceWhenIndependentRsusAgree) {
+  PoseFuser fuser(fuser_config());
+  const Eigen::Vector2d across(-std::sin(kHeading), std::cos(kHeading));
+  for (int k = 0; k < 20; ++k) {
+    const TimeNs t = kStart + k * kStep;
+    const Eigen::Vector2d ndt = truth_reference(t) + 2.0 * across;
+    fuser.add_ndt({ndt.x(), ndt.y(), kHeading}, diagonal(0.1, 0.01), t);
+  }
+  const TimeNs t = kStart + 19 * kStep + 40 * kNsPerMs;
+  const v2i::Correction fix = rsu_fix(t, 0);
+  EXPECT_EQ(fuser.add_rsu(fix, Reanchor::kNow), fusion::MeasurementOutcome::kRejectedGate);
+  EXPECT_EQ(fuser.stats().rsu_reanchors, 1u);
+  const auto fused = fuser.pose_at(t);
+  ASSERT_TRUE(fused.has_value());
+  // At the fix: its box centre mapped back to the rear axle, its yaw on the forward branch.
+  const Eigen::Vector2d at(fused->state(fusion::kX), fused->state(fusion::kY));
+  EXPECT_LT((at - truth_reference(t)).norm(), 4 * kRsuSigma);
+  EXPECT_LT(angle_distance(fused->state(fusion::kYaw), kHeading), 4 * kRsuYawSigma);
 }
 
 // A lone outlier, or fixes that disagree with each other, never re-anchor.

@@ -68,5 +68,53 @@ TEST(NdtCsv, ErrorsNameTheLine) {
   EXPECT_EQ(error_line(parser, "2,2,3,4,1,1,1"), 0U);                      // and the parser goes on
 }
 
+// The match's quality indicator (issue 18): any of converged, iterations, fitness, in any order after
+// the pose (and variances); a file without them leaves the quality unknown.
+TEST(NdtCsv, QualityColumnsAreReadByName) {
+  NdtCsvParser parser;
+  parser.parse_line("time_ns,x,y,yaw,fitness,sxx,syy,syaw,converged,iterations");
+  EXPECT_TRUE(parser.has_variances());
+  const auto row = parser.parse_line("5,1,2,3,0.047,0.04,0.09,0.0004,1,7");
+  ASSERT_TRUE(row && row->variances);
+  EXPECT_DOUBLE_EQ(row->variances->y(), 0.09);
+  ASSERT_TRUE(row->quality.converged && row->quality.iterations && row->quality.fitness_m2);
+  EXPECT_TRUE(*row->quality.converged);
+  EXPECT_EQ(*row->quality.iterations, 7);
+  EXPECT_DOUBLE_EQ(*row->quality.fitness_m2, 0.047);
+  EXPECT_EQ(vehicle::assess(row->quality, {}), vehicle::NdtHealth::kHealthy);
+
+  NdtCsvParser only_converged;
+  only_converged.parse_line("time_ns,x,y,yaw,converged");
+  EXPECT_FALSE(only_converged.has_variances());
+  const auto failed = only_converged.parse_line("5,1,2,3,0");
+  ASSERT_TRUE(failed && failed->quality.converged);
+  EXPECT_FALSE(*failed->quality.converged);
+  EXPECT_FALSE(failed->quality.fitness_m2.has_value());
+  EXPECT_EQ(vehicle::assess(failed->quality, {}), vehicle::NdtHealth::kDegraded);
+
+  NdtCsvParser plain;
+  plain.parse_line("time_ns,x,y,yaw");
+  EXPECT_EQ(vehicle::assess(plain.parse_line("5,1,2,3")->quality, {}), vehicle::NdtHealth::kUnknown);
+}
+
+TEST(NdtCsv, BadHeadersAndQualityValuesNameTheLine) {
+  for (const char* header :
+       {"time_ns,x,y", "x,time_ns,y,yaw", "time_ns,x,y,yaw,sxx,syy", "time_ns,x,y,yaw,speed",
+        "time_ns,x,y,yaw,fitness,fitness", "time_ns,x,y,yaw,x"}) {
+    NdtCsvParser parser;
+    EXPECT_EQ(error_line(parser, "# comment"), 0U);
+    EXPECT_EQ(error_line(parser, header), 2U) << header;
+  }
+  NdtCsvParser parser;
+  ASSERT_EQ(error_line(parser, "time_ns,x,y,yaw,converged,iterations,fitness"), 0U);
+  EXPECT_EQ(error_line(parser, "1,2,3,4,2,5,0.1"), 2U);    // converged neither 0 nor 1
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,-5,0.1"), 3U);   // negative count
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,5.5,0.1"), 4U);  // not a count
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,5,-0.1"), 5U);   // negative fitness
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,5,inf"), 6U);    // not finite
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,5"), 7U);        // a field missing
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,30,0.1"), 0U);   // and the parser goes on
+}
+
 }  // namespace
 }  // namespace rsu::vehicle_client

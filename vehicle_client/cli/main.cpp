@@ -21,6 +21,7 @@
 #include "v2i/security/trust_list.h"
 #include "vehicle/vehicle_core.h"
 #include "vehicle_client/cli/csv_writers.h"
+#include "vehicle_client/cli/stats_report.h"
 #include "vehicle_client/ndt_csv.h"
 #include "vehicle_client/udp_endpoint_text.h"
 #include "vehicle_client/vehicle_client.h"
@@ -43,12 +44,14 @@ constexpr const char* kAbout =
     "signed by an RSU key in --trust-list, generated within --max-age-ms of this host's clock and not\n"
     "replayed. --insecure signs and verifies nothing: local development only (it warns).\n"
     "\n"
-    "stdin: NDT poses, CSV with a header line, one of\n"
-    "  time_ns,x,y,yaw\n"
-    "  time_ns,x,y,yaw,sxx,syy,syaw\n"
+    "stdin: NDT poses, CSV with a header line naming the columns: time_ns,x,y,yaw, then any of\n"
+    "  sxx,syy,syaw (all three) and converged,iterations,fitness, in any order:\n"
     "  time_ns on the common clock (ns; GNSS/PTP time, or host time since the Unix epoch in tests);\n"
     "  x, y in the map frame (ENU, m) of the vehicle's reference point; yaw rad CCW from east;\n"
-    "  sxx, syy, syaw: variances (m^2, m^2, rad^2); without them --ndt-sigma-xy/--ndt-sigma-yaw apply.\n"
+    "  sxx, syy, syaw: variances (m^2, m^2, rad^2); without them --ndt-sigma-xy/--ndt-sigma-yaw apply;\n"
+    "  converged (0/1), iterations, fitness (PCL's score, m^2): the match's quality indicator. A pose\n"
+    "  not converged, at --ndt-max-iterations or above --ndt-max-fitness is DEGRADED: only then may RSU\n"
+    "  fixes take over the pose. Without these columns the poses are taken at their word.\n"
     "  Bad input stops the program with the line number.\n"
     "\n"
     "stdout: fused poses, CSV with the header\n"
@@ -60,9 +63,14 @@ constexpr const char* kAbout =
     "--corrections FILE: every correction received, CSV with the header\n"
     "  time_ns,x,y,yaw,cxx,cxy,cxyaw,cyy,cyyaw,cyawyaw,points_used,faces_seen,range_m,yaw_resolution,\n"
     "  confidence,rsu_id,sequence,announcement_sequence,received_ns,fusion\n"
-    "  time_ns is the LiDAR sweep time; x, y the box centre; c*: covariance; fusion: the fuser's decision.\n"
+    "  time_ns is the LiDAR sweep time; x, y the box centre; c*: covariance; fusion: the decision:\n"
+    "  accepted, rejected_gate, rejected_yaw_branch, ... (the filter's), or probation, excluded, barred,\n"
+    "  inconsistent (refused by the integrity check: each RSU is checked against the vehicle's own\n"
+    "  estimate and the other RSUs; one that disagrees beyond both covariances is excluded, logged,\n"
+    "  counted, and readmitted only after a run of consistent fixes).\n"
     "\n"
-    "On EOF it waits --drain-ms for late corrections, prints statistics on stderr and exits 0.\n"
+    "On EOF it waits --drain-ms for late corrections, prints statistics on stderr (--stats FILE: every\n"
+    "counter as \"key value\" lines) and exits 0.\n"
     "\n"
     "options";
 
@@ -74,6 +82,8 @@ struct Options {
   TimeNs drain = 300 * kNsPerMs;
   double ndt_sigma_xy = 0.2;
   double ndt_sigma_yaw = 0.02;
+  std::string stats_path;
+  vehicle::VehicleCoreConfig core;
 };
 
 std::string read_file(const std::string& path, const char* option) {
@@ -139,7 +149,15 @@ std::optional<Options> parse_options(int argc, char** argv) {
       "ndt-sigma-xy", po::value<double>(&o.ndt_sigma_xy)->default_value(o.ndt_sigma_xy, "0.2"),
       "NDT position standard deviation, m, for rows without variances")(
       "ndt-sigma-yaw", po::value<double>(&o.ndt_sigma_yaw)->default_value(o.ndt_sigma_yaw, "0.02"),
-      "NDT yaw standard deviation, rad, for rows without variances");
+      "NDT yaw standard deviation, rad, for rows without variances")(
+      "ndt-max-fitness", po::value<double>(&o.core.ndt_quality.max_fitness_m2)->default_value(0.5, "0.5"),
+      "a fitness (m^2) above this marks the pose degraded")(
+      "ndt-max-iterations", po::value<int>(&o.core.ndt_quality.max_iterations)->default_value(30),
+      "a match that used this many iterations hit its cap: degraded")(
+      "no-integrity",
+      "fuse every correction the filter's gate lets through, unchecked against the vehicle's own "
+      "estimate (for comparison only)")("stats", po::value<std::string>(&o.stats_path),
+                                        "write every counter to FILE at the end");
   po::variables_map vm;
   po::store(po::parse_command_line(argc, argv, d), vm);
   if (vm.count("help")) {
@@ -169,6 +187,11 @@ std::optional<Options> parse_options(int argc, char** argv) {
   if (!(o.ndt_sigma_xy > 0.0 && o.ndt_sigma_yaw > 0.0)) {
     throw std::invalid_argument("--ndt-sigma-xy and --ndt-sigma-yaw must be positive");
   }
+  if (!(o.core.ndt_quality.max_fitness_m2 > 0.0) || o.core.ndt_quality.max_iterations < 1) {
+    throw std::invalid_argument("--ndt-max-fitness must be positive and --ndt-max-iterations at least 1");
+  }
+  o.core.check_integrity = vm.count("no-integrity") == 0;
+  o.core.fuse_corrections = !o.announce_only;
   o.drain = from_seconds(drain_ms * 1e-3);
   if (vm.count("insecure")) {
     o.client.security.mode = v2i::SecurityMode::kInsecure;
@@ -221,7 +244,7 @@ class Session {
                                                         options_.ndt_sigma_yaw * options_.ndt_sigma_yaw)
                                             .asDiagonal());
     handle_corrections();  // first, so that the row below includes every correction received so far
-    const vehicle::NdtStep step = core_.on_ndt({row.time, row.pose, covariance});
+    const vehicle::NdtStep step = core_.on_ndt({row.time, row.pose, covariance, row.quality});
     announce(step.announce);
     if (step.fused) {
       write_fused_row(stdout, *step.fused, "ndt");
@@ -233,6 +256,13 @@ class Session {
   void handle_corrections() {
     for (const ReceivedCorrection& r : threaded_.client().poll()) {
       const vehicle::CorrectionStep step = core_.on_correction(r.correction);
+      if (step.check && events_logged_ < kMaxEventsLogged) {
+        const std::string event = integrity_event(r.correction, *step.check, core_.integrity());
+        if (!event.empty()) {
+          std::fprintf(stderr, "rsu-vehicle: %s%s\n", event.c_str(),
+                       ++events_logged_ == kMaxEventsLogged ? " (no more such lines)" : "");
+        }
+      }
       if (step.fused) {
         write_fused_row(stdout, *step.fused, "rsu");
       }
@@ -243,43 +273,19 @@ class Session {
   }
 
   void print_stats() const {
-    const VehicleClientStats c = threaded_.client().stats();
-    const vehicle::PoseFuserStats f = core_.fuser_stats();
-    std::fprintf(stderr,
-                 "rsu-vehicle: announcements sent %llu (keep-alive %llu, send errors %llu, refused %llu); "
-                 "datagrams received %llu; corrections accepted %llu, rejected %llu",
-                 ull(c.announcements_sent), ull(c.keepalive_announcements), ull(c.send_errors),
-                 ull(c.announcements_refused), ull(c.datagrams_received), ull(c.accepted()),
-                 ull(c.rejected()));
-    for (std::size_t i = 1; i < static_cast<std::size_t>(CorrectionVerdict::kCount); ++i) {
-      const auto v = static_cast<CorrectionVerdict>(i);
-      if (c.corrections.count(v) > 0) {
-        std::fprintf(stderr, " %s=%llu", to_string(v), ull(c.corrections.count(v)));
-      }
+    const VehicleClientStats client = threaded_.client().stats();
+    print_summary(stderr, client, core_, options_.client.security.mode);
+    if (!options_.stats_path.empty()) {
+      write_stats_file(options_.stats_path, client, core_);
     }
-    std::fprintf(stderr, "; authentication (%s)", v2i::to_string(options_.client.security.mode));
-    for (std::size_t i = 0; i < static_cast<std::size_t>(v2i::AuthVerdict::kCount); ++i) {
-      const auto v = static_cast<v2i::AuthVerdict>(i);
-      if (c.authentication.count(v) > 0) {
-        std::fprintf(stderr, " %s=%llu", v2i::to_string(v), ull(c.authentication.count(v)));
-      }
-    }
-    std::fprintf(
-        stderr,
-        "; fuser: NDT accepted %llu rejected %llu, RSU accepted %llu rejected gate %llu yaw-branch %llu "
-        "other %llu, late %llu, re-applied %llu, re-anchored at RSU fixes %llu, restarted at NDT %llu\n",
-        ull(f.ndt_accepted), ull(f.ndt_rejected), ull(f.rsu_accepted), ull(f.rsu_rejected_gate),
-        ull(f.rsu_rejected_yaw_branch), ull(f.rsu_rejected_other), ull(f.late), ull(f.reapplied),
-        ull(f.rsu_reanchors), ull(f.ndt_restarts));
   }
 
  private:
-  static unsigned long long ull(std::uint64_t v) { return static_cast<unsigned long long>(v); }
+  static constexpr int kMaxEventsLogged = 100;
 
   vehicle::VehicleCoreConfig core_config() const {
-    vehicle::VehicleCoreConfig config;
+    vehicle::VehicleCoreConfig config = options_.core;
     config.fuser.ekf.reference_offset = options_.client.reference_offset;
-    config.fuse_corrections = !options_.announce_only;
     return config;
   }
 
@@ -301,6 +307,7 @@ class Session {
   vehicle::VehicleCore core_;
   std::unique_ptr<std::FILE, FileCloser> corrections_;
   int refusals_logged_ = 0;
+  int events_logged_ = 0;
   Steady::time_point last_insecure_warning_{};
 };
 

@@ -1,0 +1,270 @@
+#include "vehicle/integrity_monitor.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "fusion/measurement_model.h"
+
+namespace rsu::vehicle {
+namespace {
+
+// Wilson-Hilferty: the chi-square quantile of `dof` degrees of freedom at z standard deviations of the
+// normal (within 1 % of the exact quantile for dof >= 10).
+double chi_square_quantile(int dof, double z) {
+  const double k = dof;
+  const double a = 2.0 / (9.0 * k);
+  return k * std::pow(1.0 - a + z * std::sqrt(a), 3);
+}
+
+// Normalized innovation squared, infinite when S is not positive definite.
+double nis(const Eigen::Vector3d& r, const Eigen::Matrix3d& s) {
+  const Eigen::LLT<Eigen::Matrix3d> llt(s);
+  if (llt.info() != Eigen::Success) {
+    return std::numeric_limits<double>::infinity();
+  }
+  const double d = r.dot(llt.solve(r));
+  return d >= 0.0 ? d : std::numeric_limits<double>::infinity();
+}
+
+// Doubles per earlier exclusion (the first exclusion: x1), at most `cap`.
+template <typename T>
+T doubled(T base, int exclusions, T cap) {
+  T value = base;
+  for (int i = 1; i < exclusions && value < cap; ++i) {
+    value *= 2;
+  }
+  return std::min(value, cap);
+}
+
+}  // namespace
+
+const char* to_string(SourceState state) {
+  switch (state) {
+    case SourceState::kProbation:
+      return "probation";
+    case SourceState::kAdmitted:
+      return "admitted";
+    case SourceState::kExcluded:
+      return "excluded";
+    case SourceState::kBarred:
+      return "barred";
+    case SourceState::kCount:
+      break;
+  }
+  return "unknown";
+}
+
+const char* to_string(ExclusionReason reason) {
+  switch (reason) {
+    case ExclusionReason::kNone:
+      return "none";
+    case ExclusionReason::kGrossFixes:
+      return "gross_fixes";
+    case ExclusionReason::kCumulative:
+      return "cumulative";
+    case ExclusionReason::kCount:
+      break;
+  }
+  return "unknown";
+}
+
+const char* to_string(FixVerdict verdict) {
+  switch (verdict) {
+    case FixVerdict::kUse:
+      return "use";
+    case FixVerdict::kUseOwnFailed:
+      return "use_own_failed";
+    case FixVerdict::kProbation:
+      return "probation";
+    case FixVerdict::kExcluded:
+      return "excluded";
+    case FixVerdict::kBarred:
+      return "barred";
+    case FixVerdict::kInconsistent:
+      return "inconsistent";
+    case FixVerdict::kCount:
+      break;
+  }
+  return "unknown";
+}
+
+FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::StateEstimate& own,
+                                 OwnEstimate status, const Eigen::Vector2d& reference_offset) {
+  ++checks_;
+  SourceRecord& s = record(fix.rsu_id);
+  ++s.fixes;
+  const TimeNs t = fix.sweep_time;
+  const fusion::PoseMeasurement m{t, fusion::MeasurementSource::kRsu, fix.pose, fix.pose_covariance};
+  const fusion::PoseInnovation innovation = fusion::pose_innovation(own.state, m, reference_offset);
+  const auto& h = innovation.jacobian;
+  FixCheck out;
+  out.nis = nis(innovation.residual, h * own.covariance * h.transpose() + fix.pose_covariance);
+  s.last_time = t;
+  s.last_innovation = innovation.residual;
+  s.last_covariance = fix.pose_covariance;
+  s.last_beyond_gate = !(out.nis <= config_.fix_gate_chi2);
+  out.peers_agree_against_own = compare_with_peers(fix.rsu_id, s);
+  totals_.peer_agreements_against_own += out.peers_agree_against_own ? 1 : 0;
+
+  if (s.state == SourceState::kBarred) {
+    out.verdict = FixVerdict::kBarred;
+  } else if (status == OwnEstimate::kOverruled || out.peers_agree_against_own) {
+    // The own estimate is no reference: nothing is held against a source for disagreeing with it.
+    if (s.state == SourceState::kExcluded) {
+      ++s.readmissions;
+      ++totals_.readmissions;
+    }
+    if (s.state != SourceState::kAdmitted) {
+      admit(s, out);
+    }
+    s.cusum = 0.0;
+    s.run.clear();
+    out.verdict = FixVerdict::kUseOwnFailed;
+  } else {
+    update_cusum(s, out.nis, t);
+    admit_or_exclude(s, out.nis, t, status == OwnEstimate::kDegraded, out);
+    if (s.state == SourceState::kAdmitted) {
+      out.verdict = s.last_beyond_gate                 ? FixVerdict::kInconsistent
+                    : status == OwnEstimate::kDegraded ? FixVerdict::kUseOwnFailed
+                                                       : FixVerdict::kUse;
+    } else {
+      out.verdict = s.state == SourceState::kProbation  ? FixVerdict::kProbation
+                    : s.state == SourceState::kExcluded ? FixVerdict::kExcluded
+                                                        : FixVerdict::kBarred;
+    }
+  }
+  s.verdicts.add(out.verdict);
+  totals_.verdicts.add(out.verdict);
+  return out;
+}
+
+SourceRecord& IntegrityMonitor::record(std::uint64_t rsu_id) {
+  auto it = sources_.find(rsu_id);
+  if (it == sources_.end()) {
+    if (sources_.size() >= std::max<std::size_t>(config_.max_sources, 1)) {
+      sources_.erase(std::min_element(sources_.begin(), sources_.end(), [](const auto& a, const auto& b) {
+        return a.second.last_heard < b.second.last_heard;
+      }));
+    }
+    it = sources_.emplace(rsu_id, SourceRecord{}).first;
+  }
+  it->second.last_heard = checks_;
+  return it->second;
+}
+
+// The own estimate's error is common to both innovations (up to its motion over the gap), so their
+// difference compares the two RSUs' fixes directly. Updates the source's run of fixes that agreed with an
+// admitted peer, and says whether a peer agrees with this fix while both disagree with the own estimate.
+bool IntegrityMonitor::compare_with_peers(std::uint64_t rsu_id, SourceRecord& self) {
+  bool agree_against_own = false;
+  int admitted_agree = 0;
+  int admitted_disagree = 0;
+  for (const auto& [id, other] : sources_) {
+    if (id == rsu_id || other.fixes == 0 ||
+        std::abs(self.last_time - other.last_time) > config_.pair_max_gap) {
+      continue;
+    }
+    const double motion =
+        config_.pair_motion_sigma_mps * to_seconds(std::abs(self.last_time - other.last_time));
+    Eigen::Matrix3d s = self.last_covariance + other.last_covariance;
+    s(0, 0) += motion * motion;
+    s(1, 1) += motion * motion;
+    const bool consistent = nis(self.last_innovation - other.last_innovation, s) <= config_.pair_gate_chi2;
+    ++totals_.pair_checks;
+    totals_.pair_disagreements += consistent ? 0 : 1;
+    agree_against_own = agree_against_own || (consistent && self.last_beyond_gate && other.last_beyond_gate);
+    if (other.state == SourceState::kAdmitted) {
+      (consistent ? admitted_agree : admitted_disagree) += 1;
+    }
+  }
+  if (admitted_disagree > 0) {
+    self.peer_agreements = 0;
+  } else if (admitted_agree > 0) {
+    ++self.peer_agreements;
+  }
+  return agree_against_own;
+}
+
+void IntegrityMonitor::update_cusum(SourceRecord& s, double nis, TimeNs t) const {
+  const double step = std::min(nis, config_.cusum_cap) - config_.cusum_drift;
+  if (s.cusum <= 0.0 && step > 0.0) {
+    s.excursion_start = t;
+  }
+  s.cusum = std::max(0.0, s.cusum + step);
+  if (!s.run.empty() && t - s.run.back().first > config_.max_fix_gap) {
+    s.run.clear();  // a gap breaks the run of consecutive fixes
+  }
+  s.run.emplace_back(t, nis);
+  while (s.run.size() > static_cast<std::size_t>(std::max(config_.max_admit_fixes, 1))) {
+    s.run.pop_front();
+  }
+}
+
+void IntegrityMonitor::admit_or_exclude(SourceRecord& s, double nis, TimeNs t, bool without_waiting,
+                                        FixCheck& out) {
+  if (s.state != SourceState::kExcluded && s.cusum > config_.cusum_threshold) {
+    exclude(s, nis, t, out);
+    return;
+  }
+  const bool was_excluded = s.state == SourceState::kExcluded;
+  if (s.state == SourceState::kAdmitted) {
+    return;
+  }
+  if (without_waiting) {
+    // The own estimate is weak: what agrees with it within its inflated covariance is used at once.
+    if (s.cusum > 0.5 * config_.cusum_threshold) {
+      return;
+    }
+  } else if (s.state == SourceState::kProbation) {
+    // Consistent with the own estimate for a while, or with an admitted RSU (an independent check).
+    if (!admissible(s, config_.admit_after_fixes) && s.peer_agreements < config_.peer_admit_after_fixes) {
+      return;
+    }
+  } else if (t - s.excluded_at < doubled(config_.min_exclusion, s.exclusions, config_.max_exclusion) ||
+             !admissible(s, doubled(config_.admit_after_fixes, s.exclusions + 1, config_.max_admit_fixes))) {
+    return;
+  }
+  admit(s, out);
+  if (was_excluded) {
+    ++s.readmissions;
+    ++totals_.readmissions;
+  }
+}
+
+bool IntegrityMonitor::admissible(const SourceRecord& s, int fixes_needed) const {
+  const auto n = static_cast<std::size_t>(std::max(fixes_needed, 1));
+  if (s.run.size() < n || s.cusum > 0.5 * config_.cusum_threshold) {
+    return false;
+  }
+  double sum = 0.0;
+  for (auto it = s.run.end() - static_cast<std::ptrdiff_t>(n); it != s.run.end(); ++it) {
+    sum += it->second;
+  }
+  return sum <= chi_square_quantile(3 * static_cast<int>(n), config_.admit_z);
+}
+
+void IntegrityMonitor::exclude(SourceRecord& s, double nis, TimeNs t, FixCheck& out) {
+  ++s.exclusions;
+  s.reason = nis <= config_.fix_gate_chi2 ? ExclusionReason::kCumulative : ExclusionReason::kGrossFixes;
+  s.state = s.exclusions >= config_.max_exclusions ? SourceState::kBarred : SourceState::kExcluded;
+  s.excluded_at = t;
+  s.run.clear();  // readmission is earned by fixes after the exclusion
+  const TimeNs latency = t - s.excursion_start;
+  if (s.first_exclusion_latency < 0) {
+    s.first_exclusion_latency = latency;
+  }
+  s.max_exclusion_latency = std::max(s.max_exclusion_latency, latency);
+  totals_.max_exclusion_latency = std::max(totals_.max_exclusion_latency, latency);
+  totals_.exclusions.add(s.reason);
+  totals_.barred += s.state == SourceState::kBarred ? 1 : 0;
+  out.excluded_now = true;
+}
+
+void IntegrityMonitor::admit(SourceRecord& s, FixCheck& out) {
+  s.state = SourceState::kAdmitted;
+  out.admitted_now = true;
+}
+
+}  // namespace rsu::vehicle
