@@ -83,14 +83,14 @@ def record_background(run, scenario_path, model, bg_dir):
 RELAY_RSU_SIDE = "127.0.0.2"
 
 
-def start_relay(run, link, v2i_port, out, model):
-    """Starts the relay (link: {"tool": path, "args": [impairment options]}); returns the process and the
-    vehicle's options that send its V2I traffic through it."""
+def start_relay(run, link, v2i_port, out, tag):
+    """Starts the relay (link: {"tool": path, "args": [its options: impairments, faults]}); returns the
+    process and the vehicle's options that send its V2I traffic through it."""
     vehicle_port, listen_port = free_udp_port(), free_udp_port()
-    log = os.path.join(out, "relay_%s.log" % model)
+    log = os.path.join(out, "relay_%s.log" % tag)
     relay = run.spawn([link["tool"], "--vehicle", "127.0.0.1:%d" % vehicle_port, "--listen",
                        "127.0.0.1:%d" % listen_port, "--rsu", "127.0.0.1:%d" % v2i_port, "--rsu-side",
-                       RELAY_RSU_SIDE, "--stats", os.path.join(out, "relay_%s.stats" % model)] + link["args"], log)
+                       RELAY_RSU_SIDE, "--stats", os.path.join(out, "relay_%s.stats" % tag)] + link["args"], log)
     try:
         wait_for_line(log, "ready", 10, watch=relay)
     except (TimeoutError, ChildExited) as e:
@@ -99,21 +99,25 @@ def start_relay(run, link, v2i_port, out, model):
                    "--reply-address", RELAY_RSU_SIDE]
 
 
-def live_run(run, exp, scenario_path, scenario, model, out, background=None, link=None, drain_ms=500):
-    """One RSU LiDAR model: rsud + rsu-sim stream + rsu-vehicle, on the host clock. background: the
-    background PCD files (recorded here when None); link: the relay impairing the V2I link (None: the
-    vehicle talks to rsud directly); drain_ms: how long the vehicle waits for corrections after its last
-    pose."""
-    mount = scenario["lidar"].get("mount", {})
-    vehicle = next(v for v in scenario["vehicles"] if v["id"] == exp.get("vehicle_id", 1))
-    shape = vehicle.get("shape", {})
-    duration = float(exp.get("duration_s", 10.8))
+class LiveCase:
+    """What one live run varies (eval/faults/run_fault_table.py runs many): its name (file names), the
+    RSU LiDAR model, a scenario file other than the experiment's (e.g. the LiDAR mounted higher), a yaw
+    error of the mount rsud is configured with (the real LiDAR stays where the scenario puts it: a badly
+    surveyed RSU), rsu-relay's fault options between rsud and the vehicle (None: no faults; "{epoch_ns}"
+    in them is replaced by the run's epoch), extra rsu-vehicle options."""
 
-    pcds = background or record_background(run, scenario_path, model, os.path.join(out, "background_" + model))
+    def __init__(self, model, tag=None, scenario_path=None, mount_yaw_error_deg=0.0, relay_args=None,
+                 vehicle_args=()):
+        self.model = model
+        self.tag = tag or model
+        self.scenario_path = scenario_path
+        self.mount_yaw_error_deg = mount_yaw_error_deg
+        self.relay_args = relay_args
+        self.vehicle_args = list(vehicle_args)
 
-    keys = make_keys(run, out, vehicle["id"])
-    lidar_port, v2i_port = free_udp_port(), free_udp_port()
-    config = os.path.join(out, "rsud_%s.yaml" % model)
+
+def write_rsud_config(case, mount, pcds, lidar_port, v2i_port, keys, out):
+    config = os.path.join(out, "rsud_%s.yaml" % case.tag)
     with open(config, "w") as f:
         f.write("""rsu_id: 1
 lidar:
@@ -134,25 +138,22 @@ logging:
   level: info
   stats_interval_s: 1.0
   stats_file: %s
-""" % (model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
-            mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_port, ", ".join(pcds), v2i_port,
-            os.path.join(keys, "rsu.key"), os.path.join(keys, "rsud_trust.list"),
-            os.path.join(out, "rsud_%s.stats" % model)))
-    log = os.path.join(out, "rsud_%s.log" % model)
-    rsud = run.spawn([run.tool("daemon/rsud"), "--config", config], log)
-    wait_until_ready(log, rsud)
+""" % (case.model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
+            mount.get("pitch_deg", 0), float(mount.get("yaw_deg", 0)) + case.mount_yaw_error_deg, lidar_port,
+            ", ".join(pcds), v2i_port, os.path.join(keys, "rsu.key"), os.path.join(keys, "rsud_trust.list"),
+            os.path.join(out, "rsud_%s.stats" % case.tag)))
+    return config
 
-    # One clock: scenario time 0 is `epoch` on the host clock, for the packets and the announcements.
-    epoch = time.time_ns() + 1_500_000_000
-    with open(os.path.join(out, "epoch_%s.txt" % model), "w") as f:
-        f.write("%d\n" % epoch)
-    shifted = os.path.join(out, "ndt_host_clock_%s.csv" % model)
+
+def shift_ndt_to_host_clock(ndt_path, shifted, epoch):
+    """The vehicle's NDT poses on the host clock (scenario time 0 = epoch), with their covariance and the
+    match's quality indicator (the vehicle lets RSU fixes take over its pose only when its own NDT says it
+    failed); returns the first pose's scenario time."""
     first_ndt_ns = None
-    with open(os.path.join(out, "ndt.csv")) as src, open(shifted, "w") as dst:
+    with open(ndt_path) as src, open(shifted, "w") as dst:
         header = src.readline().strip().split(",")
-        # The pose, its covariance and the match's quality indicator (the vehicle lets RSU fixes take
-        # over its pose only when its own NDT says it failed).
-        columns = ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw", "converged", "iterations", "fitness")
+        columns = ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw", "converged", "iterations", "fitness",
+                   "degeneracy")
         idx = [header.index(c) for c in columns]
         dst.write(",".join(columns) + "\n")
         for line in src:
@@ -160,13 +161,57 @@ logging:
             t = int(cells[idx[0]])
             first_ndt_ns = t if first_ndt_ns is None else first_ndt_ns
             dst.write(",".join([str(t + epoch)] + [cells[i] for i in idx[1:]]) + "\n")
+    return first_ndt_ns
 
+
+def live_run(run, exp, scenario_path, scenario, case, out, background=None, link=None, drain_ms=500,
+             ndt_path=None):
+    """One live run: rsud + rsu-sim stream + rsu-vehicle, on the host clock. case: the RSU LiDAR model, or a
+    LiveCase (a case of the fault table); background: the background PCD files (recorded here when None);
+    link: the relay impairing the V2I link (None: the vehicle talks to rsud directly, unless the case's
+    faults need rsu-relay); drain_ms: how long the vehicle waits for corrections after its last pose;
+    ndt_path: the vehicle's NDT poses (default <out>/ndt.csv). Returns rsud's counters."""
+    if isinstance(case, str):
+        case = LiveCase(case)
+    if case.scenario_path:
+        scenario_path = case.scenario_path
+        with open(scenario_path) as f:
+            scenario = yaml.safe_load(f)
+    model, tag = case.model, case.tag
+    mount = scenario["lidar"].get("mount", {})
+    vehicle = next(v for v in scenario["vehicles"] if v["id"] == exp.get("vehicle_id", 1))
+    shape = vehicle.get("shape", {})
+    duration = float(exp.get("duration_s", 10.8))
+
+    pcds = background or record_background(run, scenario_path, model, os.path.join(out, "background_" + tag))
+
+    keys = make_keys(run, out, vehicle["id"])
+    lidar_port, v2i_port = free_udp_port(), free_udp_port()
+    config = write_rsud_config(case, mount, pcds, lidar_port, v2i_port, keys, out)
+    log = os.path.join(out, "rsud_%s.log" % tag)
+    rsud = run.spawn([run.tool("daemon/rsud"), "--config", config], log)
+    wait_until_ready(log, rsud)
+
+    # One clock: scenario time 0 is `epoch` on the host clock, for the packets and the announcements.
+    epoch = time.time_ns() + 1_500_000_000
+    with open(os.path.join(out, "epoch_%s.txt" % tag), "w") as f:
+        f.write("%d\n" % epoch)
+    shifted = os.path.join(out, "ndt_host_clock_%s.csv" % tag)
+    first_ndt_ns = shift_ndt_to_host_clock(ndt_path or os.path.join(out, "ndt.csv"), shifted, epoch)
+
+    if case.relay_args is not None:
+        # A faulty RSU made by rsu-relay: it signs the corrections it alters with the RSU's key.
+        faults = [a.replace("{epoch_ns}", str(epoch)) for a in case.relay_args]
+        link = {"tool": run.tool("tools/rsu-relay"),
+                "args": (link["args"] if link else []) + faults + [
+                    "--rsu-key", os.path.join(keys, "rsu.key"),
+                    "--tamper-log", os.path.join(out, "tamper_%s.csv" % tag)]}
     relay, v2i_route = None, ["--rsu", "127.0.0.1:%d" % v2i_port, "--bind", "127.0.0.1:0"]
     if link is not None:
-        relay, v2i_route = start_relay(run, link, v2i_port, out, model)
+        relay, v2i_route = start_relay(run, link, v2i_port, out, tag)
     stream = run.spawn([run.tool("tools/rsu-sim"), "stream", scenario_path, "--model", model, "--to",
                         "127.0.0.1:%d" % lidar_port, "--epoch-ns", str(epoch), "--start", "0",
-                        "--seconds", str(duration)], os.path.join(out, "stream_%s.log" % model))
+                        "--seconds", str(duration)], os.path.join(out, "stream_%s.log" % tag))
     # rsu-vehicle paces its rows from its own start: start it when the first NDT pose is due.
     start_at = (epoch + first_ndt_ns) / 1e9
     time.sleep(max(0.0, start_at - time.time()))
@@ -176,13 +221,14 @@ logging:
                               "--realtime", "--drain-ms", str(int(drain_ms)),
                               "--key", os.path.join(keys, "vehicle.key"),
                               "--trust-list", os.path.join(keys, "vehicle_trust.list"),
-                              "--corrections", os.path.join(out, "corrections_%s.csv" % model)],
-                             os.path.join(out, "fused_%s.csv" % model), stdin_path=shifted)
+                              "--corrections", os.path.join(out, "corrections_%s.csv" % tag),
+                              "--stats", os.path.join(out, "vehicle_%s.stats" % tag)] + case.vehicle_args,
+                             os.path.join(out, "fused_%s.csv" % tag), stdin_path=shifted)
     deadline = time.time() + duration + 30
     for i, p in enumerate((stream, vehicle_proc)):
         while p.poll() is None and time.time() < deadline:
             elapsed = time.time() - epoch / 1e9
-            sys.stderr.write("\r  %-7s live run: %5.1f / %.1f s of the drive" % (model, min(max(elapsed, 0), duration),
+            sys.stderr.write("\r  %-7s live run: %5.1f / %.1f s of the drive" % (tag, min(max(elapsed, 0), duration),
                                                                                     duration))
             sys.stderr.flush()
             time.sleep(0.2)
@@ -193,7 +239,7 @@ logging:
                                                                    out))
     sys.stderr.write("\n")
     if relay is not None:
-        relay.send_signal(signal.SIGTERM)
+        relay.send_signal(signal.SIGTERM)  # it writes its counters
         relay.wait(timeout=10)
     rsud.send_signal(signal.SIGTERM)
     try:
@@ -202,7 +248,7 @@ logging:
         sys.exit("run_experiment: rsud did not stop on SIGTERM")
     if rsud.returncode != 0:
         sys.exit("run_experiment: rsud exited with %d; see %s" % (rsud.returncode, log))
-    with open(os.path.join(out, "rsud_%s.stats" % model)) as f:
+    with open(os.path.join(out, "rsud_%s.stats" % tag)) as f:
         stats = dict(line.split() for line in f)
     refused = {k: v for k, v in stats.items() if k.startswith("auth.") and v != "0" and k not in (
         "auth.accepted", "auth.signers_tracked", "auth.trusted_keys")}
@@ -210,7 +256,7 @@ logging:
     # the LiDAR's pace the run then measures the host, not the method; say so.
     shed = int(stats.get("packet.too_late", 0)) + int(stats.get("packet.lost", 0))
     print("  %-7s rsud verified %s signed announcements (refused: %s)%s" % (
-        model, stats.get("auth.accepted"), refused or "none",
+        tag, stats.get("auth.accepted"), refused or "none",
         "; WARNING: rsud lost or shed %d LiDAR packets (host too busy), this run's fixes are fewer" % shed
         if shed else ""))
     return stats

@@ -70,6 +70,10 @@ class PoseFuser {
   std::optional<fusion::StateEstimate> pose_at(TimeNs time) const;
   std::optional<fusion::StateEstimate> latest() const { return ekf_.latest(); }
 
+  // Starts again from `estimate`, dropping the history: after an RSU was found faulty, its fixes already
+  // fused must not linger in the pose (VehicleCore restarts from the vehicle's own estimate).
+  void restart_from(const fusion::StateEstimate& estimate) { ekf_.initialize(estimate); }
+
   PoseFuserStats stats() const;
   const fusion::EkfStats& ekf_stats() const { return ekf_.stats(); }
 

@@ -1,6 +1,8 @@
 #include "vehicle/vehicle_core.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 namespace rsu::vehicle {
@@ -43,10 +45,38 @@ NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
   return step;
 }
 
-CorrectionStep VehicleCore::on_correction(const v2i::Correction& correction) {
+namespace {
+
+// Raises the position covariance's eigenvalues to at least sigma_xy^2 and the yaw variance to at least
+// sigma_yaw^2; true when it had to.
+bool raise_to_floor(Eigen::Matrix3d& c, double sigma_xy, double sigma_yaw) {
+  bool raised = false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(c.topLeftCorner<2, 2>());
+  if (eigen.info() == Eigen::Success && eigen.eigenvalues().minCoeff() < sigma_xy * sigma_xy) {
+    const Eigen::Vector2d floored = eigen.eigenvalues().cwiseMax(sigma_xy * sigma_xy);
+    c.topLeftCorner<2, 2>() = eigen.eigenvectors() * floored.asDiagonal() * eigen.eigenvectors().transpose();
+    raised = true;
+  }
+  if (c(2, 2) < sigma_yaw * sigma_yaw) {
+    // Keep the yaw's correlation with the position: scale its row and column.
+    const double scale = sigma_yaw / std::sqrt(std::max(c(2, 2), 1e-300));
+    c.row(2) *= scale;
+    c.col(2) *= scale;
+    raised = true;
+  }
+  return raised;
+}
+
+}  // namespace
+
+CorrectionStep VehicleCore::on_correction(const v2i::Correction& received) {
   CorrectionStep step;
   if (!config_.fuse_corrections) {
     return step;
+  }
+  v2i::Correction correction = received;
+  if (raise_to_floor(correction.pose_covariance, config_.min_rsu_sigma_m, config_.min_rsu_yaw_sigma_rad)) {
+    ++stats_.fixes_covariance_raised;
   }
   Reanchor reanchor = Reanchor::kNever;
   const auto own = own_.estimate_at(correction.sweep_time);
@@ -57,6 +87,9 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& correction) {
     step.check = monitor_.check(correction, *own, status, config_.fuser.ekf.reference_offset);
     if (step.check->peers_agree_against_own) {
       peers_against_own_until_ = correction.sweep_time + config_.peer_agreement_hold;
+    }
+    if (step.check->excluded_now) {
+      forget_excluded(correction.rsu_id, status);
     }
     if (!step.check->use()) {
       hold_back(correction, *step.check);
@@ -78,6 +111,20 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& correction) {
     step.fused = fuser_.pose_at(correction.sweep_time);
   }
   return step;
+}
+
+void VehicleCore::forget_excluded(std::uint64_t rsu_id, OwnEstimate status) {
+  const auto source = monitor_.sources().find(rsu_id);
+  const bool was_used =
+      source != monitor_.sources().end() && source->second.verdicts.count(FixVerdict::kUse) +
+                                                    source->second.verdicts.count(FixVerdict::kUseOwnFailed) >
+                                                0;
+  const auto own = own_.latest();
+  // Only when the own estimate is a sound reference: a failed one is no better place to start from.
+  if (was_used && own && status == OwnEstimate::kHealthy) {
+    fuser_.restart_from(*own);
+    ++stats_.restarts_after_exclusion;
+  }
 }
 
 void VehicleCore::hold_back(const v2i::Correction& correction, const FixCheck& check) {

@@ -49,6 +49,12 @@ struct VehicleCoreConfig {
   TimeNs ndt_degraded_hold = 1 * kNsPerSecond;
   // The own estimate's speed may have followed the failing match before it said so.
   double degraded_speed_sigma_mps = 1.0;
+  // No RSU fix is credited with less than this (its covariance is raised to it): a roadside LiDAR's
+  // range alone is good to a few cm (the VLP-16's and VLP-32C's +-3 cm), and its box fit to no better
+  // than that, so an RSU claiming 7 mm is overconfident, and an overconfident fix would lock the fused
+  // filter onto its errors.
+  double min_rsu_sigma_m = 0.03;
+  double min_rsu_yaw_sigma_rad = 0.0087;  // 0.5 deg
   // Two RSUs agreeing against the own estimate: it counts as failed this long after.
   TimeNs peer_agreement_hold = 1 * kNsPerSecond;
   // The filter's motion estimate is announced once it has settled to these standard deviations (loose
@@ -82,6 +88,8 @@ struct VehicleCoreStats {
   std::uint64_t fixes_own_failed = 0;             // fixes checked while the own estimate counted as failed
   std::uint64_t fixes_without_own = 0;            // fixes before the own estimate existed
   std::uint64_t fixes_fused_after_probation = 0;  // held back on probation, fused once admitted
+  std::uint64_t restarts_after_exclusion = 0;     // fused filter restarted from the own estimate
+  std::uint64_t fixes_covariance_raised = 0;      // fixes claiming less than min_rsu_sigma_*
 };
 
 class VehicleCore {
@@ -109,6 +117,9 @@ class VehicleCore {
   // A source on probation moves nothing, but its latest fixes (which its admission will have shown
   // consistent) are kept and fused, late, the moment it is admitted.
   void hold_back(const v2i::Correction& correction, const FixCheck& check);
+  // An RSU that was fused has just been excluded: like a RAIM receiver dropping a faulty satellite, the
+  // fused filter falls back to the solution without it, the own estimate (other RSUs re-converge it).
+  void forget_excluded(std::uint64_t rsu_id, OwnEstimate status);
   void fuse_held_back(std::uint64_t rsu_id);
 
   VehicleCoreConfig config_;
