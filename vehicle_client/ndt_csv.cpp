@@ -12,7 +12,7 @@ namespace {
 
 using Column = NdtCsvParser::Column;
 
-constexpr std::array<std::pair<const char*, Column>, 10> kColumnNames = {{
+constexpr std::array<std::pair<const char*, Column>, 11> kColumnNames = {{
     {"time_ns", Column::kTime},
     {"x", Column::kX},
     {"y", Column::kY},
@@ -23,6 +23,7 @@ constexpr std::array<std::pair<const char*, Column>, 10> kColumnNames = {{
     {"converged", Column::kConverged},
     {"iterations", Column::kIterations},
     {"fitness", Column::kFitness},
+    {"degeneracy", Column::kDegeneracy},
 }};
 
 const char* name_of(Column column) {
@@ -91,7 +92,7 @@ void NdtCsvParser::parse_header(const std::vector<std::string_view>& fields, std
     if (!in_place || (i >= 4 && static_cast<int>(known->second) < 4)) {
       throw NdtCsvError(line_number_,
                         "expected a header \"time_ns,x,y,yaw\" followed by any of sxx,syy,syaw (all three), "
-                        "converged, iterations, fitness; got \"" +
+                        "converged, iterations, fitness, degeneracy; got \"" +
                             std::string(line) + "\"");
     }
     if (std::find(columns.begin(), columns.end(), known->second) != columns.end()) {
@@ -134,7 +135,8 @@ void NdtCsvParser::parse_field(Column column, std::string_view field, NdtPoseRow
     return;
   }
   const auto value = parse_number<double>(field);
-  if (!value || !std::isfinite(*value)) {
+  // A degeneracy may be infinite (no curvature at all along some direction); everything else is finite.
+  if (!value || std::isnan(*value) || (!std::isfinite(*value) && column != Column::kDegeneracy)) {
     throw NdtCsvError(line_number_, name + " \"" + std::string(field) + "\" is not a finite number");
   }
   switch (column) {
@@ -152,6 +154,12 @@ void NdtCsvParser::parse_field(Column column, std::string_view field, NdtPoseRow
         throw NdtCsvError(line_number_, "fitness must not be negative, got " + std::string(field));
       }
       row.quality.fitness_m2 = *value;
+      return;
+    case Column::kDegeneracy:
+      if (!(*value >= 1.0)) {
+        throw NdtCsvError(line_number_, "degeneracy must be at least 1, got " + std::string(field));
+      }
+      row.quality.degeneracy = *value;
       return;
     default:
       if (!(*value > 0.0)) {

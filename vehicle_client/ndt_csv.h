@@ -1,8 +1,9 @@
 // The rsu-vehicle CLI's input: the vehicle's NDT poses as CSV, one pose a line, after a header line
 // naming the columns: time_ns,x,y,yaw first, then any of
 //   sxx,syy,syaw                 variances of x (m^2), y (m^2) and yaw (rad^2), all three or none
-//   converged,iterations,fitness  the match's quality indicator (vehicle/ndt_quality.h), each optional:
-//                                converged 0 or 1, iterations a count, fitness PCL's score in m^2
+//   converged,iterations,fitness,degeneracy   the match's quality indicator (vehicle/ndt_quality.h),
+//                                each optional: converged 0 or 1, iterations a count, fitness PCL's
+//                                score in m^2, degeneracy a ratio >= 1 ("inf": no curvature at all)
 // in any order. time_ns: the common clock (ns); x, y: map frame ENU, m; yaw: rad CCW from east. Blank
 // lines and lines starting with '#' are skipped. Every error names the line. Pure parsing: the caller
 // reads the lines.
@@ -49,7 +50,19 @@ class NdtCsvParser {
   bool has_variances() const;
 
   // What each column holds.
-  enum class Column { kTime, kX, kY, kYaw, kSxx, kSyy, kSyaw, kConverged, kIterations, kFitness };
+  enum class Column {
+    kTime,
+    kX,
+    kY,
+    kYaw,
+    kSxx,
+    kSyy,
+    kSyaw,
+    kConverged,
+    kIterations,
+    kFitness,
+    kDegeneracy
+  };
 
  private:
   void parse_header(const std::vector<std::string_view>& fields, std::string_view line);

@@ -6,12 +6,43 @@
 #include <pcl/point_types.h>
 #include <pcl/registration/ndt.h>
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 
 namespace rsu::eval {
 
+namespace {
+
+// PCL's NDT with the Hessian of its score at the solution exposed (protected in PCL 1.13). Evaluated
+// after align() on the aligned scan, it reuses the angular derivatives of the last step's transform.
+class NdtWithHessian : public pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ> {
+ public:
+  Eigen::Matrix<double, 6, 6> hessian_at(const pcl::PointCloud<pcl::PointXYZ>& aligned) {
+    Eigen::Matrix<double, 6, 6> hessian;
+    computeHessian(hessian, aligned);
+    return hessian;
+  }
+};
+
+// How much worse the match constrains the vehicle in its weakest horizontal direction than in its
+// strongest: sqrt(lambda_max / lambda_min) of the score's curvature in x, y (the information -H, the
+// inverse of a Laplace covariance). 1: equally well both ways; a street with nothing along it: large.
+double horizontal_degeneracy(const Eigen::Matrix<double, 6, 6>& hessian) {
+  const Eigen::Matrix2d information = -hessian.topLeftCorner<2, 2>();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(information);
+  const double weakest = eigen.eigenvalues().minCoeff();
+  const double strongest = eigen.eigenvalues().maxCoeff();
+  if (eigen.info() != Eigen::Success || !(weakest > 0.0)) {
+    return std::numeric_limits<double>::infinity();  // no curvature at all along some direction
+  }
+  return std::sqrt(strongest / weakest);
+}
+
+}  // namespace
+
 struct NdtLocalizer::Impl {
-  pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ> ndt;
+  NdtWithHessian ndt;
   std::uint64_t seed = 0;
   std::uint64_t scans = 0;
 };
@@ -91,6 +122,7 @@ NdtResult NdtLocalizer::align(const std::vector<LidarPoint>& scan, const Pose3& 
   result.iterations = impl_->ndt.getFinalNumIteration();
   result.converged = impl_->ndt.hasConverged() && result.iterations < config_.max_iterations;
   result.fitness = impl_->ndt.getFitnessScore();
+  result.degeneracy = horizontal_degeneracy(impl_->ndt.hessian_at(aligned));
   result.pose = Pose2{t(0, 3), t(1, 3), std::atan2(t(1, 0), t(0, 0))};
   result.covariance.diagonal() << config_.output_sigma_xy_m * config_.output_sigma_xy_m,
       config_.output_sigma_xy_m * config_.output_sigma_xy_m,

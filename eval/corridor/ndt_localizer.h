@@ -44,6 +44,11 @@ struct NdtResult {
   bool converged = false;
   int iterations = 0;
   double fitness = 0.0;  // PCL's fitness score: mean squared distance of the aligned scan to the map, m^2
+  // sqrt(largest / smallest eigenvalue) of the score's curvature in x, y at the solution: how much more
+  // weakly the match holds the vehicle in its weakest horizontal direction than in its strongest (a
+  // street with nothing along it: large). The fitness cannot see that: sliding along a uniform facade
+  // fits it as well.
+  double degeneracy = 1.0;
   std::size_t scan_points = 0;
 };
 

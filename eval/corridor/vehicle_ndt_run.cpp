@@ -106,6 +106,7 @@ std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
     s.converged = r.converged;
     s.iterations = r.iterations;
     s.fitness = r.fitness;
+    s.degeneracy = r.degeneracy;
     s.truth = sim::pose_at(vehicle.trajectory, t_ref);
     samples.push_back(s);
     if (progress)

@@ -2,8 +2,10 @@
 // know when its own localization is the one that failed (and only then lets RSU fixes take over the
 // pose). PCL's NDT (and Autoware's ndt_scan_matcher around it) gives three: whether the Newton iteration
 // converged before its iteration cap, how many iterations it used, and the fitness score (mean squared
-// distance of the aligned scan's points to their nearest map points). A pose without an indicator is
-// taken at its word (its covariance stands): the vehicle's own sensor is trusted until it says otherwise.
+// distance of the aligned scan's points to their nearest map points); a fourth, the degeneracy, comes
+// from the curvature of the match's score at its solution (eval/corridor/ndt_localizer.h). A pose
+// without an indicator is taken at its word (its covariance stands): the vehicle's own sensor is
+// trusted until it says otherwise.
 #pragma once
 
 #include <optional>
@@ -14,6 +16,11 @@ struct NdtQuality {
   std::optional<bool> converged;  // false: stopped at the iteration cap, or no solution
   std::optional<int> iterations;
   std::optional<double> fitness_m2;  // mean squared point-to-map distance, m^2
+  // sqrt(largest / smallest eigenvalue) of the match score's curvature in x, y at the solution: how many
+  // times more weakly the match holds the vehicle in its weakest horizontal direction than in its
+  // strongest. The fitness cannot see a street with nothing along it (sliding along a uniform facade fits
+  // as well); this can.
+  std::optional<double> degeneracy;
 };
 
 struct NdtQualityLimits {
@@ -22,17 +29,23 @@ struct NdtQualityLimits {
   // Fitness above this: the scan does not fit the map where NDT put it. In the corridor experiment a
   // healthy NDT measured a median of 0.047 m^2 and at most 0.36 m^2 (with its worst pose, 0.30 m off).
   double max_fitness_m2 = 0.5;
+  // Degeneracy above this: the match holds the vehicle along some direction too weakly to be taken at
+  // its covariance. Measured (README): the corridor, where NDT holds (lamp poles every 25 m), median 5.2,
+  // at most 6.4; the degraded corridor (nothing along the road), median 8.3, its NDT up to 0.46 m off
+  // along the road while its fitness stayed near 0.04 m^2.
+  double max_degeneracy = 7.0;
 };
 
 enum class NdtHealth { kUnknown, kHealthy, kDegraded };
 
 inline NdtHealth assess(const NdtQuality& q, const NdtQualityLimits& limits) {
-  if (!q.converged && !q.iterations && !q.fitness_m2) {
+  if (!q.converged && !q.iterations && !q.fitness_m2 && !q.degeneracy) {
     return NdtHealth::kUnknown;
   }
   const bool degraded = (q.converged && !*q.converged) ||
                         (q.iterations && *q.iterations >= limits.max_iterations) ||
-                        (q.fitness_m2 && !(*q.fitness_m2 <= limits.max_fitness_m2));
+                        (q.fitness_m2 && !(*q.fitness_m2 <= limits.max_fitness_m2)) ||
+                        (q.degeneracy && !(*q.degeneracy <= limits.max_degeneracy));
   return degraded ? NdtHealth::kDegraded : NdtHealth::kHealthy;
 }
 

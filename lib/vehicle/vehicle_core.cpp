@@ -29,11 +29,10 @@ NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
     covariance *= config_.degraded_ndt_variance_scale;
     ++stats_.ndt_degraded;
   }
-  if (!degraded) {
-    own_.add({ndt.time, fusion::MeasurementSource::kNdt, ndt.pose, covariance});
-  } else if (!previous_degraded_) {
+  if (degraded && !previous_degraded_) {
     doubt_own_at(ndt.time, covariance);
   }
+  own_.add({ndt.time, fusion::MeasurementSource::kNdt, ndt.pose, covariance});
   previous_degraded_ = degraded;
   if (degraded) {
     last_degraded_ndt_ = ndt.time;

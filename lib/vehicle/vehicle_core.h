@@ -6,9 +6,9 @@
 // An RSU is never let to make the vehicle worse (issue 18): beside the fused filter runs the vehicle's
 // own estimate, a filter over its NDT poses alone, and every correction is checked against it by the
 // IntegrityMonitor before it may be fused. The own estimate counts as failed only when the vehicle's
-// NDT says so (NdtQuality: the pose's covariance is then inflated in the fused filter, the own filter
-// dead-reckons without it, and RSU fixes may re-anchor the fused filter) or when two RSUs agree against
-// it; never because one RSU keeps disagreeing.
+// NDT says so (NdtQuality: the pose's covariance is then inflated in both filters, and RSU fixes may
+// re-anchor the fused filter) or when two RSUs agree against it; never because one RSU keeps
+// disagreeing.
 #pragma once
 
 #include <Eigen/Core>
@@ -43,8 +43,9 @@ struct VehicleCoreConfig {
   bool check_integrity = true;
   IntegrityConfig integrity;
   NdtQualityLimits ndt_quality;
-  // A degraded NDT pose's covariance is multiplied by this (x100: a 0.15 m sigma becomes 1.5 m) ...
-  double degraded_ndt_variance_scale = 100.0;
+  // A degraded NDT pose's covariance is multiplied by this (x10: a 0.15 m sigma becomes 0.47 m: the
+  // degraded corridor's NDT was up to 0.46 m off along the road) ...
+  double degraded_ndt_variance_scale = 10.0;
   // ... and the own estimate counts as failed from this long before to this long after it.
   TimeNs ndt_degraded_hold = 1 * kNsPerSecond;
   // The own estimate's speed may have followed the failing match before it said so.
@@ -111,8 +112,7 @@ class VehicleCore {
   OwnEstimate own_status_at(TimeNs t) const;
   // The first degraded NDT pose after healthy ones: the match may have been failing before it said so,
   // so the own estimate's pose uncertainty grows by the degraded pose's covariance and its speed
-  // uncertainty by degraded_speed_sigma_mps; while NDT stays degraded the own estimate takes none of its
-  // poses (it dead-reckons, its uncertainty growing with the motion model's).
+  // uncertainty by degraded_speed_sigma_mps (the degraded poses themselves then come in with theirs).
   void doubt_own_at(TimeNs time, const Eigen::Matrix3d& covariance);
   // A source on probation moves nothing, but its latest fixes (which its admission will have shown
   // consistent) are kept and fused, late, the moment it is admitted.

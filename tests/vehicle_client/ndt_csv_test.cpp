@@ -83,6 +83,18 @@ TEST(NdtCsv, QualityColumnsAreReadByName) {
   EXPECT_DOUBLE_EQ(*row->quality.fitness_m2, 0.047);
   EXPECT_EQ(vehicle::assess(row->quality, {}), vehicle::NdtHealth::kHealthy);
 
+  NdtCsvParser degenerate;
+  degenerate.parse_line("time_ns,x,y,yaw,fitness,degeneracy");
+  const auto sliding = degenerate.parse_line("5,1,2,3,0.04,8.3");  // fits well, held weakly along the road
+  ASSERT_TRUE(sliding && sliding->quality.degeneracy);
+  EXPECT_DOUBLE_EQ(*sliding->quality.degeneracy, 8.3);
+  EXPECT_EQ(vehicle::assess(sliding->quality, {}), vehicle::NdtHealth::kDegraded);
+  const auto flat = degenerate.parse_line("6,1,2,3,0.04,inf");  // no curvature at all
+  ASSERT_TRUE(flat && flat->quality.degeneracy);
+  EXPECT_EQ(vehicle::assess(flat->quality, {}), vehicle::NdtHealth::kDegraded);
+  EXPECT_EQ(vehicle::assess(degenerate.parse_line("7,1,2,3,0.04,5.2")->quality, {}),
+            vehicle::NdtHealth::kHealthy);
+
   NdtCsvParser only_converged;
   only_converged.parse_line("time_ns,x,y,yaw,converged");
   EXPECT_FALSE(only_converged.has_variances());
@@ -113,7 +125,13 @@ TEST(NdtCsv, BadHeadersAndQualityValuesNameTheLine) {
   EXPECT_EQ(error_line(parser, "1,2,3,4,1,5,-0.1"), 5U);   // negative fitness
   EXPECT_EQ(error_line(parser, "1,2,3,4,1,5,inf"), 6U);    // not finite
   EXPECT_EQ(error_line(parser, "1,2,3,4,1,5"), 7U);        // a field missing
+  EXPECT_EQ(error_line(parser, "1,2,3,4,1,5,nan"), 8U);    // NaN
   EXPECT_EQ(error_line(parser, "1,2,3,4,1,30,0.1"), 0U);   // and the parser goes on
+  NdtCsvParser d;
+  ASSERT_EQ(error_line(d, "time_ns,x,y,yaw,degeneracy"), 0U);
+  EXPECT_EQ(error_line(d, "1,2,3,4,0.5"), 2U);  // below 1
+  EXPECT_EQ(error_line(d, "1,2,3,4,nan"), 3U);
+  EXPECT_EQ(error_line(d, "1,2,inf,4,2"), 4U);  // only a degeneracy may be infinite
 }
 
 }  // namespace

@@ -45,13 +45,15 @@ constexpr const char* kAbout =
     "replayed. --insecure signs and verifies nothing: local development only (it warns).\n"
     "\n"
     "stdin: NDT poses, CSV with a header line naming the columns: time_ns,x,y,yaw, then any of\n"
-    "  sxx,syy,syaw (all three) and converged,iterations,fitness, in any order:\n"
+    "  sxx,syy,syaw (all three) and converged,iterations,fitness,degeneracy, in any order:\n"
     "  time_ns on the common clock (ns; GNSS/PTP time, or host time since the Unix epoch in tests);\n"
     "  x, y in the map frame (ENU, m) of the vehicle's reference point; yaw rad CCW from east;\n"
     "  sxx, syy, syaw: variances (m^2, m^2, rad^2); without them --ndt-sigma-xy/--ndt-sigma-yaw apply;\n"
-    "  converged (0/1), iterations, fitness (PCL's score, m^2): the match's quality indicator. A pose\n"
-    "  not converged, at --ndt-max-iterations or above --ndt-max-fitness is DEGRADED: only then may RSU\n"
-    "  fixes take over the pose. Without these columns the poses are taken at their word.\n"
+    "  converged (0/1), iterations, fitness (PCL's score, m^2), degeneracy (how many times more weakly\n"
+    "  the match holds the vehicle in its weakest horizontal direction than in its strongest): the\n"
+    "  match's quality indicator. A pose not converged, at --ndt-max-iterations, above --ndt-max-fitness\n"
+    "  or --ndt-max-degeneracy is DEGRADED: only then may RSU fixes take over the pose. Without these\n"
+    "  columns the poses are taken at their word.\n"
     "  Bad input stops the program with the line number.\n"
     "\n"
     "stdout: fused poses, CSV with the header\n"
@@ -154,6 +156,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
       "a fitness (m^2) above this marks the pose degraded")(
       "ndt-max-iterations", po::value<int>(&o.core.ndt_quality.max_iterations)->default_value(30),
       "a match that used this many iterations hit its cap: degraded")(
+      "ndt-max-degeneracy", po::value<double>(&o.core.ndt_quality.max_degeneracy)->default_value(7.0, "7"),
+      "a degeneracy above this marks the pose degraded")(
       "no-integrity",
       "fuse every correction the filter's gate lets through, unchecked against the vehicle's own "
       "estimate (for comparison only)")("stats", po::value<std::string>(&o.stats_path),
@@ -187,8 +191,10 @@ std::optional<Options> parse_options(int argc, char** argv) {
   if (!(o.ndt_sigma_xy > 0.0 && o.ndt_sigma_yaw > 0.0)) {
     throw std::invalid_argument("--ndt-sigma-xy and --ndt-sigma-yaw must be positive");
   }
-  if (!(o.core.ndt_quality.max_fitness_m2 > 0.0) || o.core.ndt_quality.max_iterations < 1) {
-    throw std::invalid_argument("--ndt-max-fitness must be positive and --ndt-max-iterations at least 1");
+  if (!(o.core.ndt_quality.max_fitness_m2 > 0.0) || o.core.ndt_quality.max_iterations < 1 ||
+      !(o.core.ndt_quality.max_degeneracy >= 1.0)) {
+    throw std::invalid_argument(
+        "--ndt-max-fitness must be positive, --ndt-max-iterations and --ndt-max-degeneracy at least 1");
   }
   o.core.check_integrity = vm.count("no-integrity") == 0;
   o.core.fuse_corrections = !o.announce_only;
