@@ -124,7 +124,7 @@ FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::State
     out.verdict = FixVerdict::kUseOwnFailed;
   } else {
     update_cusum(s, out.nis, t);
-    admit_or_exclude(s, out.nis, t, status == OwnEstimate::kDegraded, out);
+    admit_or_exclude(s, out.nis, t, out);
     if (s.state == SourceState::kAdmitted) {
       out.verdict = s.last_beyond_gate                 ? FixVerdict::kInconsistent
                     : status == OwnEstimate::kDegraded ? FixVerdict::kUseOwnFailed
@@ -138,6 +138,20 @@ FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::State
   s.verdicts.add(out.verdict);
   totals_.verdicts.add(out.verdict);
   return out;
+}
+
+void IntegrityMonitor::annul_exclusions_since(TimeNs since) {
+  for (auto& [id, s] : sources_) {
+    if (s.state != SourceState::kExcluded || s.excluded_at < since) {
+      continue;
+    }
+    s.state = SourceState::kProbation;
+    s.cusum = 0.0;
+    s.run.clear();
+    s.peer_agreements = 0;
+    --s.exclusions;
+    ++totals_.annulled;
+  }
 }
 
 SourceRecord& IntegrityMonitor::record(std::uint64_t rsu_id) {
@@ -202,32 +216,20 @@ void IntegrityMonitor::update_cusum(SourceRecord& s, double nis, TimeNs t) const
   }
 }
 
-void IntegrityMonitor::admit_or_exclude(SourceRecord& s, double nis, TimeNs t, bool without_waiting,
-                                        FixCheck& out) {
+void IntegrityMonitor::admit_or_exclude(SourceRecord& s, double nis, TimeNs t, FixCheck& out) {
   if (s.state != SourceState::kExcluded && s.cusum > config_.cusum_threshold) {
     exclude(s, nis, t, out);
     return;
   }
-  const bool was_excluded = s.state == SourceState::kExcluded;
-  if (s.state == SourceState::kAdmitted) {
-    return;
-  }
-  if (without_waiting) {
-    // The own estimate is weak: what agrees with it within its inflated covariance is used at once.
-    if (s.cusum > 0.5 * config_.cusum_threshold) {
-      return;
-    }
-  } else if (s.state == SourceState::kProbation) {
+  if (s.state == SourceState::kProbation) {
     // Consistent with the own estimate for a while, or with an admitted RSU (an independent check).
-    if (!admissible(s, config_.admit_after_fixes) && s.peer_agreements < config_.peer_admit_after_fixes) {
-      return;
+    if (admissible(s, config_.admit_after_fixes) || s.peer_agreements >= config_.peer_admit_after_fixes) {
+      admit(s, out);
     }
-  } else if (t - s.excluded_at < doubled(config_.min_exclusion, s.exclusions, config_.max_exclusion) ||
-             !admissible(s, doubled(config_.admit_after_fixes, s.exclusions + 1, config_.max_admit_fixes))) {
-    return;
-  }
-  admit(s, out);
-  if (was_excluded) {
+  } else if (s.state == SourceState::kExcluded &&
+             t - s.excluded_at >= doubled(config_.min_exclusion, s.exclusions, config_.max_exclusion) &&
+             admissible(s, doubled(config_.admit_after_fixes, s.exclusions + 1, config_.max_admit_fixes))) {
+    admit(s, out);
     ++s.readmissions;
     ++totals_.readmissions;
   }

@@ -5,8 +5,8 @@
 // or a run of moderately wrong ones (a CUSUM on the normalized innovations), is excluded, with a reason,
 // and counted; it is readmitted only after a run of consistent fixes that grows with each exclusion.
 // A new source is fused only once its first fixes were consistent. When the vehicle's own estimate is
-// known to have failed, it is a weak reference (its NDT says so: its covariance is inflated, sources are
-// still judged against it but admitted without waiting) or none at all (two RSUs agree against it).
+// known to have failed, it is a weaker reference (its NDT says so: its covariance is inflated, and sources
+// are judged against that) or none at all (two RSUs agree against it).
 // Pure computation.
 #pragma once
 
@@ -42,8 +42,8 @@ enum class ExclusionReason : std::uint8_t {
 // What the vehicle knows about its own estimate at a fix's sweep time.
 enum class OwnEstimate : std::uint8_t {
   kHealthy,    // the reference every source is judged against
-  kDegraded,   // its NDT says the match failed: a weak reference (inflated covariance); sources that
-               // agree with it within that are used at once, without probation or exclusion hold
+  kDegraded,   // its NDT says the match failed: a weaker reference (inflated covariance), judged
+               // against as ever; what passes may re-anchor the fused filter
   kOverruled,  // two RSUs agreed against it: no reference at all
 };
 
@@ -101,6 +101,7 @@ struct IntegrityTotals {
   v2i::EnumCounter<FixVerdict> verdicts;
   v2i::EnumCounter<ExclusionReason> exclusions;
   std::uint64_t readmissions = 0;
+  std::uint64_t annulled = 0;  // exclusions annulled: decided against an own estimate found failing
   std::uint64_t barred = 0;
   std::uint64_t pair_checks = 0;         // fixes of two RSUs compared
   std::uint64_t pair_disagreements = 0;  // ... that disagreed
@@ -117,6 +118,11 @@ class IntegrityMonitor {
   FixCheck check(const v2i::Correction& fix, const fusion::StateEstimate& own, OwnEstimate status,
                  const Eigen::Vector2d& reference_offset);
 
+  // The own estimate turns out to have been failing since `since` (its NDT has just said so, and may have
+  // been failing before it did): exclusions decided against it from then on are annulled, the sources go
+  // back to probation with their CUSUM cleared. Counted.
+  void annul_exclusions_since(TimeNs since);
+
   const std::map<std::uint64_t, SourceRecord>& sources() const { return sources_; }
   const IntegrityTotals& totals() const { return totals_; }
   const IntegrityConfig& config() const { return config_; }
@@ -125,7 +131,7 @@ class IntegrityMonitor {
   SourceRecord& record(std::uint64_t rsu_id);
   bool compare_with_peers(std::uint64_t rsu_id, SourceRecord& self);
   void update_cusum(SourceRecord& s, double nis, TimeNs t) const;
-  void admit_or_exclude(SourceRecord& s, double nis, TimeNs t, bool without_waiting, FixCheck& out);
+  void admit_or_exclude(SourceRecord& s, double nis, TimeNs t, FixCheck& out);
   bool admissible(const SourceRecord& s, int fixes_needed) const;
   void exclude(SourceRecord& s, double nis, TimeNs t, FixCheck& out);
   void admit(SourceRecord& s, FixCheck& out);

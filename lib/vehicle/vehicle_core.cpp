@@ -31,6 +31,7 @@ NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
   }
   if (degraded && !previous_degraded_) {
     doubt_own_at(ndt.time, covariance);
+    monitor_.annul_exclusions_since(ndt.time - config_.ndt_degraded_hold);
   }
   own_.add({ndt.time, fusion::MeasurementSource::kNdt, ndt.pose, covariance});
   previous_degraded_ = degraded;
@@ -119,8 +120,9 @@ void VehicleCore::forget_excluded(std::uint64_t rsu_id, OwnEstimate status) {
                                                     source->second.verdicts.count(FixVerdict::kUseOwnFailed) >
                                                 0;
   const auto own = own_.latest();
-  // Only when the own estimate is a sound reference: a failed one is no better place to start from.
-  if (was_used && own && status == OwnEstimate::kHealthy) {
+  // Not when two RSUs overruled the own estimate: it is no better place to start from. A degraded one is
+  // (its covariance says how little it knows).
+  if (was_used && own && status != OwnEstimate::kOverruled) {
     fuser_.restart_from(*own);
     ++stats_.restarts_after_exclusion;
   }

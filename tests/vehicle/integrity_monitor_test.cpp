@@ -371,30 +371,47 @@ TEST(IntegrityMonitor, TwoAgreeingRsusOverruleADriftedNdtOneDoesNot) {
   EXPECT_GE(reanchored, 1);
 }
 
-// The unit-level degraded corridor (as measured in scenarios/corridor_degraded.yaml): from 3 s the street
-// has nothing along it to match, NDT's estimate along the road wanders up to 0.45 m off, and its quality
-// indicator says so (its degeneracy) -- at once, or only 1 s after the wander began. A good RSU in view:
-// the fused error stays at least 80 % below NDT's.
+// The unit-level degraded corridor: NDT's error along the road as measured in the degraded corridor
+// (scenarios/corridor_degraded.yaml, the experiment's seed): small, then a step of 0.44 m at 5.6 s, 0.3-
+// 0.44 m for 1.5 s, back, 0.2 m the other way at 8.6 s; little noise besides. Its quality indicator says
+// it is degraded (there: its degeneracy, above 7 nearly throughout), from the start or from the step. A
+// good RSU in view: the fused error stays at least 80 % below NDT's. Said only 0.5 s into the step, the
+// RSU has meanwhile been excluded against the (then healthy-looking) own estimate; the flag annuls that
+// exclusion, but the RSU must prove itself again against the degraded estimate, which still follows NDT's
+// step: better than NDT, not 80 % (measured and printed).
+double degraded_corridor_ndt_error(TimeNs t) {
+  static const std::pair<double, double> kMeasured[] = {{0.0, 0.0},   {5.1, -0.04}, {5.6, -0.44},
+                                                        {6.1, -0.35}, {7.1, -0.30}, {7.6, 0.01},
+                                                        {8.6, 0.20},  {9.6, 0.05},  {20.0, 0.0}};
+  const double s = to_seconds(t - kStart);
+  for (std::size_t i = 1; i < std::size(kMeasured); ++i) {
+    const auto [t0, e0] = kMeasured[i - 1];
+    const auto [t1, e1] = kMeasured[i];
+    if (s <= t1) {
+      return e0 + (e1 - e0) * std::clamp((s - t0) / (t1 - t0), 0.0, 1.0);
+    }
+  }
+  return 0.0;
+}
+
 TEST(IntegrityMonitor, ADegradedNdtIsStillHelpedByAGoodRsu) {
-  for (const double flag_delay_s : {0.0, 1.0}) {
+  for (const double flagged_from_s : {0.0, 5.1, 6.1}) {
+    const bool in_time = flagged_from_s <= 5.1;
     NdtModel ndt;
-    ndt.drift = [](TimeNs t) {
-      const double s = std::max(0.0, to_seconds(t - kStart) - 3.0);
-      return Eigen::Vector2d(0.45 * std::sin(0.8 * s) * std::min(1.0, s), 0.0);
-    };
-    ndt.degraded = [=](TimeNs t) { return to_seconds(t - kStart) >= 3.0 + flag_delay_s; };
+    ndt.true_sigma_m = 0.02;
+    ndt.drift = [](TimeNs t) { return Eigen::Vector2d(degraded_corridor_ndt_error(t), 0.0); };
+    ndt.degraded = [=](TimeNs t) { return to_seconds(t - kStart) >= flagged_from_s; };
     RsuModel rsu;
-    const DriveResult r = drive(15.0, ndt, {rsu}, {}, kStart + 3 * kNsPerSecond);
-    std::printf(
-        "degraded NDT flagged %.0f s after it began to wander: NDT MAE %.3f m, fused %.3f m (%.0f %% "
-        "lower)\n",
-        flag_delay_s, r.ndt_mae, r.fused_mae, 100.0 * (1.0 - r.fused_mae / r.ndt_mae));
-    EXPECT_LE(r.fused_mae, 0.2 * r.ndt_mae) << "flagged after " << flag_delay_s << " s";
+    rsu.true_sigma_m = 0.03;  // the degraded corridor's RSU fixes (MAE 0.02-0.03 m)
+    const DriveResult r = drive(12.0, ndt, {rsu}, {}, kStart + 4 * kNsPerSecond);
+    std::printf("degraded NDT (flagged from %.1f s): NDT MAE %.3f m, fused %.3f m (%.0f %% lower)\n",
+                flagged_from_s, r.ndt_mae, r.fused_mae, 100.0 * (1.0 - r.fused_mae / r.ndt_mae));
+    EXPECT_LE(r.fused_mae, (in_time ? 0.2 : 1.0) * r.ndt_mae) << "flagged from " << flagged_from_s << " s";
   }
 }
 
 // The limit: an NDT that runs away (0.5 m/s, 6 m in 12 s) far beyond what its degraded covariance
-// (x10: 0.47 m) allows. The vehicle's own estimate follows it, a single RSU cannot prove it wrong, and it is
+// (x4: 0.30 m) allows. The vehicle's own estimate follows it, a single RSU cannot prove it wrong, and it is
 // excluded: the fused pose stays with NDT. (Dead reckoning on odometry or an IMU would bound such a run;
 // the paper's vehicle has neither.) Measured here so that the README states it.
 TEST(IntegrityMonitor, ARunawayNdtIsNotOverruledByOneRsu) {

@@ -77,6 +77,7 @@ std::vector<vehicle_client::ReceivedCorrection> read_corrections(const std::stri
 int run(const po::variables_map& vm) {
   vehicle::VehicleCoreConfig config;
   config.check_integrity = vm.count("no-integrity") == 0;
+  config.degraded_ndt_variance_scale = vm["degraded-variance-scale"].as<double>();
   const auto corrections = read_corrections(vm["corrections-in"].as<std::string>());
   std::FILE* decisions = nullptr;
   if (vm.count("corrections")) {
@@ -147,7 +148,10 @@ int main(int argc, char** argv) {
       "the corrections rsu-vehicle received (its --corrections file)")(
       "corrections", po::value<std::string>(), "write them again with the replay's decisions")(
       "no-integrity", "fuse without the integrity checks (rsu-vehicle --no-integrity)")(
-      "ndt-sigma-xy", po::value<double>()->default_value(0.2), "as rsu-vehicle's")(
+      "degraded-variance-scale",
+      po::value<double>()->default_value(rsu::vehicle::VehicleCoreConfig{}.degraded_ndt_variance_scale),
+      "a degraded NDT pose's covariance times this")("ndt-sigma-xy", po::value<double>()->default_value(0.2),
+                                                     "as rsu-vehicle's")(
       "ndt-sigma-yaw", po::value<double>()->default_value(0.02), "as rsu-vehicle's");
   po::variables_map vm;
   try {
