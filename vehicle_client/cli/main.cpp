@@ -104,6 +104,21 @@ void warn_insecure() {
                "verified; anyone can forge or replay corrections. Local development only. ***\n");
 }
 
+// When the vehicle's own NDT counts as degraded, and whether corrections are checked at all (issue 18).
+void add_integrity_options(po::options_description& d, Options& o) {
+  d.add_options()("ndt-max-fitness",
+                  po::value<double>(&o.core.ndt_quality.max_fitness_m2)->default_value(0.5, "0.5"),
+                  "a fitness (m^2) above this marks the pose degraded")(
+      "ndt-max-iterations", po::value<int>(&o.core.ndt_quality.max_iterations)->default_value(30),
+      "a match that used this many iterations hit its cap: degraded")(
+      "ndt-max-degeneracy", po::value<double>(&o.core.ndt_quality.max_degeneracy)->default_value(7.0, "7"),
+      "a degeneracy above this marks the pose degraded")(
+      "no-integrity",
+      "fuse every correction the filter's gate lets through, unchecked against the vehicle's own "
+      "estimate (for comparison only)")("stats", po::value<std::string>(&o.stats_path),
+                                        "write every counter to FILE at the end");
+}
+
 // Empty when --help was given (and printed).
 std::optional<Options> parse_options(int argc, char** argv) {
   Options o;
@@ -151,17 +166,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
       "ndt-sigma-xy", po::value<double>(&o.ndt_sigma_xy)->default_value(o.ndt_sigma_xy, "0.2"),
       "NDT position standard deviation, m, for rows without variances")(
       "ndt-sigma-yaw", po::value<double>(&o.ndt_sigma_yaw)->default_value(o.ndt_sigma_yaw, "0.02"),
-      "NDT yaw standard deviation, rad, for rows without variances")(
-      "ndt-max-fitness", po::value<double>(&o.core.ndt_quality.max_fitness_m2)->default_value(0.5, "0.5"),
-      "a fitness (m^2) above this marks the pose degraded")(
-      "ndt-max-iterations", po::value<int>(&o.core.ndt_quality.max_iterations)->default_value(30),
-      "a match that used this many iterations hit its cap: degraded")(
-      "ndt-max-degeneracy", po::value<double>(&o.core.ndt_quality.max_degeneracy)->default_value(7.0, "7"),
-      "a degeneracy above this marks the pose degraded")(
-      "no-integrity",
-      "fuse every correction the filter's gate lets through, unchecked against the vehicle's own "
-      "estimate (for comparison only)")("stats", po::value<std::string>(&o.stats_path),
-                                        "write every counter to FILE at the end");
+      "NDT yaw standard deviation, rad, for rows without variances");
+  add_integrity_options(d, o);
   po::variables_map vm;
   po::store(po::parse_command_line(argc, argv, d), vm);
   if (vm.count("help")) {
