@@ -22,7 +22,7 @@ PY=/usr/bin/python3  # Debian's python3, which has python3-matplotlib and python
 scripts/install-deps.sh
 echo "== building (Release) =="
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle rsu-keygen rsu-link-relay
+cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle rsu-keygen rsu-relay
 
 echo "== 1. realistic experiment: corridor street, NDT vs RSU vs fused (paper Sec. 4) =="
 $PY eval/corridor/run_experiment.py --build build --out "$OUT/corridor"

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The V2I link impaired (issue 13 item 2): the realistic experiment in the degraded corridor, through the
 real processes on loopback as run_experiment.py runs it, once per link condition, with a relay process
-(rsu-link-relay) between rsud and the vehicle that delays, jitters, loses and reorders datagrams in both
+(rsu-relay) between rsud and the vehicle that delays, jitters, loses and reorders datagrams in both
 directions (announcements up, corrections down). Neither rsud nor rsu-vehicle is changed for it.
 
   delay: 0, 50, 100, 200, 500 ms one way (each direction)  x  loss: 0, 10, 30, 50 % (each direction)
@@ -84,12 +84,12 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder with the tools")
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "link_impairment"))
     ap.add_argument("--model", default="vlp32c", help="the RSU LiDAR (vlp16 or vlp32c)")
-    ap.add_argument("--relay", help="the relay program (default: <build>/tools/rsu-link-relay)")
+    ap.add_argument("--relay", help="the relay program (default: <build>/tools/rsu-relay)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the relay's impairment draws")
     ap.add_argument("--quick", action="store_true", help="the one-factor sweeps only (12 runs instead of 23)")
     args = ap.parse_args()
     exp, scenario_path, scenario = run_experiment.prepare(args)
-    relay = os.path.abspath(args.relay or os.path.join(args.build, "tools", "rsu-link-relay"))
+    relay = os.path.abspath(args.relay or os.path.join(args.build, "tools", "rsu-relay"))
     if not os.path.exists(relay):
         sys.exit("run_link_impairment: %s not found (build first)" % relay)
     # One RSU model: the experiment file as given, with that model only and the street by absolute path.

@@ -31,7 +31,7 @@ constexpr const char* kAbout =
     "                 [--rsu-side ADDR] [impairments] [faults] [--rsu-key RSU.key | --insecure]\n"
     "\n"
     "The vehicle announces to --listen instead of the RSU (the i-th --listen relays to the i-th --rsu)\n"
-    "and is started with --reply-address equal to --rsu-side (default: the first --listen's address). The\n"
+    "and is started with --reply-address equal to --rsu-side (default 127.0.0.2). The\n"
     "relay binds that address at the vehicle's own port (from --vehicle), sends the announcements to the\n"
     "RSU from there, so that rsud (which answers only to the address an announcement came from) sends its\n"
     "corrections back to the relay, which passes them on to --vehicle. Use two loopback addresses, e.g.\n"
@@ -121,8 +121,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
       "listen", po::value<std::vector<std::string>>(&listen)->required(),
       "ADDR:PORT taking the vehicle's announcements for the matching --rsu (repeat)")(
       "rsu", po::value<std::vector<std::string>>(&rsus)->required(),
-      "HOST:PORT of an RSU's V2I port (repeat)")("rsu-side", po::value<std::string>(&rsu_side),
-                                                 "the relay's RSU-side address (see above)")(
+      "HOST:PORT of an RSU's V2I port (repeat)")(
+      "rsu-side", po::value<std::string>(&rsu_side)->default_value("127.0.0.2"),
+      "the relay's RSU-side address (the vehicle's --reply-address; see above)")(
       "seed", po::value<std::uint64_t>(&o.relay.seed)->default_value(1), "seed of every impairment draw")(
       "bias-x-m", po::value<double>()->default_value(0.0), "fault: add this to each correction's x, m")(
       "bias-y-m", po::value<double>()->default_value(0.0), "fault: add this to each correction's y, m")(
@@ -160,8 +161,11 @@ std::optional<Options> parse_options(int argc, char** argv) {
   if (r.listen.size() != r.rsus.size()) {
     throw po::error("give one --listen per --rsu");
   }
-  r.rsu_side_address =
-      rsu_side.empty() ? r.listen.front().address() : boost::asio::ip::make_address(rsu_side);
+  boost::system::error_code ec;
+  r.rsu_side_address = boost::asio::ip::make_address(rsu_side, ec);
+  if (ec) {
+    throw po::error("--rsu-side: \"" + rsu_side + "\" is not an IP address");
+  }
   r.link = {link_of(vm, "uplink"), link_of(vm, "downlink")};
   TamperConfig& t = r.tamper;
   t.bias_m = {vm["bias-x-m"].as<double>(), vm["bias-y-m"].as<double>()};
@@ -186,14 +190,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
 
 void write_stats(std::FILE* out, const RelayStats& s) {
   const char* names[] = {"uplink", "downlink"};
-  for (int d = 0; d < 2; ++d) {
-    const DirectionStats& x = s.direction[d];
+  for (std::size_t d = 0; d < 2; ++d) {
+    const ImpairedDirectionStats& x = s.direction[d];
     std::fprintf(
         out, "%s.received %llu\n%s.forwarded %llu\n%s.dropped %llu\n%s.reordered %llu\n%s.send_errors %llu\n",
         names[d], static_cast<unsigned long long>(x.received), names[d],
         static_cast<unsigned long long>(x.forwarded), names[d], static_cast<unsigned long long>(x.dropped),
         names[d], static_cast<unsigned long long>(x.reordered), names[d],
-        static_cast<unsigned long long>(x.send_errors));
+        static_cast<unsigned long long>(s.send_errors[d]));
   }
   std::fprintf(out, "corrections %llu\ncorrections.altered %llu\ncorrections.burst %llu\n",
                static_cast<unsigned long long>(s.corrections),

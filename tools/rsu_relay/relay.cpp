@@ -1,5 +1,6 @@
 #include "tools/rsu_relay/relay.h"
 
+#include <chrono>
 #include <stdexcept>
 
 #include "vehicle_client/udp_endpoint_text.h"
@@ -9,15 +10,37 @@ namespace rsu::tools {
 namespace asio = boost::asio;
 using udp = asio::ip::udp;
 
+namespace {
+
+TimeNs steady_now() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+std::vector<ImpairedDirection> uplinks_for(const RelayConfig& c) {
+  std::vector<ImpairedDirection> out;
+  for (std::size_t i = 0; i < c.rsus.size(); ++i) {
+    out.emplace_back(c.link[0], c.seed, i == 0 ? 0 : 1 + i);
+  }
+  return out;
+}
+
+}  // namespace
+
 Relay::Relay(asio::io_context& io, const RelayConfig& config)
-    : io_(io), config_(config), timer_(io), tamper_(config.tamper, config.rsu_key) {
+    : config_(config),
+      timer_(io),
+      uplinks_(uplinks_for(config)),
+      downlink_(config.link[1], config.seed, 1),
+      tamper_(config.tamper, config.rsu_key) {
   if (config_.listen.empty() || config_.listen.size() != config_.rsus.size()) {
     throw std::invalid_argument("give one --listen per --rsu");
   }
   std::vector<udp::endpoint> binds = config_.listen;
   binds.emplace_back(config_.rsu_side_address, config_.vehicle.port());
   for (const udp::endpoint& at : binds) {
-    auto socket = std::make_unique<udp::socket>(io_, at.protocol());
+    auto socket = std::make_unique<udp::socket>(io, at.protocol());
     socket->bind(at);
     socket->non_blocking(true);  // a full send buffer drops the datagram (counted), as a radio would
     sockets_.push_back(std::move(socket));
@@ -42,6 +65,19 @@ Relay::~Relay() {
   }
 }
 
+RelayStats Relay::stats() const {
+  RelayStats out = stats_;
+  for (const ImpairedDirection& up : uplinks_) {
+    const ImpairedDirectionStats& s = up.stats();
+    out.direction[0].received += s.received;
+    out.direction[0].dropped += s.dropped;
+    out.direction[0].reordered += s.reordered;
+    out.direction[0].forwarded += s.forwarded;
+  }
+  out.direction[1] = downlink_.stats();
+  return out;
+}
+
 std::string Relay::describe() const {
   std::string text;
   for (std::size_t i = 0; i < config_.listen.size(); ++i) {
@@ -59,103 +95,72 @@ void Relay::receive(std::size_t i) {
                                       return;
                                     }
                                     if (!ec) {
-                                      on_datagram(i, {buffers_[i].begin(), buffers_[i].begin() + bytes});
+                                      std::vector<std::uint8_t> datagram(buffers_[i].begin(),
+                                                                         buffers_[i].begin() + bytes);
+                                      if (i + 1 < sockets_.size()) {
+                                        uplinks_[i].push(steady_now(), std::move(datagram));
+                                      } else {
+                                        on_correction_side(std::move(datagram), steady_now());
+                                      }
+                                      flush();
                                     }
                                     receive(i);
                                   });
 }
 
-void Relay::on_datagram(std::size_t i, std::vector<std::uint8_t> bytes) {
-  const bool uplink = i + 1 < sockets_.size();
-  const int direction = uplink ? 0 : 1;
-  ++stats_.direction[direction].received;
-  Pending pending{Clock::now(), uplink ? config_.rsus[i] : config_.vehicle, std::move(bytes), direction};
-  if (!uplink) {
-    TamperedDatagram t = tamper_.process(pending.bytes);
-    if (t.correction) {
-      ++stats_.corrections;
-      stats_.corrections_altered += t.altered ? 1 : 0;
-      stats_.corrections_burst += t.burst ? 1 : 0;
-      if (tamper_log_ != nullptr) {
-        const v2i::Correction& c = *t.correction;
-        std::fprintf(tamper_log_, "%lld,%llu,%u,%d,%d,%.6f,%.6f,%.9g,%.9g\n",
-                     static_cast<long long>(c.sweep_time), static_cast<unsigned long long>(c.rsu_id),
-                     c.sequence, t.altered ? 1 : 0, t.burst ? 1 : 0, c.pose.x, c.pose.y,
-                     c.pose_covariance(0, 0), c.pose_covariance(1, 1));
-        std::fflush(tamper_log_);
-      }
-    }
-    pending.bytes = std::move(t.bytes);
-  }
-  const LinkDecision d = decide(config_.link[direction], config_.seed, direction, index_[direction]++);
-  if (d.drop) {
-    ++stats_.direction[direction].dropped;
-    return;
-  }
-  pending.at += std::chrono::nanoseconds(d.delay);
-  schedule(std::move(pending), d.hold_for_next);
-}
-
-void Relay::schedule(Pending pending, bool hold_for_next) {
-  const int direction = pending.direction;
-  if (hold_for_next && !held_[direction]) {
-    held_[direction] = std::move(pending);  // goes out after the next one of its direction
-    arm_timer();
-    return;
-  }
-  const Clock::time_point at = pending.at;
-  queue_.emplace(at, std::move(pending));
-  if (held_[direction]) {
-    Pending overtaken = std::move(*held_[direction]);
-    held_[direction].reset();
-    overtaken.at = std::max(overtaken.at, at + std::chrono::microseconds(1));
-    ++stats_.direction[direction].reordered;
-    queue_.emplace(overtaken.at, std::move(overtaken));
-  }
-  arm_timer();
-}
-
-void Relay::arm_timer() {
-  std::optional<Clock::time_point> next;
-  if (!queue_.empty()) {
-    next = queue_.begin()->first;
-  }
-  for (const auto& held : held_) {
-    if (held) {
-      const Clock::time_point deadline = held->at + config_.reorder_timeout;
-      next = next ? std::min(*next, deadline) : deadline;
+void Relay::on_correction_side(std::vector<std::uint8_t> bytes, TimeNs now) {
+  TamperedDatagram t = tamper_.process(bytes);
+  if (t.correction) {
+    ++stats_.corrections;
+    stats_.corrections_altered += t.altered ? 1 : 0;
+    stats_.corrections_burst += t.burst ? 1 : 0;
+    if (tamper_log_ != nullptr) {
+      const v2i::Correction& c = *t.correction;
+      std::fprintf(tamper_log_, "%lld,%llu,%u,%d,%d,%.6f,%.6f,%.9g,%.9g\n",
+                   static_cast<long long>(c.sweep_time), static_cast<unsigned long long>(c.rsu_id),
+                   c.sequence, t.altered ? 1 : 0, t.burst ? 1 : 0, c.pose.x, c.pose.y,
+                   c.pose_covariance(0, 0), c.pose_covariance(1, 1));
+      std::fflush(tamper_log_);
     }
   }
+  downlink_.push(now, std::move(t.bytes));
+}
+
+// Sends what is due in every direction and waits for the next due time.
+void Relay::flush() {
+  const TimeNs now = steady_now();
+  std::optional<TimeNs> next;
+  const auto note = [&](const std::optional<TimeNs>& due) {
+    if (due && (!next || *due < *next)) {
+      next = due;
+    }
+  };
+  for (std::size_t i = 0; i < uplinks_.size(); ++i) {
+    for (const auto& bytes : uplinks_[i].pop_due(now)) {
+      send(*sockets_.back(), bytes, config_.rsus[i], 0);
+    }
+    note(uplinks_[i].next_due());
+  }
+  for (const auto& bytes : downlink_.pop_due(now)) {
+    send(*sockets_.front(), bytes, config_.vehicle, 1);
+  }
+  note(downlink_.next_due());
   if (!next) {
     return;
   }
-  timer_.expires_at(*next);
+  timer_.expires_after(std::chrono::nanoseconds(std::max<TimeNs>(0, *next - now)));
   timer_.async_wait([this](const boost::system::error_code& ec) {
-    if (ec != asio::error::operation_aborted) {
-      on_timer();
+    if (!ec) {
+      flush();
     }
   });
 }
 
-void Relay::on_timer() {
-  const Clock::time_point now = Clock::now();
-  while (!queue_.empty() && queue_.begin()->first <= now) {
-    send(queue_.begin()->second);
-    queue_.erase(queue_.begin());
-  }
-  for (auto& held : held_) {
-    if (held && held->at + config_.reorder_timeout <= now) {
-      send(*held);  // nothing overtook it: late, but in order
-      held.reset();
-    }
-  }
-  arm_timer();
-}
-
-void Relay::send(const Pending& pending) {
+void Relay::send(udp::socket& from, const std::vector<std::uint8_t>& bytes, const udp::endpoint& to,
+                 int direction) {
   boost::system::error_code ec;
-  sockets_.back()->send_to(asio::buffer(pending.bytes), pending.to, 0, ec);
-  ec ? ++stats_.direction[pending.direction].send_errors : ++stats_.direction[pending.direction].forwarded;
+  from.send_to(asio::buffer(bytes), to, 0, ec);
+  stats_.send_errors[static_cast<std::size_t>(direction)] += ec ? 1 : 0;
 }
 
 }  // namespace rsu::tools

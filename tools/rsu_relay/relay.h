@@ -1,5 +1,5 @@
 // rsu-relay's event loop: UDP datagrams between a vehicle and its RSUs on loopback, each direction
-// impaired (LinkImpairment), corrections altered on the way down (CorrectionTamper). Boost.Asio, one
+// impaired (ImpairedDirection), corrections altered on the way down (CorrectionTamper). Boost.Asio, one
 // thread.
 #pragma once
 
@@ -9,17 +9,15 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/udp.hpp>
 #include <boost/asio/steady_timer.hpp>
-#include <chrono>
 #include <cstdint>
 #include <cstdio>
-#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "tools/rsu_relay/correction_tamper.h"
-#include "tools/rsu_relay/link_impairment.h"
+#include "tools/rsu_relay/impaired_direction.h"
 
 namespace rsu::tools {
 
@@ -32,19 +30,14 @@ struct RelayConfig {
   boost::asio::ip::address rsu_side_address;
   std::array<LinkImpairment, 2> link;  // [0] uplink (vehicle -> RSU), [1] downlink (RSU -> vehicle)
   std::uint64_t seed = 1;
-  // A held-back datagram goes out after this long if no later one overtook it.
-  std::chrono::milliseconds reorder_timeout{100};
   TamperConfig tamper;
   std::optional<v2i::security::SigningKey> rsu_key;
   std::string tamper_log_path;  // CSV of every correction forwarded (empty: none)
 };
 
-struct DirectionStats {
-  std::uint64_t received = 0, forwarded = 0, dropped = 0, reordered = 0, send_errors = 0;
-};
-
 struct RelayStats {
-  std::array<DirectionStats, 2> direction;
+  std::array<ImpairedDirectionStats, 2> direction;  // [0] uplink (all RSUs), [1] downlink
+  std::array<std::uint64_t, 2> send_errors{};
   std::uint64_t corrections = 0, corrections_altered = 0, corrections_burst = 0;
 };
 
@@ -55,34 +48,24 @@ class Relay {
   Relay(const Relay&) = delete;
   Relay& operator=(const Relay&) = delete;
 
-  const RelayStats& stats() const { return stats_; }
+  RelayStats stats() const;
   std::string describe() const;
 
  private:
-  using Clock = std::chrono::steady_clock;
-  struct Pending {
-    Clock::time_point at;
-    boost::asio::ip::udp::endpoint to;
-    std::vector<std::uint8_t> bytes;
-    int direction = 0;
-  };
-
   void receive(std::size_t socket_index);
-  void on_datagram(std::size_t socket_index, std::vector<std::uint8_t> bytes);
-  void schedule(Pending pending, bool hold_for_next);
-  void arm_timer();
-  void on_timer();
-  void send(const Pending& pending);
+  void on_correction_side(std::vector<std::uint8_t> bytes, TimeNs now);
+  void flush();
+  void send(boost::asio::ip::udp::socket& from, const std::vector<std::uint8_t>& bytes,
+            const boost::asio::ip::udp::endpoint& to, int direction);
 
-  boost::asio::io_context& io_;
   RelayConfig config_;
   std::vector<std::unique_ptr<boost::asio::ip::udp::socket>> sockets_;  // vehicle side ..., then RSU side
   std::vector<std::array<std::uint8_t, 65536>> buffers_;
   std::vector<boost::asio::ip::udp::endpoint> senders_;
   boost::asio::steady_timer timer_;
-  std::multimap<Clock::time_point, Pending> queue_;
-  std::array<std::optional<Pending>, 2> held_;
-  std::array<std::uint64_t, 2> index_{};
+  // One uplink per RSU (its random stream: 0 for the first, as the downlink's is 1; 2, 3, ... for more).
+  std::vector<ImpairedDirection> uplinks_;
+  ImpairedDirection downlink_;
   CorrectionTamper tamper_;
   std::FILE* tamper_log_ = nullptr;
   RelayStats stats_;

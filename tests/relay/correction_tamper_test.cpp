@@ -1,64 +1,16 @@
-// rsu-relay's decisions: link impairments drawn as configured (measured over many datagrams against the
-// fractions and bounds the test sets), and corrections altered as configured and signed again so that
-// the vehicle's authenticator accepts them.
+// rsu-relay's faults (CorrectionTamper): corrections altered as configured and signed again so that the
+// vehicle's authenticator accepts them; everything else passes untouched.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <variant>
 
 #include "tools/rsu_relay/correction_tamper.h"
-#include "tools/rsu_relay/link_impairment.h"
 #include "v2i/message_authenticator.h"
 #include "v2i/wire_codec.h"
 
 namespace rsu::tools {
 namespace {
-
-constexpr int kDraws = 100'000;
-
-TEST(LinkImpairment, LossDelayJitterAndReorderAreDrawnAsConfigured) {
-  const LinkImpairment link{.delay_ms = 100.0, .jitter_ms = 20.0, .loss = 0.3, .reorder = 0.1};
-  int dropped = 0, held = 0;
-  double sum_ms = 0.0, min_ms = 1e9, max_ms = 0.0;
-  for (int k = 0; k < kDraws; ++k) {
-    const LinkDecision d = decide(link, 7, 1, static_cast<std::uint64_t>(k));
-    dropped += d.drop ? 1 : 0;
-    held += d.hold_for_next ? 1 : 0;
-    EXPECT_FALSE(d.drop && d.hold_for_next);
-    const double ms = static_cast<double>(d.delay) * 1e-6;
-    sum_ms += ms;
-    min_ms = std::min(min_ms, ms);
-    max_ms = std::max(max_ms, ms);
-  }
-  // Binomial: 4 standard deviations.
-  EXPECT_NEAR(dropped, 0.3 * kDraws, 4.0 * std::sqrt(kDraws * 0.3 * 0.7));
-  const double kept = kDraws - dropped;
-  EXPECT_NEAR(held, 0.1 * kept, 4.0 * std::sqrt(kept * 0.1 * 0.9));
-  EXPECT_GE(min_ms, 80.0);
-  EXPECT_LE(max_ms, 120.0);
-  EXPECT_LT(min_ms, 80.1);  // the whole range is used
-  EXPECT_GT(max_ms, 119.9);
-  EXPECT_NEAR(sum_ms / kDraws, 100.0, 4.0 * 20.0 / std::sqrt(3.0 * kDraws));
-}
-
-TEST(LinkImpairment, ASeedRepeatsARunAndTheDirectionsAreIndependent) {
-  const LinkImpairment link{.delay_ms = 0.0, .jitter_ms = 50.0, .loss = 0.5, .reorder = 0.0};
-  int same_direction = 0, across = 0;
-  for (std::uint64_t k = 0; k < 1000; ++k) {
-    const LinkDecision a = decide(link, 3, 0, k);
-    const LinkDecision b = decide(link, 3, 0, k);
-    EXPECT_EQ(a.drop, b.drop);
-    EXPECT_EQ(a.delay, b.delay);
-    same_direction += a.drop == decide(link, 4, 0, k).drop ? 1 : 0;  // another seed
-    across += a.drop == decide(link, 3, 1, k).drop ? 1 : 0;          // the other direction
-  }
-  EXPECT_NEAR(same_direction, 500, 80);  // unrelated: agree about half the time
-  EXPECT_NEAR(across, 500, 80);
-  // No impairment: nothing happens.
-  const LinkDecision none = decide(LinkImpairment{}, 3, 0, 5);
-  EXPECT_FALSE(none.drop || none.hold_for_next);
-  EXPECT_EQ(none.delay, 0);
-}
 
 v2i::security::SigningKey key_from(std::uint8_t fill) {
   v2i::security::Seed seed{};

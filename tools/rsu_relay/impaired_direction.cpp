@@ -1,4 +1,4 @@
-#include "tools/rsu_link_relay/impaired_direction.h"
+#include "tools/rsu_relay/impaired_direction.h"
 
 #include <algorithm>
 

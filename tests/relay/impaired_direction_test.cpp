@@ -1,4 +1,4 @@
-// ImpairedDirection (tools/rsu_link_relay): datagrams k = 0, 1, ... pushed 10 ms apart, each carrying
+// ImpairedDirection (tools/rsu_relay): datagrams k = 0, 1, ... pushed 10 ms apart, each carrying
 // its own index, so that what leaves when can be checked against each impairment's definition.
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "tools/rsu_link_relay/impaired_direction.h"
+#include "tools/rsu_relay/impaired_direction.h"
 
 namespace rsu::tools {
 namespace {
