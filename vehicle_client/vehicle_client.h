@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
+#include "common/enum_counter.h"
 #include "common/pose.h"
 #include "common/time.h"
 #include "v2i/announcement_validation.h"
-#include "v2i/enum_counter.h"
 #include "v2i/messages.h"
 #include "vehicle/announcer.h"
 #include "vehicle/correction_filter.h"
@@ -45,10 +45,10 @@ struct VehicleClientStats {
   std::uint64_t announcements_refused = 0;  // announce() refused the state (see announce())
   std::uint64_t datagrams_received = 0;
   std::uint64_t receive_errors = 0;
-  v2i::EnumCounter<CorrectionVerdict> corrections;    // accepted, and rejected by reason
-  v2i::EnumCounter<v2i::AuthVerdict> authentication;  // every datagram's signature/replay verdict
-  std::uint64_t sequence_restarts = 0;                // an RSU restarted (CorrectionFilter)
-  std::uint64_t dropped_unpolled = 0;                 // over max_pending_corrections
+  EnumCounter<CorrectionVerdict> corrections;    // accepted, and rejected by reason
+  EnumCounter<v2i::AuthVerdict> authentication;  // every datagram's signature/replay verdict
+  std::uint64_t sequence_restarts = 0;           // an RSU restarted (CorrectionFilter)
+  std::uint64_t dropped_unpolled = 0;            // over max_pending_corrections
 
   std::uint64_t accepted() const { return corrections.count(CorrectionVerdict::kAccepted); }
   std::uint64_t rejected() const { return corrections.total() - accepted(); }

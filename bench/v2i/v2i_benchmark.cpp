@@ -102,8 +102,8 @@ BENCHMARK(BM_DecodeValidateUpsert);
 
 // CPU seconds per message (an inverted rate over the iterations), printed with its unit.
 void report_core_share(benchmark::State& state) {
-  state.counters["cpu_per_msg"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["cpu_per_msg"] = benchmark::Counter(
+      static_cast<double>(state.iterations()), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
 security::SigningKey vehicle_key(int i) {
@@ -203,7 +203,7 @@ BENCHMARK(BM_SignedDatagramPath);
 void BM_Associate(benchmark::State& state) {
   const auto n = static_cast<std::size_t>(state.range(0));
   std::vector<VehicleHypothesis> vehicles(n);
-  std::vector<FittedCluster> clusters(n);
+  std::vector<perception::Detection> clusters(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double x = 100.0 * uniform_open01(mix64(2 * i));
     const double y = 100.0 * uniform_open01(mix64(2 * i + 1));
@@ -212,7 +212,12 @@ void BM_Associate(benchmark::State& state) {
     vehicles[i].centre = {x + 0.3 * noise.a, y + 0.3 * noise.b};
     vehicles[i].covariance = Eigen::Vector3d(0.09, 0.09, 0.01).asDiagonal();
     vehicles[i].size = {4.89, 1.92, 1.70};
-    clusters[(i * 7) % n] = {{x, y}, 0.0, 4.5, 1.8, 300};
+    perception::RectangleFit& fit = clusters[(i * 7) % n].fit;
+    fit.status = perception::FitStatus::ok;
+    fit.center = {x, y};
+    fit.length0 = 4.5;
+    fit.length1 = 1.8;
+    fit.corners.fill(Eigen::Vector2d::Zero());  // unused by association
   }
   for (auto _ : state) {
     benchmark::DoNotOptimize(associate(clusters, vehicles));

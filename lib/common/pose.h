@@ -30,6 +30,8 @@ struct Pose3 {
     t.translation() = Eigen::Vector3d(x, y, z);
     return t;
   }
+
+  bool operator==(const Pose3&) const = default;
 };
 
 }  // namespace rsu

@@ -125,6 +125,8 @@ struct LidarDecoderOptions {
   ReturnSelection returns = ReturnSelection::both;
   // Where a rotation starts (scan phase, clockwise from +x), degrees.
   double rotation_start_azimuth_deg = 0.0;
+
+  bool operator==(const LidarDecoderOptions&) const = default;
 };
 
 // The models make_lidar_decoder knows, as said in errors.

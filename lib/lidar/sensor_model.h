@@ -54,6 +54,8 @@ struct SensorModel {
   double sequences_per_rotation() const { return 1e6 / (rotation_hz() * sequence_period_us); }
   // Unit beam direction in the sensor frame for laser `laser` at beam rotation angle `azimuth_rad`.
   Eigen::Vector3d beam_direction(std::size_t laser, double azimuth_rad) const;
+
+  bool operator==(const SensorModel&) const = default;
 };
 
 // Why `model` cannot be used (tables of unequal length, non-positive periods, a packet format whose

@@ -26,6 +26,8 @@ struct BackgroundModelConfig {
   GroundHeightFilterConfig ground;
   ReferenceFrameBackgroundConfig reference_frame;
   RangeImageBackgroundConfig range_image;
+
+  bool operator==(const BackgroundModelConfig&) const = default;
 };
 
 class BackgroundModel {

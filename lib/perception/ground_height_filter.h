@@ -13,6 +13,8 @@ namespace rsu::perception {
 struct GroundHeightFilterConfig {
   double ground_z = 0.0;    // height of the (horizontal) ground plane in the map frame, metres
   double min_height = 0.2;  // points lower than ground_z + min_height are ground; the pilot's default
+
+  bool operator==(const GroundHeightFilterConfig&) const = default;
 };
 
 class GroundHeightFilter {

@@ -16,48 +16,34 @@ void PerceptionPipeline::add_background_frame(std::span<const LidarPoint> points
   background_.add_background_frame(points);
 }
 
+Clustering PerceptionPipeline::cluster(std::span<const LidarPoint> points,
+                                       const std::vector<std::uint32_t>& indices) const {
+  return config_.clustering_method == ClusteringMethod::grid
+             ? cluster_grid(points, indices, config_.clustering)
+             : cluster_reference(points, indices, config_.clustering);
+}
+
+// The paper's per-frame steps, each one call: foreground, clusters, a rectangle fitted to each.
 PerceptionResult PerceptionPipeline::process(std::span<const LidarPoint> points) const {
+  const ForegroundSelection foreground = background_.select_foreground(points);
+  const Clustering clusters = cluster(points, foreground.indices);
   PerceptionResult result;
-  const ForegroundSelection fg = background_.select_foreground(points);
-  result.stats.input_points = points.size();
-  result.stats.foreground_points = fg.indices.size();
-  result.stats.background_points = fg.background;
-  result.stats.invalid_points = fg.invalid;
-
-  const Clustering clusters = config_.clustering_method == ClusteringMethod::grid
-                                  ? cluster_grid(points, fg.indices, config_.clustering)
-                                  : cluster_reference(points, fg.indices, config_.clustering);
-  result.stats.clusters_dropped_small = clusters.dropped_small;
-  result.stats.clusters_dropped_large = clusters.dropped_large;
-  result.stats.invalid_points += clusters.invalid_points;
-
   result.objects.reserve(clusters.clusters.size());
-  for (const Cluster& cluster : clusters.clusters) {
-    DetectedObject object;
-    object.point_indices = cluster;
-    object.points.reserve(cluster.size());
-    std::vector<Eigen::Vector2d> footprint;
-    footprint.reserve(cluster.size());
-    const TimeNs t0 = points[cluster.front()].time_ns;
-    TimeNs offset_sum = 0;  // relative to t0: a frame spans 0.1 s, so the sum cannot overflow
-    for (const std::uint32_t i : cluster) {
-      const LidarPoint& p = points[i];
-      object.points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y),
-                                 static_cast<double>(p.z));
-      footprint.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y));
-      offset_sum += p.time_ns - t0;
-    }
-    object.sweep_time_ns = t0 + offset_sum / static_cast<TimeNs>(cluster.size());
-    object.fit = fit_rectangle(footprint, lidar_xy(), config_.fix.fit);
-    if (!object.fit.ok()) {
-      ++result.stats.failed_fits;
-    }
-    result.objects.push_back(std::move(object));
+  for (const Cluster& c : clusters.clusters) {
+    result.objects.push_back({detect(points, c, lidar_xy(), config_.fix.fit), c});
+    result.stats.failed_fits += result.objects.back().fit.ok() ? 0 : 1;
   }
+  PerceptionStats& s = result.stats;
+  s.input_points = points.size();
+  s.foreground_points = foreground.indices.size();
+  s.background_points = foreground.background;
+  s.invalid_points = foreground.invalid + clusters.invalid_points;
+  s.clusters_dropped_small = clusters.dropped_small;
+  s.clusters_dropped_large = clusters.dropped_large;
   return result;
 }
 
-VehicleFix PerceptionPipeline::correct(const DetectedObject& object, const AnnouncedVehicle& vehicle) const {
+VehicleFix PerceptionPipeline::correct(const Detection& object, const AnnouncedVehicle& vehicle) const {
   return fix_vehicle(object.points, vehicle, lidar_position_, config_.fix);
 }
 

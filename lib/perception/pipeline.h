@@ -16,6 +16,7 @@
 #include "common/time.h"
 #include "lidar/point.h"
 #include "perception/background_model.h"
+#include "perception/detection.h"
 #include "perception/euclidean_clustering.h"
 #include "perception/ground_height_filter.h"
 #include "perception/l_shape_fitting.h"
@@ -51,12 +52,10 @@ struct PerceptionConfig {
   VehicleFixConfig fix;
 };
 
-// One cluster: its points and its rectangle fit.
-struct DetectedObject {
+// One cluster of the frame: its detection (points, sweep time, rectangle: detection.h) and which of
+// the frame's points it is made of.
+struct DetectedObject : Detection {
   std::vector<std::uint32_t> point_indices;  // into the processed frame
-  std::vector<Eigen::Vector3d> points;       // those points (map frame)
-  TimeNs sweep_time_ns = 0;                  // mean firing time: when the LiDAR swept it (DESIGN.md §3)
-  RectangleFit fit;
 };
 
 struct PerceptionStats {
@@ -87,12 +86,14 @@ class PerceptionPipeline {
   PerceptionResult process(std::span<const LidarPoint> points_in_map_frame) const;
 
   // The fix of one object, for the vehicle matched to it (fix_vehicle with this pipeline's settings).
-  VehicleFix correct(const DetectedObject& object, const AnnouncedVehicle& vehicle) const;
+  VehicleFix correct(const Detection& object, const AnnouncedVehicle& vehicle) const;
 
   const PerceptionConfig& config() const { return config_; }
   Eigen::Vector2d lidar_xy() const { return lidar_position_.head<2>(); }
 
  private:
+  Clustering cluster(std::span<const LidarPoint> points, const std::vector<std::uint32_t>& indices) const;
+
   PerceptionConfig config_;
   Eigen::Vector3d lidar_position_;
   BackgroundModel background_;

@@ -39,6 +39,8 @@ struct RangeImageBackgroundConfig {
   double margin_m = 0.3;
   double margin_per_m = 0.01;
   int max_rings = 256;  // rings >= this are invalid (a guard against garbage ring numbers)
+
+  bool operator==(const RangeImageBackgroundConfig&) const = default;
 };
 
 class RangeImageBackground {

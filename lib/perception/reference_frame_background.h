@@ -23,6 +23,8 @@ namespace rsu::perception {
 
 struct ReferenceFrameBackgroundConfig {
   double match_radius_m = 0.3;  // see the file comment
+
+  bool operator==(const ReferenceFrameBackgroundConfig&) const = default;
 };
 
 class ReferenceFrameBackground {

@@ -1,6 +1,9 @@
 #include "rsu/correction_builder.h"
 
 #include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <utility>
 
 #include "common/angles.h"
 
@@ -40,6 +43,68 @@ v2i::Correction make_correction(const CorrectionInputs& in, const perception::Co
   c.quality.yaw_resolution = to_wire(fix.resolution);
   c.quality.confidence = std::clamp(fix.confidence, 0.0, 1.0);
   return c;
+}
+
+namespace {
+
+std::optional<v2i::security::SigningKey> signing_key(const RsuCoreConfig& config) {
+  return config.security.mode == v2i::SecurityMode::kSigned ? config.signing_key : std::nullopt;
+}
+
+}  // namespace
+
+CorrectionBuilder::CorrectionBuilder(const RsuCoreConfig& config, std::uint32_t first_signer_sequence)
+    : lidar_xy_(config.mount.x, config.mount.y), signer_(signing_key(config), first_signer_sequence) {
+  advertised_.rsu_id = config.rsu_id;
+  advertised_.lidar_pose = config.mount;
+  advertised_.coverage_radius_m = config.coverage_radius_m;
+  advertised_.correction_port = config.correction_port;
+  advertised_.announcement_port = config.announcement_port;
+}
+
+std::optional<OutgoingCorrection> CorrectionBuilder::build(const v2i::VehicleAnnouncement& a,
+                                                           const perception::VehicleFix& fix,
+                                                           TimeNs sweep_time, TimeNs now) {
+  VehicleChannel& channel = channels_[a.vehicle_id];
+  CorrectionInputs inputs;
+  inputs.rsu_id = advertised_.rsu_id;
+  inputs.vehicle_id = a.vehicle_id;
+  inputs.sequence = channel.next_sequence;
+  inputs.announcement_sequence = a.sequence;
+  inputs.sweep_time = sweep_time;
+  inputs.points_used = fix.points_used;
+  OutgoingCorrection out;
+  out.correction = make_correction(inputs, fix.corrected, fix.fit, lidar_xy_);
+  out.bytes = signer_.encode(out.correction, now);
+  if (out.bytes.empty())
+    return std::nullopt;
+  out.destination = a.reply_to;
+  ++channel.next_sequence;  // wraps modulo 2^32, as the wire says
+  channel.matched = true;
+  channel.last_matched_sweep = sweep_time;
+  return out;
+}
+
+bool CorrectionBuilder::corrected_this_rotation(std::uint64_t vehicle_id, TimeNs batch_time,
+                                                TimeNs rotation_period_ns) const {
+  const auto it = channels_.find(vehicle_id);
+  return it != channels_.end() && it->second.matched &&
+         std::abs(batch_time - it->second.last_matched_sweep) < rotation_period_ns / 2;
+}
+
+std::vector<std::uint8_t> CorrectionBuilder::advertisement(TimeNs now) {
+  return signer_.encode(advertised_, now);
+}
+
+void CorrectionBuilder::forget_unregistered(const v2i::VehicleRegistry& registry, TimeNs now) {
+  for (auto it = channels_.begin(); it != channels_.end();)
+    it = registry.find(it->first, now) == nullptr ? channels_.erase(it) : std::next(it);
+}
+
+CorrectionBuilder CorrectionBuilder::reloaded(const RsuCoreConfig& next) && {
+  CorrectionBuilder fresh(next, signer_.next_sequence());
+  fresh.channels_ = std::move(channels_);
+  return fresh;
 }
 
 }  // namespace rsu::core

@@ -1,11 +1,12 @@
 #include "v2i/announcement_validation.h"
 
-#include <arpa/inet.h>  // inet_pton only: a pure string-to-bytes parser, no socket is involved
-
 #include <Eigen/Eigenvalues>
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
+
+#include "v2i/ip_literal.h"
 
 namespace rsu::v2i {
 namespace {
@@ -106,26 +107,8 @@ const char* to_string(AnnouncementReason reason) {
 }
 
 bool is_unicast_ip_literal(const std::string& address) {
-  // An embedded NUL would let "192.0.2.1\0junk" pass as its prefix.
-  if (address.empty() || address.size() > 64 || address.find('\0') != std::string::npos) {
-    return false;
-  }
-  std::array<unsigned char, 16> bytes{};
-  if (inet_pton(AF_INET, address.c_str(), bytes.data()) == 1) {
-    const bool unspecified = bytes[0] == 0;  // 0.0.0.0/8: "this network"
-    const bool multicast = bytes[0] >= 224 && bytes[0] <= 239;
-    const bool broadcast = bytes[0] == 255 && bytes[1] == 255 && bytes[2] == 255 && bytes[3] == 255;
-    return !unspecified && !multicast && !broadcast;
-  }
-  if (inet_pton(AF_INET6, address.c_str(), bytes.data()) == 1) {
-    bool all_zero = true;
-    for (const unsigned char b : bytes) {
-      all_zero = all_zero && b == 0;
-    }
-    const bool multicast = bytes[0] == 0xff;
-    return !all_zero && !multicast;
-  }
-  return false;
+  const std::optional<IpLiteral> literal = parse_ip_literal(address);
+  return literal && is_unicast(*literal);
 }
 
 AnnouncementReason validate_announcement(const VehicleAnnouncement& a, TimeNs now,

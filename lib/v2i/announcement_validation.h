@@ -5,8 +5,8 @@
 #include <cstdint>
 
 #include "common/angles.h"
+#include "common/enum_counter.h"
 #include "common/time.h"
-#include "v2i/enum_counter.h"
 #include "v2i/messages.h"
 
 namespace rsu::v2i {

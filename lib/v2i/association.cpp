@@ -10,9 +10,9 @@
 namespace rsu::v2i {
 namespace {
 
-bool is_finite(const FittedCluster& c) {
-  return c.centre.allFinite() && std::isfinite(c.yaw) && std::isfinite(c.edge_along_m) &&
-         std::isfinite(c.edge_across_m) && c.edge_along_m >= 0.0 && c.edge_across_m >= 0.0;
+bool is_finite(const perception::RectangleFit& c) {
+  return c.ok() && c.center.allFinite() && std::isfinite(c.yaw) && std::isfinite(c.length0) &&
+         std::isfinite(c.length1) && c.length0 >= 0.0 && c.length1 >= 0.0;
 }
 
 bool is_finite(const VehicleHypothesis& v) {
@@ -32,7 +32,7 @@ struct UnseenSpread {
   double axis_yaw = 0.0;
 };
 
-UnseenSpread unseen_half_extent(const FittedCluster& c, const VehicleHypothesis& v,
+UnseenSpread unseen_half_extent(const perception::RectangleFit& c, const VehicleHypothesis& v,
                                 const AssociationConfig& cfg) {
   const BoxSize& size = v.size;
   const double slack_long = size.length_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
@@ -52,31 +52,31 @@ UnseenSpread unseen_half_extent(const FittedCluster& c, const VehicleHypothesis&
   Eigen::Vector2d spread = Eigen::Vector2d::Zero();
   bool any = false;
   // Pairing 1: along <-> length, across <-> width. Pairing 2: along <-> width, across <-> length.
-  if (allow_along_is_length && c.edge_along_m <= size.length_m + slack_long &&
-      c.edge_across_m <= size.width_m + slack_wide) {
-    spread = spread.cwiseMax(Eigen::Vector2d(std::max(0.0, size.length_m - c.edge_along_m),
-                                             std::max(0.0, size.width_m - c.edge_across_m)));
+  if (allow_along_is_length && c.length0 <= size.length_m + slack_long &&
+      c.length1 <= size.width_m + slack_wide) {
+    spread = spread.cwiseMax(
+        Eigen::Vector2d(std::max(0.0, size.length_m - c.length0), std::max(0.0, size.width_m - c.length1)));
     any = true;
   }
-  if (allow_along_is_width && c.edge_along_m <= size.width_m + slack_wide &&
-      c.edge_across_m <= size.length_m + slack_long) {
-    spread = spread.cwiseMax(Eigen::Vector2d(std::max(0.0, size.width_m - c.edge_along_m),
-                                             std::max(0.0, size.length_m - c.edge_across_m)));
+  if (allow_along_is_width && c.length0 <= size.width_m + slack_wide &&
+      c.length1 <= size.length_m + slack_long) {
+    spread = spread.cwiseMax(
+        Eigen::Vector2d(std::max(0.0, size.width_m - c.length0), std::max(0.0, size.length_m - c.length1)));
     any = true;
   }
   return {any ? Eigen::Vector2d(0.5 * spread) : Eigen::Vector2d::Zero(), axis_yaw};
 }
 
-bool size_consistent(const FittedCluster& c, const BoxSize& size, const AssociationConfig& cfg) {
-  const double longer = std::max(c.edge_along_m, c.edge_across_m);
-  const double shorter = std::min(c.edge_along_m, c.edge_across_m);
+bool size_consistent(const perception::RectangleFit& c, const BoxSize& size, const AssociationConfig& cfg) {
+  const double longer = std::max(c.length0, c.length1);
+  const double shorter = std::min(c.length0, c.length1);
   return longer <= size.length_m * (1.0 + cfg.size_relative_tolerance) + cfg.size_absolute_tolerance_m &&
          shorter <= size.width_m * (1.0 + cfg.size_relative_tolerance) + cfg.size_absolute_tolerance_m;
 }
 
 }  // namespace
 
-PairCheck check_pair(const FittedCluster& cluster, const VehicleHypothesis& vehicle,
+PairCheck check_pair(const perception::RectangleFit& cluster, const VehicleHypothesis& vehicle,
                      const AssociationConfig& config) {
   PairCheck out;
   if (!is_finite(cluster) || !is_finite(vehicle)) {
@@ -101,7 +101,7 @@ PairCheck check_pair(const FittedCluster& cluster, const VehicleHypothesis& vehi
   if (!(det > 0.0) || !(s(0, 0) > 0.0)) {
     return out;  // kInvalid: the vehicle's covariance is not positive semi-definite
   }
-  const Eigen::Vector2d d = cluster.centre - vehicle.centre;
+  const Eigen::Vector2d d = cluster.center - vehicle.centre;
   // d^T S^-1 d with the closed-form 2x2 inverse.
   out.distance_sq =
       (s(1, 1) * d.x() * d.x() - (s(0, 1) + s(1, 0)) * d.x() * d.y() + s(0, 0) * d.y() * d.y()) / det;
@@ -109,10 +109,16 @@ PairCheck check_pair(const FittedCluster& cluster, const VehicleHypothesis& vehi
   return out;
 }
 
-AssociationResult associate(std::span<const FittedCluster> clusters,
+AssociationResult associate(std::span<const perception::Detection> detections,
                             std::span<const VehicleHypothesis> vehicles, const AssociationConfig& config) {
+  // Only detections with a rectangle are offered: the assignment runs over them (columns in order).
+  std::vector<std::size_t> offered;
+  for (std::size_t d = 0; d < detections.size(); ++d) {
+    if (detections[d].fit.ok())
+      offered.push_back(d);
+  }
   AssociationResult result;
-  const auto n_clusters = static_cast<Eigen::Index>(clusters.size());
+  const auto n_clusters = static_cast<Eigen::Index>(offered.size());
   const auto n_vehicles = static_cast<Eigen::Index>(vehicles.size());
 
   // Rows: vehicles. Columns: clusters, then one private "no cluster" column per vehicle costing the
@@ -126,8 +132,8 @@ AssociationResult associate(std::span<const FittedCluster> clusters,
   for (Eigen::Index v = 0; v < n_vehicles; ++v) {
     cost(v, n_clusters + v) = unmatched_cost;
     for (Eigen::Index c = 0; c < n_clusters; ++c) {
-      const PairCheck check =
-          check_pair(clusters[static_cast<std::size_t>(c)], vehicles[static_cast<std::size_t>(v)], config);
+      const PairCheck check = check_pair(detections[offered[static_cast<std::size_t>(c)]].fit,
+                                         vehicles[static_cast<std::size_t>(v)], config);
       switch (check.verdict) {
         case PairGate::kPass:
           cost(v, c) = check.distance_sq;
@@ -147,7 +153,7 @@ AssociationResult associate(std::span<const FittedCluster> clusters,
     }
   }
 
-  std::vector<char> cluster_used(clusters.size(), 0);
+  std::vector<char> cluster_used(detections.size(), 0);
   std::vector<char> vehicle_used(vehicles.size(), 0);
   if (any_pass) {
     const std::optional<Assignment> assignment = solve_assignment(cost);
@@ -155,8 +161,9 @@ AssociationResult associate(std::span<const FittedCluster> clusters,
       for (Eigen::Index v = 0; v < n_vehicles; ++v) {
         const int c = assignment->row_to_col[static_cast<std::size_t>(v)];
         if (c >= 0 && c < n_clusters && cost(v, c) < forbidden) {
-          result.pairs.push_back({static_cast<std::size_t>(c), static_cast<std::size_t>(v), distance(v, c)});
-          cluster_used[static_cast<std::size_t>(c)] = 1;
+          const std::size_t d = offered[static_cast<std::size_t>(c)];
+          result.pairs.push_back({d, static_cast<std::size_t>(v), distance(v, c)});
+          cluster_used[d] = 1;
           vehicle_used[static_cast<std::size_t>(v)] = 1;
         }
       }
@@ -164,7 +171,7 @@ AssociationResult associate(std::span<const FittedCluster> clusters,
   }
   std::sort(result.pairs.begin(), result.pairs.end(),
             [](const AssociatedPair& a, const AssociatedPair& b) { return a.cluster < b.cluster; });
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
+  for (std::size_t c = 0; c < detections.size(); ++c) {
     if (!cluster_used[c]) {
       result.unmatched_clusters.push_back(c);
     }

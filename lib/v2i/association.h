@@ -11,19 +11,10 @@
 #include <span>
 #include <vector>
 
+#include "perception/detection.h"
 #include "v2i/vehicle_hypothesis.h"
 
 namespace rsu::v2i {
-
-// A rectangle fitted to one cluster of foreground points (L-shape fitting, DESIGN.md §1), before any
-// size correction. Its yaw may be off by 90 or 180 degrees; its edges shrink where faces are unseen.
-struct FittedCluster {
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // map frame, m
-  double yaw = 0.0;                                  // direction of edge_along, rad
-  double edge_along_m = 0.0;                         // edge length along yaw
-  double edge_across_m = 0.0;                        // edge length across yaw
-  std::size_t point_count = 0;
-};
 
 struct AssociationConfig {
   // Chi-square gate on the 2-dof centre distance: 9.21 is the 99 % quantile. Leaving a vehicle
@@ -57,12 +48,14 @@ struct PairCheck {
   double distance_sq = 0.0;  // Mahalanobis distance squared of the centres (when computed)
 };
 
-// The gate for one cluster-vehicle pair.
-PairCheck check_pair(const FittedCluster& cluster, const VehicleHypothesis& vehicle,
+// The gate for one detection-vehicle pair: the detection's fitted rectangle (L-shape fitting, before any
+// size correction: its yaw may be off by 90 or 180 degrees, its edges short where faces are unseen)
+// against the vehicle's predicted box. A rectangle that is not ok() or not finite is kInvalid.
+PairCheck check_pair(const perception::RectangleFit& cluster, const VehicleHypothesis& vehicle,
                      const AssociationConfig& config = {});
 
 struct AssociatedPair {
-  std::size_t cluster = 0;  // index into the clusters given
+  std::size_t cluster = 0;  // index into the detections given
   std::size_t vehicle = 0;  // index into the vehicles given
   double distance_sq = 0.0;
 };
@@ -77,7 +70,9 @@ struct AssociationResult {
   std::size_t pairs_invalid = 0;
 };
 
-AssociationResult associate(std::span<const FittedCluster> clusters,
+// Detections without a rectangle (too few points, degenerate) are not offered: they are listed in
+// unmatched_clusters and left to the caller (a fragment of a vehicle may still join it by position).
+AssociationResult associate(std::span<const perception::Detection> detections,
                             std::span<const VehicleHypothesis> vehicles,
                             const AssociationConfig& config = {});
 

@@ -19,8 +19,8 @@
 #include <cstdint>
 #include <span>
 
+#include "common/enum_counter.h"
 #include "common/time.h"
-#include "v2i/enum_counter.h"
 #include "v2i/security/ed25519.h"
 #include "v2i/security/replay_guard.h"
 #include "v2i/security/trust_list.h"

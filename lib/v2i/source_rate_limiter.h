@@ -18,6 +18,8 @@ struct RateLimitConfig {
   // Distinct sources tracked at once; a source whose bucket has refilled is forgotten (a fresh
   // bucket is identical), so this bounds only sources active within burst / rate seconds.
   std::size_t max_sources = 4096;
+
+  bool operator==(const RateLimitConfig&) const = default;
 };
 
 enum class RateDecision : std::uint8_t { kAllowed, kLimited, kTooManySources };

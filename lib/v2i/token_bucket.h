@@ -11,6 +11,8 @@ struct TokenBucketConfig {
   // radio link that delivers a backlog at once.
   double rate_per_s = 20.0;
   double burst = 10.0;
+
+  bool operator==(const TokenBucketConfig&) const = default;
 };
 
 class TokenBucket {

@@ -10,8 +10,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include "common/enum_counter.h"
 #include "common/time.h"
-#include "v2i/enum_counter.h"
 #include "v2i/messages.h"
 #include "v2i/source_rate_limiter.h"
 
@@ -27,6 +27,8 @@ struct VehicleRegistryConfig {
   RateLimitConfig rate_limit;
   // Announced dimensions differing by more than this count as a size change.
   double size_change_tolerance_m = 0.01;
+
+  bool operator==(const VehicleRegistryConfig&) const = default;
 };
 
 enum class UpsertOutcome : std::uint8_t {

@@ -11,8 +11,8 @@
 #include <map>
 #include <span>
 
+#include "common/enum_counter.h"
 #include "common/time.h"
-#include "v2i/enum_counter.h"
 #include "v2i/message_authenticator.h"
 #include "v2i/messages.h"
 #include "v2i/security/trust_list.h"
@@ -53,9 +53,9 @@ class CorrectionFilter {
   // RSU's generation time is compared with); on kAccepted `out` holds the correction.
   CorrectionVerdict check(std::span<const std::uint8_t> datagram, TimeNs now, v2i::Correction& out);
 
-  const v2i::EnumCounter<CorrectionVerdict>& counts() const { return counts_; }
+  const EnumCounter<CorrectionVerdict>& counts() const { return counts_; }
   // Every datagram's authentication verdict (accepted, or refused by reason).
-  const v2i::EnumCounter<v2i::AuthVerdict>& authentication_counts() const { return authenticator_.counts(); }
+  const EnumCounter<v2i::AuthVerdict>& authentication_counts() const { return authenticator_.counts(); }
   // Forgets silent RSUs' replay state (call now and then).
   void expire(TimeNs now) { authenticator_.expire(now); }
   // Accepted corrections whose sequence went backwards while the sweep time moved on: the RSU daemon
@@ -74,7 +74,7 @@ class CorrectionFilter {
 
   CorrectionFilterConfig config_;
   v2i::MessageAuthenticator authenticator_;
-  v2i::EnumCounter<CorrectionVerdict> counts_;
+  EnumCounter<CorrectionVerdict> counts_;
   std::map<std::uint64_t, RsuOrder> order_by_rsu_;
   std::uint64_t checks_ = 0;
   std::uint64_t sequence_restarts_ = 0;

@@ -24,13 +24,25 @@ VehicleHypothesis vehicle(std::uint64_t id, double x, double y, double yaw, doub
   return v;
 }
 
-FittedCluster full_view(double x, double y, double yaw) {
-  return {{x, y}, yaw, kCar.length_m, kCar.width_m, 400};
+// A detection whose fitted rectangle is centred at `centre`, `along` long in direction `yaw`, `across` wide.
+perception::Detection fitted(const Eigen::Vector2d& centre, double yaw, double along, double across) {
+  perception::Detection d;
+  d.fit.status = perception::FitStatus::ok;
+  d.fit.center = centre;
+  d.fit.yaw = yaw;
+  d.fit.length0 = along;
+  d.fit.length1 = across;
+  d.fit.corners.fill(Eigen::Vector2d::Zero());  // unused by association
+  return d;
+}
+
+perception::Detection full_view(double x, double y, double yaw) {
+  return fitted({x, y}, yaw, kCar.length_m, kCar.width_m);
 }
 
 TEST(Association, MatchesNearbyAndRejectsFarClusters) {
   const std::vector<VehicleHypothesis> vehicles = {vehicle(1, 0.0, 0.0, 0.0, 0.3)};
-  const std::vector<FittedCluster> clusters = {full_view(25.0, 3.0, 0.0), full_view(0.2, -0.1, 0.0)};
+  const std::vector<perception::Detection> clusters = {full_view(25.0, 3.0, 0.0), full_view(0.2, -0.1, 0.0)};
   const AssociationResult r = associate(clusters, vehicles);
   ASSERT_EQ(r.pairs.size(), 1U);
   EXPECT_EQ(r.pairs[0].cluster, 1U);
@@ -42,7 +54,7 @@ TEST(Association, MatchesNearbyAndRejectsFarClusters) {
   EXPECT_EQ(r.pairs_too_far, 1U);
 
   // Far alone: nothing matched, the vehicle is reported unmatched.
-  const std::vector<FittedCluster> far_only = {full_view(6.0, 0.0, 0.0)};
+  const std::vector<perception::Detection> far_only = {full_view(6.0, 0.0, 0.0)};
   const AssociationResult none = associate(far_only, vehicles);
   EXPECT_TRUE(none.pairs.empty());
   EXPECT_EQ(none.unmatched_vehicles, (std::vector<std::size_t>{0}));
@@ -51,12 +63,13 @@ TEST(Association, MatchesNearbyAndRejectsFarClusters) {
 
 TEST(Association, RejectsClustersTooBigForTheAnnouncedSize) {
   const std::vector<VehicleHypothesis> vehicles = {vehicle(1, 0.0, 0.0, 0.0, 0.3)};
-  const std::vector<FittedCluster> bus = {{{0.0, 0.0}, 0.0, 12.0, 2.5, 900}};
+  const std::vector<perception::Detection> bus = {fitted({0.0, 0.0}, 0.0, 12.0, 2.5)};
   const AssociationResult r = associate(bus, vehicles);
   EXPECT_TRUE(r.pairs.empty());
   EXPECT_EQ(r.pairs_size_mismatch, 1U);
   // The same box turned by 90 degrees (edges swapped) is still a car.
-  const std::vector<FittedCluster> turned = {{{0.1, 0.0}, kPi / 2.0, kCar.width_m, kCar.length_m, 400}};
+  const std::vector<perception::Detection> turned = {
+      fitted({0.1, 0.0}, kPi / 2.0, kCar.width_m, kCar.length_m)};
   EXPECT_EQ(associate(turned, vehicles).pairs.size(), 1U);
 }
 
@@ -64,7 +77,8 @@ TEST(Association, UnseenExtentWidensTheGateAlongTheMissingAxis) {
   // Seen from straight behind, only the rear face: the fitted box sits on the rear bumper, half a car
   // length behind the true centre.
   const std::vector<VehicleHypothesis> vehicles = {vehicle(1, 0.0, 0.0, 0.0, 0.2)};
-  const std::vector<FittedCluster> rear_face = {{{-kCar.length_m / 2.0, 0.0}, 0.0, 0.1, kCar.width_m, 60}};
+  const std::vector<perception::Detection> rear_face = {
+      fitted({-kCar.length_m / 2.0, 0.0}, 0.0, 0.1, kCar.width_m)};
   EXPECT_EQ(associate(rear_face, vehicles).pairs.size(), 1U);
   AssociationConfig strict;
   strict.inflate_for_unseen_extent = false;
@@ -76,14 +90,14 @@ TEST(Association, AKnownHeadingKeepsTheUnseenLengthAlongIt) {
   // announces its heading (yaw sigma 0.1 rad) and its centre within 0.5 m. Half the vehicle's LENGTH
   // may be unseen along its heading, but only half its width across it: the face is not this vehicle.
   VehicleHypothesis v = vehicle(1, 0.0, 0.0, 0.0, 0.5);
-  const std::vector<FittedCluster> next_lane_face = {{{0.3, -3.5}, 0.0, 2.0, 0.2, 80}};
+  const std::vector<perception::Detection> next_lane_face = {fitted({0.3, -3.5}, 0.0, 2.0, 0.2)};
   EXPECT_TRUE(associate(next_lane_face, std::vector<VehicleHypothesis>{v}).pairs.empty());
   // A vehicle whose heading is unknown could be turned by 90 deg: then its length may lie across.
   v.covariance(2, 2) = 1.0;
   EXPECT_EQ(associate(next_lane_face, std::vector<VehicleHypothesis>{v}).pairs.size(), 1U);
   // The same face turned by 90 deg in its representation (edges swapped) is judged the same way.
   v.covariance(2, 2) = 0.01;
-  const std::vector<FittedCluster> turned = {{{0.3, -3.5}, kPi / 2.0, 0.2, 2.0, 80}};
+  const std::vector<perception::Detection> turned = {fitted({0.3, -3.5}, kPi / 2.0, 0.2, 2.0)};
   EXPECT_TRUE(associate(turned, std::vector<VehicleHypothesis>{v}).pairs.empty());
 }
 
@@ -92,9 +106,9 @@ TEST(Association, GlobalAssignmentBeatsNearestNeighbour) {
   // is 3.5 m away and localises well. Vehicle 0's nearest cluster is the neighbour's.
   const std::vector<VehicleHypothesis> vehicles = {vehicle(1, 0.0, 1.9, 0.0, 1.0),
                                                    vehicle(2, 0.0, 3.5, 0.0, 0.2)};
-  const std::vector<FittedCluster> clusters = {full_view(0.0, 0.0, 0.0), full_view(0.0, 3.5, 0.0)};
-  ASSERT_LT((clusters[1].centre - vehicles[0].centre).norm(),
-            (clusters[0].centre - vehicles[0].centre).norm());
+  const std::vector<perception::Detection> clusters = {full_view(0.0, 0.0, 0.0), full_view(0.0, 3.5, 0.0)};
+  ASSERT_LT((clusters[1].fit.center - vehicles[0].centre).norm(),
+            (clusters[0].fit.center - vehicles[0].centre).norm());
   const AssociationResult r = associate(clusters, vehicles);
   ASSERT_EQ(r.pairs.size(), 2U);
   EXPECT_EQ(r.pairs[0].cluster, 0U);
@@ -138,15 +152,15 @@ TEST(Association, NeverSwapsSideBySideVehicles) {
 
     const auto cluster_at = [&](const Eigen::Vector2d& c, std::uint64_t salt) {
       const auto fit_noise = standard_normal_pair(2024, 10 + salt, trial);
-      FittedCluster f = full_view(c.x() + 0.1 * fit_noise.a, c.y() + 0.1 * fit_noise.b, heading);
+      perception::Detection f = full_view(c.x() + 0.1 * fit_noise.a, c.y() + 0.1 * fit_noise.b, heading);
       if (mix64(trial * 31 + salt) % 2 == 1) {  // off by 90 degrees: same rectangle, edges swapped
-        f.yaw = wrap_angle(heading + kPi / 2.0);
-        std::swap(f.edge_along_m, f.edge_across_m);
+        f.fit.yaw = wrap_angle(heading + kPi / 2.0);
+        std::swap(f.fit.length0, f.fit.length1);
       }
       return f;
     };
-    std::vector<FittedCluster> clusters = {cluster_at(truth_poor, 0), cluster_at(truth_good, 1),
-                                           cluster_at(truth_other, 2)};
+    std::vector<perception::Detection> clusters = {cluster_at(truth_poor, 0), cluster_at(truth_good, 1),
+                                                   cluster_at(truth_other, 2)};
     std::vector<std::size_t> truth_cluster_of_vehicle = {0, 1};
     if (mix64(trial) % 2 == 1) {  // present the clusters in another order
       std::swap(clusters[0], clusters[1]);
@@ -161,8 +175,8 @@ TEST(Association, NeverSwapsSideBySideVehicles) {
     for (std::size_t v = 0; v < 2; ++v) {
       std::size_t nearest = 0;
       for (std::size_t c = 1; c < clusters.size(); ++c) {
-        if ((clusters[c].centre - vehicles[v].centre).norm() <
-            (clusters[nearest].centre - vehicles[v].centre).norm()) {
+        if ((clusters[c].fit.center - vehicles[v].centre).norm() <
+            (clusters[nearest].fit.center - vehicles[v].centre).norm()) {
           nearest = c;
         }
       }
@@ -189,8 +203,8 @@ TEST(Association, BadInputsAreSkippedNotFatal) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<VehicleHypothesis> vehicles = {vehicle(1, 0.0, 0.0, 0.0, 0.3), vehicle(2, 10.0, 0.0, 0.0, 0.3)};
   vehicles[1].covariance(0, 0) = -5.0;  // not a covariance
-  std::vector<FittedCluster> clusters = {full_view(0.0, 0.0, 0.0), full_view(nan, 0.0, 0.0),
-                                         full_view(10.0, 0.0, 0.0)};
+  std::vector<perception::Detection> clusters = {full_view(0.0, 0.0, 0.0), full_view(nan, 0.0, 0.0),
+                                                 full_view(10.0, 0.0, 0.0)};
   const AssociationResult r = associate(clusters, vehicles);
   ASSERT_EQ(r.pairs.size(), 1U);
   EXPECT_EQ(r.pairs[0].cluster, 0U);

@@ -1,11 +1,12 @@
-// Counts events per value of a reason/outcome enum whose last enumerator is kCount.
+// Counts events per value of a reason/outcome enum whose last enumerator is kCount (list them with
+// CounterList, counter_list.h).
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 
-namespace rsu::v2i {
+namespace rsu {
 
 template <typename Enum>
 class EnumCounter {
@@ -34,4 +35,4 @@ class EnumCounter {
   std::array<std::uint64_t, kSize> counts_{};
 };
 
-}  // namespace rsu::v2i
+}  // namespace rsu

@@ -1,0 +1,34 @@
+// One detected object: a cluster of foreground points and the rectangle fitted to it (L-shape fitting,
+// paper Sec. 3.1), before anything knows which vehicle it is. The one type every step after clustering
+// shares: the per-frame pipeline returns it, the RSU's sweep gathers it, association gates its
+// rectangle against the announced vehicles (tracking).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/time.h"
+#include "lidar/point.h"
+#include "perception/l_shape_fitting.h"
+#include "perception/rectangle_fit.h"
+
+namespace rsu::perception {
+
+struct Detection {
+  std::vector<Eigen::Vector3d> points;  // map frame
+  TimeNs sweep_time_ns = 0;             // mean firing time of its points: when the LiDAR swept it
+  RectangleFit fit;                     // its status says whether a rectangle could be fitted
+};
+
+// The detection made of `points` (map frame, at least one): their mean firing time and the rectangle
+// fitted to their footprint as seen from the LiDAR at `lidar_xy`.
+Detection detect(std::span<const LidarPoint> points, const Eigen::Vector2d& lidar_xy,
+                 const LShapeFitConfig& config);
+// The same for the points `indices` of `frame`.
+Detection detect(std::span<const LidarPoint> frame, std::span<const std::uint32_t> indices,
+                 const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& config);
+
+}  // namespace rsu::perception

@@ -1,0 +1,68 @@
+// A released vehicle's fix (vehicle_gatherer.h): from which of its gathered points, with its announced
+// size and heading, through perception::fix_vehicle with rsud's configuration, and the checks a fix
+// must pass before a correction may go out.
+#pragma once
+
+#include <cstddef>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "common/time.h"
+#include "perception/vehicle_fix.h"
+#include "rsu/lidar_mount.h"
+#include "rsu/lidar_stats.h"
+#include "rsu/rsu_core_config.h"
+#include "rsu/vehicle_gatherer.h"
+#include "v2i/messages.h"
+
+namespace rsu::core {
+
+enum class GatheredFixOutcome {
+  fixed,
+  doubtful_cluster,     // a near vehicle held for a doubtful assigned cluster got none of its own
+  no_assigned_cluster,  // the gathered union is not one vehicle, and no part was assigned to it
+  fit_failed,           // no rectangle could be fitted
+  out_of_coverage,      // beyond RsuCoreConfig::coverage_radius_m
+  inconsistent,         // the known-size box contradicts the points, or they do not place it
+  correction_failed,    // the size correction refused it for another reason
+};
+
+struct GatheredFix {
+  GatheredFixOutcome outcome = GatheredFixOutcome::fit_failed;
+  perception::VehicleFix fix;
+  TimeNs sweep_time = 0;                // mean firing time of the points it was fixed from
+  std::size_t fragments_merged = 0;     // extra parts fixed with the assigned one
+  std::size_t fragments_unmatched = 0;  // parts left out (someone else's)
+
+  bool ok() const { return outcome == GatheredFixOutcome::fixed; }
+};
+
+// Adds what became of one released vehicle to the LiDAR counters.
+void count(const GatheredFix& fix, LidarStats& stats);
+
+class GatheredVehicleFixer {
+ public:
+  GatheredVehicleFixer(const RsuCoreConfig& config, const LidarMount& mount);
+
+  // The fix of `held` with what the vehicle announced (`a`): from the whole gathered union if it is
+  // one vehicle of the announced size; otherwise from the detection the assignment gave it alone.
+  GatheredFix fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a) const;
+
+ private:
+  // The vehicle's fix from its points swept at `sweep_time`, with its announced size and its announced
+  // heading carried to that time as the yaw prior.
+  perception::VehicleFix fix_announced(std::span<const Eigen::Vector3d> points,
+                                       const v2i::VehicleAnnouncement& a, TimeNs sweep_time) const;
+  // Whether the fitted rectangle passes the vehicle's association gate at `sweep_time`.
+  bool fits_vehicle(const perception::RectangleFit& fit, const v2i::VehicleAnnouncement& a,
+                    TimeNs sweep_time) const;
+
+  perception::VehicleFixConfig fix_config_;
+  v2i::HypothesisConfig hypothesis_;
+  v2i::AssociationConfig association_;
+  Eigen::Vector3d lidar_position_;
+  double coverage_radius_m_;
+};
+
+}  // namespace rsu::core
