@@ -16,9 +16,9 @@
 #include <map>
 #include <utility>
 
+#include "common/enum_counter.h"
 #include "common/time.h"
 #include "fusion/vehicle_ekf.h"
-#include "v2i/enum_counter.h"
 #include "v2i/messages.h"
 #include "vehicle/integrity_config.h"
 
@@ -91,15 +91,15 @@ struct SourceRecord {
   std::uint64_t last_heard = 0;  // check() count, for least-recently-heard eviction
 
   std::uint64_t fixes = 0;
-  v2i::EnumCounter<FixVerdict> verdicts;
+  EnumCounter<FixVerdict> verdicts;
   std::uint64_t readmissions = 0;
   TimeNs first_exclusion_latency = -1;  // first fix of the excursion -> exclusion, -1: never excluded
   TimeNs max_exclusion_latency = -1;
 };
 
 struct IntegrityTotals {
-  v2i::EnumCounter<FixVerdict> verdicts;
-  v2i::EnumCounter<ExclusionReason> exclusions;
+  EnumCounter<FixVerdict> verdicts;
+  EnumCounter<ExclusionReason> exclusions;
   std::uint64_t readmissions = 0;
   std::uint64_t annulled = 0;  // exclusions annulled: decided against an own estimate found failing
   std::uint64_t barred = 0;

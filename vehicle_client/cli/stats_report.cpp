@@ -15,7 +15,7 @@ double ms(TimeNs t) {
 }
 
 template <typename Enum, typename Write>
-void for_each_count(const v2i::EnumCounter<Enum>& counts, std::size_t first, Write write) {
+void for_each_count(const EnumCounter<Enum>& counts, std::size_t first, Write write) {
   for (std::size_t i = first; i < static_cast<std::size_t>(Enum::kCount); ++i) {
     const auto e = static_cast<Enum>(i);
     if (counts.count(e) > 0) {
