@@ -6,6 +6,7 @@
 
 #include "common/angles.h"
 #include "daemon/dds_config.h"
+#include "io/velodyne_calibration.h"
 #include "io/yaml_field.h"
 #include "lidar/lidar_decoder.h"
 #include "lidar/ouster/ouster_lidar_decoder.h"
@@ -23,6 +24,14 @@ std::uint16_t port_of(const YamlField& f) {
   const double v = f.number();
   if (v < 1 || v > 65535 || v != std::floor(v))
     f.fail("must be a port number within [1, 65535]");
+  return static_cast<std::uint16_t>(v);
+}
+
+// A port, or 0 for "the sensor's own" / "none" (lidar.input.udp and pcap).
+std::uint16_t port_or_zero_of(const YamlField& f) {
+  const double v = f.number();
+  if (v < 0 || v > 65535 || v != std::floor(v))
+    f.fail("must be a port number within [1, 65535], or 0");
   return static_cast<std::uint16_t>(v);
 }
 
@@ -59,27 +68,64 @@ Pose3 read_mount(const YamlField& f) {
   return p;
 }
 
+bool bool_of(const YamlField& f) {
+  const std::string v = f.text();
+  if (v != "true" && v != "false")
+    f.fail("expected true or false");
+  return v == "true";
+}
+
+UdpInput read_udp_input(const YamlField& u) {
+  u.expect_map({"bind_address", "port", "auxiliary_port", "reorder_packets"});
+  UdpInput in;
+  in.port = 0;  // the sensor's data port unless set: read_lidar() (Velodyne) or rsud (the metadata's)
+  if (u.has("bind_address"))
+    in.bind_address = address_of(u.child("bind_address"));
+  if (u.has("port"))
+    in.port = port_or_zero_of(u.child("port"));
+  if (u.has("auxiliary_port"))
+    in.auxiliary_port = port_or_zero_of(u.child("auxiliary_port"));
+  if (u.has("reorder_packets"))
+    in.reorder_packets = unsigned_of(u.child("reorder_packets"), 64);
+  return in;
+}
+
+PcapInput read_pcap_input(const YamlField& p, const std::filesystem::path& base) {
+  p.expect_map({"file", "pace", "loop", "port", "auxiliary_port"});
+  PcapInput in;
+  in.file = path_of(p.required("file"), base);
+  if (p.has("pace")) {
+    const std::string v = p.child("pace").text();
+    if (v == "realtime")
+      in.pace = PcapInput::Pace::kRealtime;
+    else if (v == "max")
+      in.pace = PcapInput::Pace::kMax;
+    else
+      p.child("pace").fail("expected realtime or max, got \"" + v + "\"");
+  }
+  if (p.has("loop"))
+    in.loop = bool_of(p.child("loop"));
+  if (p.has("port"))
+    in.port = port_or_zero_of(p.child("port"));
+  if (p.has("auxiliary_port"))
+    in.auxiliary_port = port_or_zero_of(p.child("auxiliary_port"));
+  return in;
+}
+
 LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
-  f.expect_map({"udp", "velodyne_udp", "pcd", "simulator", "dds_pointcloud2"});
-  const int kinds = int{f.has("udp")} + int{f.has("velodyne_udp")} + int{f.has("pcd")} +
+  f.expect_map({"udp", "velodyne_udp", "pcap", "pcd", "simulator", "dds_pointcloud2"});
+  const int kinds = int{f.has("udp")} + int{f.has("velodyne_udp")} + int{f.has("pcap")} + int{f.has("pcd")} +
                     int{f.has("simulator")} + int{f.has("dds_pointcloud2")};
   if (kinds != 1)
-    f.fail("exactly one of udp (velodyne_udp), pcd, simulator, dds_pointcloud2 is required");
+    f.fail("exactly one of udp (velodyne_udp), pcap, pcd, simulator, dds_pointcloud2 is required");
   if (f.has("dds_pointcloud2"))
     return read_dds_pointcloud2_input(f.child("dds_pointcloud2"));
-  if (f.has("udp") || f.has("velodyne_udp")) {  // velodyne_udp: the name before other sensors
-    const YamlField u = f.child(f.has("udp") ? "udp" : "velodyne_udp");
-    u.expect_map({"bind_address", "port", "reorder_packets"});
-    VelodyneUdpInput in;
-    in.port = 0;  // the sensor's data port, once its decoder is made (read_lidar)
-    if (u.has("bind_address"))
-      in.bind_address = address_of(u.child("bind_address"));
-    if (u.has("port"))
-      in.port = port_of(u.child("port"));
-    if (u.has("reorder_packets"))
-      in.reorder_packets = unsigned_of(u.child("reorder_packets"), 64);
-    return in;
-  }
+  if (f.has("udp"))
+    return read_udp_input(f.child("udp"));
+  if (f.has("velodyne_udp"))
+    return read_udp_input(f.child("velodyne_udp"));
+  if (f.has("pcap"))
+    return read_pcap_input(f.child("pcap"), base);
   if (f.has("pcd")) {
     const YamlField p = f.child("pcd");
     p.expect_map({"files", "rate_hz"});
@@ -99,7 +145,8 @@ LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
 }
 
 void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
-  f.expect_map({"model", "metadata", "mount", "input", "max_packet_age_ms"});
+  f.expect_map({"model", "calibration", "metadata", "returns", "scan_phase_deg", "time_source",
+                "clock_tolerance_ms", "mount", "input", "max_packet_age_ms"});
   const YamlField model = f.required("model");
   c.core.sensor_model = model.text();
   if (!is_decodable_model(c.core.sensor_model))
@@ -116,9 +163,42 @@ void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path
     model.fail(
         "an Ouster needs lidar.metadata: the JSON the sensor (or the Ouster SDK, next to a recording) wrote");
   }
+  // A Velodyne unit's calibration file; read (and applied) by load_lidar_files().
+  if (f.has("calibration")) {
+    if (!sensor_model_by_name(c.core.sensor_model))
+      f.child("calibration").fail("a Velodyne calibration file; the " + c.core.sensor_model + " takes none");
+    c.sensor_files.calibration = path_of(f.child("calibration"), base);
+  }
+  LidarDecoderOptions& sensor = c.core.sensor_options;
+  if (f.has("returns")) {
+    const YamlField r = f.child("returns");
+    const auto selection = return_selection_by_name(r.text());
+    if (!selection)
+      r.fail("expected both, strongest or last, got \"" + r.text() + "\"");
+    sensor.returns = *selection;
+  }
+  sensor.rotation_start_azimuth_deg = f.number_or("scan_phase_deg", 0.0);
+  if (sensor.rotation_start_azimuth_deg < 0 || sensor.rotation_start_azimuth_deg >= 360)
+    f.child("scan_phase_deg").fail("must be within [0, 360) deg");
+  if (f.has("time_source")) {
+    const YamlField t = f.child("time_source");
+    const std::string v = t.text();
+    if (v == "sensor")
+      c.core.time_source = core::TimeSource::kSensor;
+    else if (v == "host_receive")
+      c.core.time_source = core::TimeSource::kHostReceive;
+    else
+      t.fail("expected sensor or host_receive, got \"" + v + "\"");
+  }
+  if (f.has("clock_tolerance_ms")) {
+    const double ms = f.positive_or("clock_tolerance_ms", 100.0);
+    if (ms > 3600e3)
+      f.child("clock_tolerance_ms").fail("must be <= 3600000 ms");
+    c.core.clock_tolerance = static_cast<TimeNs>(ms * 1e6);
+  }
   c.core.mount = read_mount(f.required("mount"));
   c.input = read_input(f.required("input"), base);
-  if (auto* u = std::get_if<VelodyneUdpInput>(&c.input)) {
+  if (auto* u = std::get_if<UdpInput>(&c.input)) {
     c.core.packet_order.depth = u->reorder_packets;
     if (u->port == 0 && !ouster)
       u->port = kVelodyneDataPort;  // an Ouster's comes from its metadata (rsud resolves it)
@@ -383,12 +463,21 @@ void load_security(DaemonConfig& c) {
 
 void load_lidar_files(DaemonConfig& c) {
   LidarDecoderOptions& o = c.core.sensor_options;
-  if (o.metadata_source.empty())
-    return;
-  try {
-    o.metadata_text = io::read_text_file(o.metadata_source);
-  } catch (const io::YamlError& e) {
-    throw ConfigError(c.source + ": lidar.metadata: " + e.what());
+  if (!o.metadata_source.empty()) {
+    try {
+      o.metadata_text = io::read_text_file(o.metadata_source);
+    } catch (const io::YamlError& e) {
+      throw ConfigError(c.source + ": lidar.metadata: " + e.what());
+    }
+  }
+  if (!c.sensor_files.calibration.empty()) {
+    try {
+      o.calibrated_model = io::apply_velodyne_calibration(*sensor_model_by_name(c.core.sensor_model),
+                                                          io::read_text_file(c.sensor_files.calibration),
+                                                          c.sensor_files.calibration);
+    } catch (const io::YamlError& e) {
+      throw ConfigError(e.what());  // "<file>:<line>: <field>: ..."
+    }
   }
 }
 
@@ -412,11 +501,24 @@ std::string summarize(const DaemonConfig& c) {
   out << "lidar " << c.core.sensor_model << " at (" << m.x << ", " << m.y << ", " << m.z << ") m, yaw "
       << rad_to_deg(m.yaw) << " deg, pitch " << rad_to_deg(m.pitch) << " deg, roll " << rad_to_deg(m.roll)
       << " deg\n";
-  if (!c.core.sensor_options.metadata_source.empty())
-    out << "lidar metadata " << c.core.sensor_options.metadata_source << "\n";
-  if (const auto* u = std::get_if<VelodyneUdpInput>(&c.input)) {
+  out << "lidar "
+      << (c.sensor_files.calibration.empty() ? "built-in tables"
+                                             : "calibration " + c.sensor_files.calibration)
+      << (c.core.sensor_options.metadata_source.empty() ? ""
+                                                         : ", metadata " + c.core.sensor_options.metadata_source)
+      << ", returns " << to_string(c.core.sensor_options.returns) << ", scan phase "
+      << c.core.sensor_options.rotation_start_azimuth_deg << " deg, time source "
+      << (c.core.time_source == core::TimeSource::kSensor ? "sensor" : "host_receive") << " (clock tolerance "
+      << to_seconds(c.core.clock_tolerance) * 1e3 << " ms)\n";
+  if (const auto* u = std::get_if<UdpInput>(&c.input)) {
     out << "input udp " << u->bind_address << ":"
-        << (u->port != 0 ? std::to_string(u->port) : std::string("the metadata's udp_port_lidar")) << "\n";
+        << (u->port != 0 ? std::to_string(u->port) : std::string("the metadata's udp_port_lidar"))
+        << (u->auxiliary_port != 0 ? ", auxiliary port " + std::to_string(u->auxiliary_port) : std::string())
+        << "\n";
+  } else if (const auto* c2 = std::get_if<PcapInput>(&c.input)) {
+    out << "input pcap " << c2->file << " at "
+        << (c2->pace == PcapInput::Pace::kMax ? "maximum pace" : "recorded pace")
+        << (c2->loop ? ", looped" : "") << "\n";
   } else if (const auto* p = std::get_if<PcdInput>(&c.input)) {
     out << "input pcd " << p->files.size() << " file(s) at " << p->rate_hz << " Hz\n";
   } else if (const auto* s = std::get_if<SimulatorInput>(&c.input)) {

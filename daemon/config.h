@@ -18,14 +18,29 @@
 
 namespace rsu::daemon {
 
-// The sensor's UDP packets (lidar.input.udp; velodyne_udp is its older name), any decoded sensor.
-struct VelodyneUdpInput {
+// The LiDAR's UDP packets as they arrive (lidar.input.udp; velodyne_udp is the same, its older name).
+struct UdpInput {
   std::string bind_address = "0.0.0.0";
-  // Velodyne: 2368 unless set (DESIGN.md §2); Ouster: 0 unless set, the metadata's udp_port_lidar.
+  // Velodyne: 2368 unless set (DESIGN.md §2); Ouster: 0 unless set, the metadata's udp_port_lidar (0:
+  // the decoder's default data port).
   std::uint16_t port = 2368;
+  // A second port for the sensor's packets without points (Velodyne position packets, 8308: their
+  // $GPRMC gives the data packets' hour); 0: not listened to.
+  std::uint16_t auxiliary_port = 0;
   // Packets held to put reordered ones back in time order (lidar/packet_order.h); each adds one
   // packet period of latency (VLP-32C 0.66 ms). 0: a late packet is dropped and counted.
   std::size_t reorder_packets = 0;
+};
+
+// A recorded capture (classic pcap: Ethernet, 802.1Q or Linux cooked link type) replayed as if it
+// arrived now: the run's clock is the capture's (each datagram's record time), so a replay is the
+// same every time. The datagrams to the sensor's ports are decoded; everything else is counted.
+struct PcapInput {
+  std::string file;
+  enum class Pace { kRealtime, kMax } pace = Pace::kRealtime;
+  bool loop = false;                 // at the end, start again (the clock moves on by whole hours)
+  std::uint16_t port = 0;            // 0: the sensor's data port
+  std::uint16_t auxiliary_port = 0;  // 0: the sensor's (Velodyne position packets: 8308)
 };
 
 // Whole frames read from PCD files (sensor frame, as `rsu-sim simulate` writes them), replayed in a
@@ -54,7 +69,13 @@ struct DdsPointCloud2Input {
   std::string frame_id;
 };
 
-using LidarInput = std::variant<VelodyneUdpInput, PcdInput, SimulatorInput, DdsPointCloud2Input>;
+using LidarInput = std::variant<UdpInput, PcdInput, SimulatorInput, DdsPointCloud2Input, PcapInput>;
+
+// The Velodyne calibration file (lidar.calibration), read by load_lidar_files() into
+// core.sensor_options.calibrated_model (an Ouster's metadata path is core.sensor_options.metadata_source).
+struct SensorFiles {
+  std::string calibration;  // io/velodyne_calibration.h
+};
 
 // The announcements the RSUs of a road share over the bus (daemon/peer_bus.h; README, "Several RSUs on
 // one bus"). The per-origin-RSU rate limit is the core's (core::PeerConfig). Needs dds.enabled.
@@ -112,6 +133,7 @@ struct DaemonConfig {
   std::string source;  // the file it was read from
   core::RsuCoreConfig core;
   SecurityFiles security;
+  SensorFiles sensor_files;
   LidarInput input;
   std::vector<std::string> background_pcd_files;  // when set: the background, instead of learning
   std::string v2i_listen_address = "0.0.0.0";
@@ -137,8 +159,10 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
 // insecure mode nothing is read). Throws ConfigError naming the file (and line) when one is missing,
 // unreadable or malformed.
 void load_security(DaemonConfig& config);
-// Reads the LiDAR's own files named in the configuration (lidar.metadata) into config.core.sensor_options
-// (the decoder checks their content when RsuCore makes it). Throws ConfigError naming a missing file.
+// Reads the LiDAR's own files named in the configuration (lidar.metadata, lidar.calibration) into
+// config.core.sensor_options (the decoder checks the metadata's content when RsuCore makes it; the
+// calibration is applied here). Throws ConfigError naming the file (and line) when one is missing or
+// malformed.
 void load_lidar_files(DaemonConfig& config);
 // parse_config + load_lidar_files + load_security.
 DaemonConfig load_config(const std::string& path);

@@ -15,6 +15,7 @@
 #include "daemon/config.h"
 #include "daemon/logging.h"
 #include "daemon/rsu_daemon.h"
+#include "io/capture_file.h"
 #include "rsu/rsu_core.h"
 #include "sim/scenario.h"
 
@@ -46,8 +47,14 @@ void check_config(const rsu::daemon::DaemonConfig& config) {
   };
   for (const auto& f : config.background_pcd_files)
     check_file(f, "background.pcd_files");
-  if (const auto* u = std::get_if<rsu::daemon::VelodyneUdpInput>(&config.input)) {
+  if (const auto* u = std::get_if<rsu::daemon::UdpInput>(&config.input)) {
     check_address(u->bind_address, "lidar.input.udp.bind_address");
+  } else if (const auto* c = std::get_if<rsu::daemon::PcapInput>(&config.input)) {
+    try {
+      const rsu::io::CaptureFile capture(c->file);  // a missing, pcapng or foreign file is named
+    } catch (const rsu::io::CaptureError& e) {
+      throw std::runtime_error(config.source + ": lidar.input.pcap: " + e.what());
+    }
   } else if (const auto* p = std::get_if<rsu::daemon::PcdInput>(&config.input)) {
     for (const auto& f : p->files)
       check_file(f, "lidar.input.pcd.files");

@@ -57,6 +57,7 @@ RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, std::string conf
       bad_input_(config_.logging.bad_input_log_first, seconds(config_.logging.summary_interval_s)),
       v2i_socket_(io),
       lidar_socket_(io),
+      auxiliary_socket_(io),
       signals_(io, SIGHUP, SIGTERM, SIGINT),
       housekeeping_timer_(io),
       watchdog_timer_(io),
@@ -69,6 +70,10 @@ RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, std::string conf
                         : sensor_model_by_name(config_.core.sensor_model)) {}
 
 RsuDaemon::~RsuDaemon() = default;
+
+TimeNs RsuDaemon::clock_now() const {
+  return replaying_ ? replay_now_ : now_ns();
+}
 
 void RsuDaemon::start() {
   const udp::endpoint v2i(parse_address(config_.v2i_listen_address, "v2i.listen_address"), config_.v2i_port);
@@ -132,16 +137,26 @@ void RsuDaemon::every(asio::steady_timer& timer, steady::duration period, void (
 // ---- LiDAR input ----------------------------------------------------------------------------------
 
 void RsuDaemon::start_input() {
-  if (const auto* u = std::get_if<VelodyneUdpInput>(&config_.input)) {
-    const std::uint16_t port = u->port != 0 ? u->port : core_.lidar_decoder().default_ports().data;
-    const udp::endpoint endpoint(parse_address(u->bind_address, "lidar.input.udp.bind_address"), port);
+  if (const auto* u = std::get_if<UdpInput>(&config_.input)) {
+    const SensorPorts ports = core_.lidar_decoder().default_ports();
+    const auto address = parse_address(u->bind_address, "lidar.input.udp.bind_address");
+    const udp::endpoint endpoint(address, u->port != 0 ? u->port : ports.data);
     bind_udp(lidar_socket_, endpoint, "LiDAR");
     boost::system::error_code ignored;
     // ~1500 packets/s (VLP-32C): 4 MB holds over 2 s of them should the loop ever stall.
     lidar_socket_.set_option(asio::socket_base::receive_buffer_size(4 << 20), ignored);
-    spdlog::info("receiving {} packets on {}:{}", core_.lidar_decoder().model_name(),
-                 endpoint.address().to_string(), endpoint.port());
-    receive_lidar();
+    spdlog::info("receiving {} packets on {}:{}", core_.lidar_decoder().model_name(), endpoint.address().to_string(),
+                 endpoint.port());
+    receive_lidar(lidar_socket_, lidar_buffer_, lidar_sender_);
+    if (u->auxiliary_port != 0) {
+      const udp::endpoint auxiliary(address, u->auxiliary_port);
+      bind_udp(auxiliary_socket_, auxiliary, "LiDAR auxiliary (position packets)");
+      spdlog::info("receiving its position packets on {}:{}", auxiliary.address().to_string(),
+                   auxiliary.port());
+      receive_lidar(auxiliary_socket_, auxiliary_buffer_, auxiliary_sender_);
+    }
+  } else if (std::holds_alternative<PcapInput>(config_.input)) {
+    start_capture();
   } else if (const auto* p = std::get_if<PcdInput>(&config_.input)) {
     for (const std::string& file : p->files) {
       try {
@@ -158,8 +173,8 @@ void RsuDaemon::start_input() {
         [this](std::span<const LidarPoint> points, bool whole) {
           if (stopping_)
             return;
-          handle_lidar_result(whole ? core_.on_lidar_frame(points, now_ns())
-                                    : core_.on_lidar_points(points, now_ns()));
+          handle_lidar_result(whole ? core_.on_lidar_frame(points, clock_now())
+                                    : core_.on_lidar_points(points, clock_now()));
         });
   } else {
     start_simulator();
@@ -187,29 +202,157 @@ void RsuDaemon::start_dds() {
 }
 
 void RsuDaemon::on_object_list() {
-  dds_->publish_object_list(now_ns());
+  dds_->publish_object_list(clock_now());
 }
 
-void RsuDaemon::receive_lidar() {
-  lidar_socket_.async_receive_from(
-      asio::buffer(lidar_buffer_), lidar_sender_,
-      [this](const boost::system::error_code& ec, std::size_t bytes) {
+void RsuDaemon::receive_lidar(udp::socket& socket, std::array<std::uint8_t, 65536>& buffer,
+                              udp::endpoint& sender) {
+  socket.async_receive_from(
+      asio::buffer(buffer), sender,
+      [this, &socket, &buffer, &sender](const boost::system::error_code& ec, std::size_t bytes) {
         if (ec == asio::error::operation_aborted || stopping_)
           return;
         if (!ec) {
-          const auto result =
-              core_.on_lidar_packet(std::span<const std::uint8_t>(lidar_buffer_.data(), bytes), now_ns());
-          if (result.packet.kind == PacketKind::refused) {
-            ++lidar_packets_rejected_;
-            bad_input_.report("lidar_packet:" + std::string(result.packet.reason),
-                              std::to_string(bytes) + " bytes from " + lidar_sender_.address().to_string());
-          }
-          handle_lidar_result(result);
+          on_lidar_payload(std::span<const std::uint8_t>(buffer.data(), bytes), clock_now(),
+                           sender.address().to_string());
         } else {
-          spdlog::debug("Velodyne socket: {}", ec.message());
+          spdlog::debug("LiDAR socket: {}", ec.message());
         }
-        receive_lidar();
+        receive_lidar(socket, buffer, sender);
       });
+}
+
+void RsuDaemon::on_lidar_payload(std::span<const std::uint8_t> payload, TimeNs arrival,
+                                 const std::string& from) {
+  const auto result = core_.on_lidar_packet(payload, arrival);
+  if (result.packet.kind == PacketKind::refused) {
+    ++lidar_packets_rejected_;
+    bad_input_.report("lidar_packet:" + std::string(result.packet.reason),
+                      std::to_string(payload.size()) + " bytes from " + from);
+  }
+  handle_lidar_result(result);
+}
+
+// ---- capture replay -------------------------------------------------------------------------------
+
+void RsuDaemon::start_capture() {
+  const auto& input = std::get<PcapInput>(config_.input);
+  try {
+    capture_ = std::make_unique<io::CaptureFile>(input.file);
+  } catch (const io::CaptureError& e) {
+    throw std::runtime_error(std::string("lidar.input.pcap: ") + e.what());
+  }
+  const SensorPorts ports = core_.lidar_decoder().default_ports();
+  capture_data_port_ = input.port != 0 ? input.port : ports.data;
+  capture_auxiliary_port_ = input.auxiliary_port != 0 ? input.auxiliary_port : ports.auxiliary;
+  if (!next_capture_datagram()) {
+    throw std::runtime_error("lidar.input.pcap: " + input.file + ": no UDP datagram in the capture");
+  }
+  replaying_ = true;
+  replay_now_ = capture_next_->time_ns;
+  capture_first_ns_ = capture_next_->time_ns;
+  clock_started_ = replay_now_;
+  next_replay_housekeeping_ = replay_now_;
+  pass_started_ = steady::now();
+  spdlog::info(
+      "replaying {} at {} pace; the run's clock is the capture's; {} datagrams to ports {} and {} go to the "
+      "{} decoder",
+      input.file, input.pace == PcapInput::Pace::kMax ? "maximum" : "the recorded", config_.core.sensor_model,
+      capture_data_port_, capture_auxiliary_port_, config_.core.sensor_model);
+  asio::post(io_, [this] { replay_step(); });
+}
+
+bool RsuDaemon::next_capture_datagram() {
+  UdpDatagram d;
+  if (!capture_->next(d)) {
+    capture_next_.reset();
+    return false;
+  }
+  capture_next_ = std::move(d);
+  return true;
+}
+
+void RsuDaemon::replay_datagram(const UdpDatagram& datagram) {
+  replay_now_ = datagram.time_ns + replay_shift_;
+  capture_last_ns_ = datagram.time_ns;
+  // The output-changing housekeeping on the capture's clock, every 500 ms of it.
+  while (replay_now_ >= next_replay_housekeeping_) {
+    housekeep(next_replay_housekeeping_);
+    next_replay_housekeeping_ += 500 * kNsPerMs;
+  }
+  const std::uint16_t port = datagram.dst.port;
+  if (port != capture_data_port_ && (capture_auxiliary_port_ == 0 || port != capture_auxiliary_port_)) {
+    ++capture_counts_.other_datagrams;
+    return;
+  }
+  ++capture_counts_.lidar_datagrams;
+  const std::uint32_t ip = datagram.src.ip;
+  on_lidar_payload(datagram.payload, replay_now_,
+                   std::to_string(ip >> 24) + "." + std::to_string((ip >> 16) & 0xFF) + "." +
+                       std::to_string((ip >> 8) & 0xFF) + "." + std::to_string(ip & 0xFF));
+}
+
+void RsuDaemon::replay_step() {
+  if (stopping_)
+    return;
+  const auto& input = std::get<PcapInput>(config_.input);
+  const bool max_pace = input.pace == PcapInput::Pace::kMax;
+  // A bounded batch per turn of the event loop, so that signals, V2I and timers are served meanwhile.
+  for (int i = 0; i < 500 && capture_next_; ++i) {
+    if (!max_pace) {
+      const auto due = pass_started_ + std::chrono::nanoseconds(capture_next_->time_ns - capture_first_ns_);
+      if (due > steady::now()) {
+        input_timer_.expires_at(due);
+        input_timer_.async_wait([this](const boost::system::error_code& ec) {
+          if (!ec)
+            replay_step();
+        });
+        return;
+      }
+    }
+    const UdpDatagram datagram = std::move(*capture_next_);
+    next_capture_datagram();
+    replay_datagram(datagram);
+    if (!capture_next_ && input.loop && capture_->error() == PcapError::none) {
+      // Again from the start, the clock moved on by whole hours so that it never runs backwards and
+      // the sensor's microseconds-past-the-hour resolve as before.
+      const TimeNs span = capture_last_ns_ - capture_first_ns_ + kNsPerSecond;
+      const TimeNs hour = 3600 * kNsPerSecond;
+      replay_shift_ += (span + hour - 1) / hour * hour;
+      ++capture_counts_.loops;
+      capture_->rewind();
+      if (next_capture_datagram()) {
+        capture_first_ns_ = capture_next_->time_ns;
+        pass_started_ = steady::now();
+      }
+    }
+  }
+  if (capture_next_) {
+    asio::post(io_, [this] { replay_step(); });
+    return;
+  }
+  finish_capture();
+}
+
+void RsuDaemon::finish_capture() {
+  const PcapSkipped skipped = capture_->skipped();
+  if (capture_->error() != PcapError::none) {
+    spdlog::warn("the capture {} ends where it stops being readable ({}): a recording cut off mid-record",
+                 capture_->path(), to_string(capture_->error()));
+  }
+  spdlog::info(
+      "capture replayed: {} records, {} datagrams to the LiDAR's ports, {} to other ports, {} not IPv4, {} "
+      "not "
+      "UDP, {} unusable fragments, {} malformed; {} packets accepted by the decoder",
+      capture_->records(), capture_counts_.lidar_datagrams, capture_counts_.other_datagrams, skipped.not_ipv4,
+      skipped.not_udp, skipped.fragmented, skipped.malformed, [this] {
+        for (const auto& [name, value] : core_.lidar_decoder().counters()) {
+          if (name == "accepted")
+            return value;
+        }
+        return std::uint64_t{0};
+      }());
+  drain_and_stop();
 }
 
 void RsuDaemon::on_pcd_frame() {
@@ -223,10 +366,10 @@ void RsuDaemon::on_pcd_frame() {
   TimeNs last = frame.front().time_ns;
   for (const LidarPoint& p : frame)
     last = std::max(last, p.time_ns);
-  const TimeNs shift = now_ns() - last;
+  const TimeNs shift = clock_now() - last;
   for (LidarPoint& p : frame)
     p.time_ns += shift;
-  handle_lidar_result(core_.on_lidar_frame(frame, now_ns()));
+  handle_lidar_result(core_.on_lidar_frame(frame, clock_now()));
 }
 
 void RsuDaemon::start_simulator() {
@@ -259,14 +402,14 @@ void RsuDaemon::start_simulator() {
     spdlog::info("background: {} simulated rotations of the scenario's scene without vehicles", n);
   }
   next_sim_packet_ = simulator_->packet_index_at(scenario_->start_ns);
-  sim_clock_offset_ = now_ns() - scenario_->start_ns;
+  sim_clock_offset_ = clock_now() - scenario_->start_ns;
   spdlog::info("simulating {} from {}", lidar.model_name, input.scenario);
   every(input_timer_, std::chrono::milliseconds(2), &RsuDaemon::on_simulator_tick);
 }
 
 void RsuDaemon::on_simulator_tick() {
   std::array<std::uint8_t, kPacketBytes> payload{};
-  const TimeNs now = now_ns();
+  const TimeNs now = clock_now();
   // Packets whose firings are over by now; at most 100 per tick so a slow host degrades, not stalls.
   for (int i = 0; i < 100; ++i) {
     PacketReturns returns = simulator_->simulate_packet(next_sim_packet_);
@@ -293,8 +436,10 @@ void RsuDaemon::load_background_pcd() {
 }
 
 void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
-  for (const std::string& notice : core_.take_lidar_notices())
+  for (const std::string& notice : core_.take_lidar_notices()) {
     spdlog::warn("LiDAR: {}", notice);
+    last_clock_warning_ = steady::now();  // the periodic reminder waits a minute after any notice
+  }
   if (result.background_became_ready) {
     spdlog::info("background learned from {} whole rotations", core_.lidar_stats().background_frames);
     become_ready_if_possible();
@@ -351,7 +496,7 @@ void RsuDaemon::on_v2i_datagram(std::size_t bytes) {
   }
   const core::SourceEndpoint source{address.to_string(), v2i_sender_.port()};
   const std::span<const std::uint8_t> datagram(v2i_buffer_.data(), bytes);
-  const TimeNs now = now_ns();
+  const TimeNs now = clock_now();
   const core::DatagramOutcome outcome = core_.on_datagram(datagram, source, now);
   if (outcome.accepted()) {
     if (outcome.upsert == v2i::UpsertOutcome::kAdded) {
@@ -382,7 +527,7 @@ void RsuDaemon::on_peer_announcement(std::span<const std::uint8_t> datagram,
                                      const core::PeerProvenance& from) {
   if (stopping_)
     return;
-  const core::DatagramOutcome outcome = core_.on_peer_announcement(datagram, from, now_ns());
+  const core::DatagramOutcome outcome = core_.on_peer_announcement(datagram, from, clock_now());
   if (outcome.accepted()) {
     if (outcome.upsert == v2i::UpsertOutcome::kAdded) {
       spdlog::info("vehicle {} registered from RSU {} (it heard the vehicle at {}:{})", outcome.vehicle_id,
@@ -408,19 +553,39 @@ void RsuDaemon::on_peer_announcement(std::span<const std::uint8_t> datagram,
 
 // ---- timers ---------------------------------------------------------------------------------------
 
-void RsuDaemon::on_housekeeping() {
-  const std::size_t expired = core_.expire(now_ns());
+void RsuDaemon::housekeep(TimeNs now) {
+  const std::size_t expired = core_.expire(now);
   if (dds_)
-    dds_->forget_quiet_vehicles(now_ns());
+    dds_->forget_quiet_vehicles(now);
+  if (expired > 0)
+    spdlog::info("{} silent vehicle(s) expired from the registry", expired);
+}
+
+void RsuDaemon::on_housekeeping() {
+  if (!replaying_)
+    housekeep(clock_now());  // a replay does it on the capture's clock (replay_datagram)
   if (peers_ && peers_->peers() != peers_seen_) {
     peers_seen_ = peers_->peers();
     spdlog::info("peer bus: {} other RSU(s) share announcements", peers_seen_);
   }
-  if (expired > 0)
-    spdlog::info("{} silent vehicle(s) expired from the registry", expired);
   bad_input_.maybe_summarize(steady::now());
   if (steady::now() - last_insecure_warning_ >= std::chrono::minutes(1))
     warn_if_insecure();
+  // The sensor clock beyond the tolerance: said when it happened (a notice), then once a minute.
+  const core::SensorClockReport clock = core_.sensor_clock();
+  if (clock.beyond_tolerance && steady::now() - last_clock_warning_ >= std::chrono::minutes(1)) {
+    last_clock_warning_ = steady::now();
+    std::uint64_t refused = 0;
+    for (const auto& [name, value] : core_.counters()) {
+      if (name == "packet.clock_offset")
+        refused = value;
+    }
+    spdlog::warn("LiDAR clock still {:.3f} s off the host's (tolerance {} ms): {}",
+                 to_seconds(clock.offset_ns), config_.core.clock_tolerance / kNsPerMs,
+                 config_.core.time_source == core::TimeSource::kSensor
+                     ? std::to_string(refused) + " packets refused so far"
+                     : std::string("its points stamped by arrival"));
+  }
 }
 
 void RsuDaemon::warn_if_insecure() {
@@ -438,7 +603,7 @@ void RsuDaemon::on_watchdog() {
 }
 
 void RsuDaemon::on_advertise() {
-  const std::vector<std::uint8_t> bytes = core_.advertisement(now_ns());
+  const std::vector<std::uint8_t> bytes = core_.advertisement(clock_now());
   boost::system::error_code ec;
   const auto address = asio::ip::make_address(config_.advertisement.address, ec);
   if (!ec)
@@ -459,6 +624,8 @@ void RsuDaemon::log_counters(bool only_nonzero) const {
       continue;
     line += (line.empty() ? "" : " ") + name + "=" + std::to_string(value);
   }
+  for (const auto& [name, value] : core_.gauges())
+    line += " " + name + "=" + std::to_string(value);
   spdlog::info("stats: corrections_sent={} correction_sends_failed={} {}", corrections_sent_,
                correction_sends_failed_, line);
   if (dds_)
@@ -475,13 +642,33 @@ void RsuDaemon::write_stats_file() const {
     std::ofstream out(tmp, std::ios::trunc);
     if (!out)
       return;
-    out << "uptime_s " << std::chrono::duration<double>(steady::now() - started_).count() << "\n";
+    // A replay's uptime is on the capture's clock, as everything else it writes.
+    out << "uptime_s "
+        << (replaying_ ? to_seconds(clock_now() - clock_started_)
+                       : std::chrono::duration<double>(steady::now() - started_).count())
+        << "\n";
     out << "ready " << (ready_ ? 1 : 0) << "\n";
     out << "corrections_sent " << corrections_sent_ << "\n";
     out << "correction_sends_failed " << correction_sends_failed_ << "\n";
     out << "lidar_packets_rejected " << lidar_packets_rejected_ << "\n";
     for (const auto& [name, value] : core_.counters())
       out << name << " " << value << "\n";
+    for (const auto& [name, value] : core_.gauges())
+      out << name << " " << value << "\n";
+    if (capture_) {
+      const PcapSkipped skipped = capture_->skipped();
+      out << "capture.records " << capture_->records() << "\n";
+      out << "capture.lidar_datagrams " << capture_counts_.lidar_datagrams << "\n";
+      out << "capture.other_datagrams " << capture_counts_.other_datagrams << "\n";
+      out << "capture.not_ipv4 " << skipped.not_ipv4 << "\n";
+      out << "capture.not_udp " << skipped.not_udp << "\n";
+      out << "capture.fragmented " << skipped.fragmented << "\n";
+      out << "capture.malformed " << skipped.malformed << "\n";
+      out << "capture.reassembled " << capture_->reassembled() << "\n";
+      out << "capture.ip_lengths_repaired " << capture_->ip_lengths_repaired() << "\n";
+      out << "capture.loops " << capture_counts_.loops << "\n";
+      out << "capture.cut_off " << (capture_->error() != PcapError::none ? 1 : 0) << "\n";
+    }
     if (dds_)
       dds_->write_stats(out);
     if (peers_)
@@ -511,7 +698,7 @@ void RsuDaemon::reload() {
   spdlog::info("SIGHUP: reloading {}", config_path_);
   try {
     DaemonConfig next = load_config(config_path_);
-    const core::ReloadSummary summary = core_.reload(next.core, now_ns());
+    const core::ReloadSummary summary = core_.reload(next.core, clock_now());
     spdlog::info("configuration reloaded: {} of {} registered vehicle(s) kept, background {}",
                  summary.vehicles_after, summary.vehicles_before,
                  summary.background_kept ? "kept" : "to be learned again");
@@ -522,10 +709,9 @@ void RsuDaemon::reload() {
         next.input.index() != config_.input.index() || next.dds.enabled != config_.dds.enabled ||
         next.dds.peers.enabled != config_.dds.peers.enabled ||
         next.dds.peers.topic != config_.dds.peers.topic ||
-        (std::holds_alternative<VelodyneUdpInput>(next.input) &&
-         (std::get<VelodyneUdpInput>(next.input).port != std::get<VelodyneUdpInput>(config_.input).port ||
-          std::get<VelodyneUdpInput>(next.input).bind_address !=
-              std::get<VelodyneUdpInput>(config_.input).bind_address));
+        (std::holds_alternative<UdpInput>(next.input) &&
+         (std::get<UdpInput>(next.input).port != std::get<UdpInput>(config_.input).port ||
+          std::get<UdpInput>(next.input).bind_address != std::get<UdpInput>(config_.input).bind_address));
     if (inputs_changed)
       spdlog::warn("socket addresses or the LiDAR input changed: they take effect after a restart");
     // Sockets, input and the DDS participant stay as they are; everything else follows the new file.
@@ -557,7 +743,7 @@ void RsuDaemon::drain_and_stop() {
   stopping_ = true;
   notify_stopping();
   // Pending clusters (a vehicle the sweep was still on) are corrected and sent now, not lost.
-  const core::LidarStepResult last = core_.flush(now_ns());
+  const core::LidarStepResult last = core_.flush(clock_now());
   send_corrections(last.corrections);
   log_counters(true);
   write_stats_file();
@@ -567,6 +753,7 @@ void RsuDaemon::drain_and_stop() {
   signals_.cancel(ignored);
   v2i_socket_.close(ignored);
   lidar_socket_.close(ignored);
+  auxiliary_socket_.close(ignored);
   for (auto* t : {&housekeeping_timer_, &watchdog_timer_, &advertise_timer_, &stats_timer_, &input_timer_,
                   &object_list_timer_})
     t->cancel();

@@ -19,6 +19,7 @@
 
 #include "daemon/bad_input_log.h"
 #include "daemon/config.h"
+#include "io/capture_file.h"
 #include "lidar/sensor_model.h"
 #include "rsu/rsu_core.h"
 
@@ -48,7 +49,10 @@ class RsuDaemon {
   using steady = std::chrono::steady_clock;
 
   void receive_v2i();
-  void receive_lidar();
+  // Receives the LiDAR's datagrams on `socket` (the data port, or the auxiliary one) into `buffer`.
+  void receive_lidar(udp::socket& socket, std::array<std::uint8_t, 65536>& buffer, udp::endpoint& sender);
+  // One datagram of the LiDAR, live or replayed, arrived at `arrival` (the run's clock).
+  void on_lidar_payload(std::span<const std::uint8_t> payload, TimeNs arrival, const std::string& from);
   void on_v2i_datagram(std::size_t bytes);
   void on_peer_announcement(std::span<const std::uint8_t> datagram, const core::PeerProvenance& from);
   void handle_lidar_result(const core::LidarStepResult& result);
@@ -66,12 +70,23 @@ class RsuDaemon {
   void start_dds();
 
   void start_input();
+  // Capture replay (lidar.input.pcap): the run's clock is the capture's (file comment of config.h).
+  void start_capture();
+  void replay_step();
+  void replay_datagram(const UdpDatagram& datagram);
+  bool next_capture_datagram();
+  void finish_capture();
+  // What the periodic housekeeping does that changes the output (registry expiry, DDS bookkeeping):
+  // on the host's timer, or on the capture's clock during a replay so that a replay stays the same.
+  void housekeep(TimeNs now);
   void load_background_pcd();
   void start_simulator();
   void on_signal(int signal_number);
   void reload();
   void drain_and_stop();
   void write_stats_file() const;
+  // The run's clock: the host's, or during a capture replay the capture's.
+  TimeNs clock_now() const;
   void log_counters(bool only_nonzero) const;
   // Insecure mode is for local development only: said loudly at start-up and every minute after.
   void warn_if_insecure();
@@ -84,10 +99,13 @@ class RsuDaemon {
 
   udp::socket v2i_socket_;
   udp::socket lidar_socket_;
+  udp::socket auxiliary_socket_;  // the LiDAR's packets without points (Velodyne position packets)
   std::array<std::uint8_t, 65536> v2i_buffer_{};  // any UDP datagram fits: truncation cannot happen
   std::array<std::uint8_t, 65536> lidar_buffer_{};
+  std::array<std::uint8_t, 65536> auxiliary_buffer_{};
   udp::endpoint v2i_sender_;
   udp::endpoint lidar_sender_;
+  udp::endpoint auxiliary_sender_;
 
   boost::asio::signal_set signals_;
   boost::asio::steady_timer housekeeping_timer_;
@@ -110,6 +128,25 @@ class RsuDaemon {
   std::unique_ptr<sim::LidarSimulator> simulator_;
   std::int64_t next_sim_packet_ = 0;
   TimeNs sim_clock_offset_ = 0;
+  // Capture replay
+  struct CaptureCounts {
+    std::uint64_t lidar_datagrams = 0;  // to the sensor's ports: given to the decoder
+    std::uint64_t other_datagrams = 0;  // to any other port: counted only
+    std::uint64_t loops = 0;
+  };
+  std::unique_ptr<io::CaptureFile> capture_;
+  std::optional<UdpDatagram> capture_next_;  // read, not yet replayed (recorded pace)
+  std::uint16_t capture_data_port_ = 0;
+  std::uint16_t capture_auxiliary_port_ = 0;
+  CaptureCounts capture_counts_;
+  bool replaying_ = false;
+  TimeNs replay_now_ = 0;            // the capture's clock: the replayed record's time + replay_shift_
+  TimeNs replay_shift_ = 0;          // whole hours added per loop, so that time never runs backwards
+  TimeNs capture_first_ns_ = 0;      // the first record of the current pass (recorded pace)
+  TimeNs capture_last_ns_ = 0;       // the last record replayed
+  steady::time_point pass_started_;  // host time the current pass began (recorded pace)
+  TimeNs next_replay_housekeeping_ = 0;
+  TimeNs clock_started_ = 0;  // the run's clock at start (uptime)
 
   bool ready_ = false;
   bool stopping_ = false;
@@ -119,6 +156,7 @@ class RsuDaemon {
   std::uint64_t lidar_packets_rejected_ = 0;
   steady::time_point started_ = steady::now();
   steady::time_point last_insecure_warning_{};
+  steady::time_point last_clock_warning_{};
 };
 
 }  // namespace rsu::daemon

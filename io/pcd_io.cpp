@@ -9,7 +9,9 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <span>
 #include <sstream>
+#include <stdexcept>
 
 namespace rsu::io {
 namespace {
@@ -101,10 +103,15 @@ std::uint32_t datatype_size(std::uint8_t datatype) {
 
 }  // namespace
 
-void write_pcd(const std::string& path, const std::vector<LidarPoint>& points) {
+namespace {
+
+// A PCL cloud of `points` with the given packed fields, each point written by `put_point`.
+template <typename PutPoint>
+void write_fields(const std::string& path, const std::vector<LidarPoint>& points,
+                  std::span<const FieldSpec> fields, PutPoint put_point) {
   pcl::PCLPointCloud2 cloud;
   std::uint32_t offset = 0;
-  for (const FieldSpec& f : kFields) {
+  for (const FieldSpec& f : fields) {
     pcl::PCLPointField field;
     field.name = f.name;
     field.offset = offset;
@@ -121,6 +128,24 @@ void write_pcd(const std::string& path, const std::vector<LidarPoint>& points) {
   cloud.data.resize(static_cast<std::size_t>(cloud.row_step));
   std::uint8_t* dst = cloud.data.data();
   for (const LidarPoint& p : points) {
+    put_point(dst, p);
+    dst += cloud.point_step;
+  }
+  pcl::PCDWriter writer;
+  if (writer.writeBinary(path, cloud) != 0)
+    throw PcdError(path + ": cannot write PCD file");
+}
+
+constexpr FieldSpec kRotationFields[] = {
+    {"x", pcl::PCLPointField::FLOAT32, 4},   {"y", pcl::PCLPointField::FLOAT32, 4},
+    {"z", pcl::PCLPointField::FLOAT32, 4},   {"intensity", pcl::PCLPointField::FLOAT32, 4},
+    {"ring", pcl::PCLPointField::UINT16, 2}, {"time", pcl::PCLPointField::UINT32, 4},
+};
+
+}  // namespace
+
+void write_pcd(const std::string& path, const std::vector<LidarPoint>& points) {
+  write_fields(path, points, kFields, [](std::uint8_t* dst, const LidarPoint& p) {
     put(dst + 0, p.x);
     put(dst + 4, p.y);
     put(dst + 8, p.z);
@@ -128,11 +153,24 @@ void write_pcd(const std::string& path, const std::vector<LidarPoint>& points) {
     put(dst + 16, p.ring);
     put(dst + 18, p.azimuth_rad);
     put(dst + 22, static_cast<double>(p.time_ns) * 1e-9);
-    dst += cloud.point_step;
+  });
+}
+
+void write_rotation_pcd(const std::string& path, const std::vector<LidarPoint>& points,
+                        TimeNs rotation_start_ns) {
+  for (const LidarPoint& p : points) {
+    const TimeNs since = p.time_ns - rotation_start_ns;
+    if (since < 0 || since > TimeNs{0xFFFFFFFF})
+      throw std::invalid_argument(path + ": a point outside [rotation start, + 4.29 s]");
   }
-  pcl::PCDWriter writer;
-  if (writer.writeBinary(path, cloud) != 0)
-    throw PcdError(path + ": cannot write PCD file");
+  write_fields(path, points, kRotationFields, [rotation_start_ns](std::uint8_t* dst, const LidarPoint& p) {
+    put(dst + 0, p.x);
+    put(dst + 4, p.y);
+    put(dst + 8, p.z);
+    put(dst + 12, p.intensity);
+    put(dst + 16, p.ring);
+    put(dst + 18, static_cast<std::uint32_t>(p.time_ns - rotation_start_ns));
+  });
 }
 
 namespace {

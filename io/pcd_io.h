@@ -17,6 +17,12 @@ class PcdError : public std::runtime_error {
 };
 
 void write_pcd(const std::string& path, const std::vector<LidarPoint>& points);
+// One rotation as rsu-decode writes it (README, "rsu-decode"): fields x y z intensity (float32), ring
+// (uint16) and time (uint32, ns since `rotation_start_ns`, the rotation's first point). Throws PcdError
+// naming the file when it cannot be written, or std::invalid_argument for a point before the start or
+// more than 4.29 s after it.
+void write_rotation_pcd(const std::string& path, const std::vector<LidarPoint>& points,
+                        TimeNs rotation_start_ns);
 // Throws PcdError naming the file and what is wrong (missing file, no x/y/z, unsupported field type).
 std::vector<LidarPoint> read_pcd(const std::string& path);
 

@@ -133,8 +133,9 @@ FrameKind link_payload(std::span<const std::uint8_t> frame, std::uint32_t link_t
   return FrameKind::udp;
 }
 
-FrameKind parse_frame(std::span<const std::uint8_t> frame, std::uint32_t link_type, UdpDatagram& out,
-                      Ipv4Fragment& fragment) {
+// `whole`: the record holds the frame as it was on the wire (not cut by the snapshot length).
+FrameKind parse_frame(std::span<const std::uint8_t> frame, std::uint32_t link_type, bool whole,
+                      UdpDatagram& out, Ipv4Fragment& fragment, bool& length_repaired) {
   std::span<const std::uint8_t> ip;
   if (const FrameKind kind = link_payload(frame, link_type, ip); kind != FrameKind::udp) {
     return kind;
@@ -143,8 +144,14 @@ FrameKind parse_frame(std::span<const std::uint8_t> frame, std::uint32_t link_ty
     return FrameKind::malformed;
   }
   const std::size_t header_bytes = std::size_t{ip[0] & 0x0Fu} * 4;
-  const std::size_t total_bytes = get_be16(ip, 2);
-  // total <= captured: a datagram cut by the snapshot length is not usable.
+  std::size_t total_bytes = get_be16(ip, 2);
+  // Early VLP-16 firmware writes its data packets' IPv4 length (1234) into its 554-byte position
+  // packets: a frame captured whole that is shorter than its IPv4 length is taken at its own length
+  // (the UDP length is still checked), while a datagram cut by the snapshot length is not usable.
+  if (whole && total_bytes > ip.size() && ip.size() >= header_bytes) {
+    total_bytes = ip.size();
+    length_repaired = true;
+  }
   if (header_bytes < kIpv4Bytes || total_bytes < header_bytes || total_bytes > ip.size()) {
     return FrameKind::malformed;
   }
@@ -323,6 +330,7 @@ PcapReader::Next PcapReader::next(UdpDatagram& out) {
     const std::uint32_t seconds = get_u32(bytes, at_, big_endian_);
     const std::uint32_t fraction = get_u32(bytes, at_ + 4, big_endian_);
     const std::uint32_t captured = get_u32(bytes, at_ + 8, big_endian_);
+    const std::uint32_t original = get_u32(bytes, at_ + 12, big_endian_);
     if (captured > kMaxCapturedLength) {
       error_ = PcapError::bad_record_length;
       return Next::error;
@@ -341,7 +349,9 @@ PcapReader::Next PcapReader::next(UdpDatagram& out) {
     out.time_ns = TimeNs{seconds} * kNsPerSecond + TimeNs{fraction} * ns_per_fraction_;
     Ipv4Fragment fragment;
     fragment.time_ns = out.time_ns;
-    FrameKind kind = parse_frame(frame, link_type_, out, fragment);
+    bool repaired = false;
+    FrameKind kind = parse_frame(frame, link_type_, captured >= original, out, fragment, repaired);
+    ip_lengths_repaired_ += repaired ? 1 : 0;
     if (kind == FrameKind::fragment) {
       const std::optional<Ipv4Datagram> whole = reassembler_.add(fragment);
       if (!whole) {

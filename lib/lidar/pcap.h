@@ -103,6 +103,9 @@ class PcapReader {
   PcapSkipped skipped() const;
   std::uint64_t reassembled() const { return reassembler_.stats().reassembled; }
   std::uint64_t records() const { return records_; }  // records read, whatever they held
+  // Whole frames shorter than their IPv4 length, read at their own length (early VLP-16 firmware's
+  // position packets: pcap.cpp).
+  std::uint64_t ip_lengths_repaired() const { return ip_lengths_repaired_; }
 
  private:
   bool read_header();
@@ -117,6 +120,7 @@ class PcapReader {
   PcapSkipped skipped_;  // without the reassembler's
   Ipv4Reassembler reassembler_;
   std::uint64_t records_ = 0;
+  std::uint64_t ip_lengths_repaired_ = 0;
 };
 
 // A whole capture in memory (tests, small files): PcapReader over all of `bytes`.

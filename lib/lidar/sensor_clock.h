@@ -6,6 +6,12 @@
 // `step_threshold` either way (the sensor's clock was set, or restarted from zero) starts the estimate
 // afresh. A host that falls behind (packets queued in its socket) raises the raw value but not the
 // estimate: the lag stays visible as raw - estimate.
+//
+// Stamping by arrival (time_source host_receive) moves the sensor's times by an offset that must not
+// jump: a new smallest delay lowers the estimate at once, and moving the points by that step could put
+// a packet before its predecessor. So the stamping offset follows the estimate at no more than
+// `max_slew` of the sensor time passing (1 %: a rotation's internal timing distorted by at most 1 ms
+// while it converges), except across a clock step.
 // Pure: the caller passes both times in.
 #pragma once
 
@@ -18,6 +24,7 @@ namespace rsu {
 
 struct SensorClockConfig {
   double max_drift = 1e-4;                    // s/s the estimate may rise by
+  double max_slew = 1e-2;                     // s/s the stamping offset may move by
   TimeNs step_threshold = 10 * kNsPerSecond;  // a larger change is a new clock, not drift or lag
 };
 
@@ -30,6 +37,8 @@ class SensorClock {
 
   // host - sensor: add to a sensor time to get host time. nullopt before the first packet.
   std::optional<TimeNs> offset_ns() const { return known_ ? std::optional<TimeNs>(estimate_) : std::nullopt; }
+  // The offset to stamp points with (file comment): the estimate, approached without jumps.
+  TimeNs stamping_offset_ns() const { return stamping_; }
   // The last packet's arrival - end: the offset plus that packet's delay.
   TimeNs last_raw_ns() const { return last_raw_; }
   std::uint64_t steps() const { return steps_; }  // times the estimate started afresh
@@ -40,6 +49,8 @@ class SensorClock {
   TimeNs estimate_ = 0;
   TimeNs last_raw_ = 0;
   TimeNs last_arrival_ = 0;
+  TimeNs last_sensor_ = 0;
+  TimeNs stamping_ = 0;
   std::uint64_t steps_ = 0;
 };
 

@@ -3,6 +3,7 @@
 namespace rsu::core {
 
 void report(const PacketOrderStats& o, const SweepClustererStats& s, const LidarStats& l, CounterList& out) {
+  out.add("packet", "released", o.released);  // into perception, in time order
   out.add("packet", "lost", o.lost);
   out.add("packet", "reordered", o.reordered);
   out.add("packet", "late_dropped", o.late);

@@ -51,8 +51,9 @@ PacketIntakeStep PacketIntake::push(std::span<const std::uint8_t> payload, TimeN
   }
   if (time_source_ == TimeSource::kHostReceive) {
     // On the host clock: the packet's sensor times moved by the measured offset (its arrival minus its
-    // known duration, the smallest delay seen: sensor_clock.h); relative times stay the sensor's.
-    const TimeNs shift = *sensor_clock_.offset_ns();
+    // known duration, the smallest delay seen, approached without jumps: sensor_clock.h); relative
+    // times stay the sensor's.
+    const TimeNs shift = sensor_clock_.stamping_offset_ns();
     for (LidarPoint& p : scratch_)
       p.time_ns += shift;
     step.packet.first_ns += shift;

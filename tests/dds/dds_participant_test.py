@@ -28,6 +28,7 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "tools", "python"))
+from pcd_file import read_binary_pcd  # noqa: E402
 from rsu_processes import Children, free_udp_port, read_text, wait_for_line  # noqa: E402
 
 TRUTH = (14.0, -5.0, math.radians(25.0))  # footprint centre x, y (m), yaw (rad) of the static car
@@ -54,22 +55,8 @@ simulation: {start_s: 0.0, frames: 4}
 
 
 def read_pcd(path):
-    """The binary PCD rsu-sim writes: returns (fields, sizes, types, points, rows of bytes)."""
-    with open(path, "rb") as f:
-        blob = f.read()
-    header_end = blob.index(b"DATA binary\n") + len(b"DATA binary\n")
-    header = {}
-    for line in blob[:header_end].decode().splitlines():
-        words = line.split()
-        if words and not words[0].startswith("#"):
-            header[words[0]] = words[1:]
-    names, sizes, types = header["FIELDS"], [int(s) for s in header["SIZE"]], header["TYPE"]
-    n = int(header["POINTS"][0])
-    codes = {("F", 4): "f", ("F", 8): "d", ("U", 2): "H", ("U", 1): "B", ("U", 4): "I"}
-    fmt = "<" + "".join(codes[(t, s)] for t, s in zip(types, sizes))
-    step = struct.calcsize(fmt)
-    data = blob[header_end:header_end + n * step]
-    return [dict(zip(names, struct.unpack_from(fmt, data, i * step))) for i in range(n)]
+    """The binary PCD rsu-sim writes, as a list of points (dicts of field -> value)."""
+    return read_binary_pcd(path)[1]
 
 
 def write_cloud_file(points, path, broken=None):

@@ -212,11 +212,27 @@ TEST(LidarPcap, SkipsFramesThatAreNotIntactUdp) {
     f[at] = v;
     return parse_pcap(f);
   };
-  EXPECT_EQ(with(eth + 12, 0x86).skipped.not_ipv4, 1U);      // 0x86DD: IPv6
-  EXPECT_EQ(with(ip + 9, 6).skipped.not_udp, 1U);            // TCP
-  EXPECT_EQ(with(ip + 6, 0x20).skipped.fragmented, 1U);      // more fragments
-  EXPECT_EQ(with(ip, 0x65).skipped.malformed, 1U);           // IPv6 version nibble
-  EXPECT_EQ(with(ip + 2, 0xFF).skipped.malformed, 1U);       // total length past the frame
+  EXPECT_EQ(with(eth + 12, 0x86).skipped.not_ipv4, 1U);  // 0x86DD: IPv6
+  EXPECT_EQ(with(ip + 9, 6).skipped.not_udp, 1U);        // TCP
+  EXPECT_EQ(with(ip + 6, 0x20).skipped.fragmented, 1U);  // more fragments
+  EXPECT_EQ(with(ip, 0x65).skipped.malformed, 1U);       // IPv6 version nibble
+  // The IPv4 total length past the frame: a frame cut by the snapshot length (original length larger
+  // than the captured one) is unusable; a frame captured whole is read at its own length (early VLP-16
+  // firmware sends position packets whose IPv4 length is its data packets'), its UDP length checked.
+  auto cut = good;
+  cut[ip + 2] = 0xFF;
+  cut[37] += 1;  // original length 256 bytes more than captured
+  EXPECT_EQ(parse_pcap(cut).skipped.malformed, 1U);
+  const PcapParseResult long_ip = with(ip + 2, 0xFF);
+  ASSERT_EQ(long_ip.datagrams.size(), 1U);
+  EXPECT_EQ(long_ip.datagrams[0].payload, payload_of(20, 0));
+  PcapReader reader;
+  auto lying = good;
+  lying[ip + 2] = 0xFF;
+  reader.feed(lying);
+  UdpDatagram d;
+  EXPECT_EQ(reader.next(d), PcapReader::Next::datagram);
+  EXPECT_EQ(reader.ip_lengths_repaired(), 1U);
   EXPECT_EQ(with(ip + 20 + 4, 0xFF).skipped.malformed, 1U);  // UDP length past the datagram
   EXPECT_EQ(with(28 + 3, 0x10).skipped.malformed, 1U);       // microseconds >= 1e6
   for (const auto& r : {with(eth + 12, 0x86), with(ip + 9, 6)}) {

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -86,6 +88,42 @@ TEST(RealCapture, Vlp16DualReturnMatchesNebulasDecode) {
   EXPECT_GT(last_only, 100U);
   EXPECT_GT(strongest_only, 100U);
   EXPECT_GT(both, ours.size() / 2);
+}
+
+// The real VLP-32C capture runs with a limited field of view (270 -> 90 deg): 4 of its packets hold
+// blocks from both sides of the 179 deg gap. Nothing is interpolated across it, the blocks after it
+// are stamped when the rotor reached them (the next packet's own timestamp confirms it, to 0.2 ms; they
+// were stamped 50 ms early before), and the rotation rate is measured (10.0 Hz, not assumed).
+TEST(RealCapture, Vlp32cLimitedFieldOfViewIsNotInterpolatedAcross) {
+  VelodyneDecoder decoder(make_vlp32c());
+  const std::vector<UdpDatagram> datagrams = test::read_capture("nebula_vlp32c_5scans.pcap");
+  int gap_packets = 0;
+  for (std::size_t k = 0; k + 1 < datagrams.size(); ++k) {
+    std::vector<LidarPoint> points;
+    const PacketOutcome outcome = decoder.decode(datagrams[k].payload, datagrams[k].time_ns, points);
+    ASSERT_TRUE(outcome.is_data());
+    const std::uint64_t gaps_before = static_cast<std::uint64_t>(gap_packets);
+    if (decoder.stats().field_of_view_gaps == gaps_before)
+      continue;
+    ++gap_packets;
+    // Where its successor starts, by the successor's own timestamp.
+    VelodyneDecoder peek(make_vlp32c());
+    std::vector<LidarPoint> next_points;
+    const PacketOutcome next = peek.decode(datagrams[k + 1].payload, datagrams[k + 1].time_ns, next_points);
+    EXPECT_NEAR(static_cast<double>(outcome.next_ns - next.first_ns), 0.0, 0.2e6) << "packet " << k;
+    EXPECT_GT(outcome.next_ns - outcome.first_ns, 45 * kNsPerMs);  // the packet spans the gap
+    // No point in the gap: every azimuth within the field of view (with the lasers' +-4.2 deg offsets
+    // and the manual's interpolation lead).
+    for (const LidarPoint& p : points) {
+      const double deg = static_cast<double>(p.azimuth_rad) * 180.0 / std::numbers::pi;
+      EXPECT_TRUE(deg > 265.0 || deg < 96.0) << deg << " deg, packet " << k;
+    }
+  }
+  EXPECT_EQ(gap_packets, 4);
+  EXPECT_NEAR(decoder.geometry().rotation_hz, 10.0, 0.05);
+  const std::vector<std::string> notices = decoder.take_notices();
+  ASSERT_EQ(notices.size(), 1U);
+  EXPECT_NE(notices[0].find("limited field of view"), std::string::npos);
 }
 
 }  // namespace

@@ -48,6 +48,24 @@ TEST(SensorClock, LagIsNotOffsetButDriftIs) {
   EXPECT_NEAR(static_cast<double>(*drifting.offset_ns()), static_cast<double>(drift + 1'000'000), 100'000.0);
 }
 
+// The stamping offset never jumps: a packet that came through faster than all before lowers the
+// estimate at once, the stamps follow at 1 % of the time passing, so packets stay in order.
+TEST(SensorClock, StampingOffsetSlewsWithoutJumps) {
+  SensorClock clock;
+  TimeNs sensor_end = 0;
+  clock.observe(sensor_end, sensor_end + 20 * kNsPerMs);  // the first packet waited 20 ms
+  TimeNs previous_stamp = sensor_end + clock.stamping_offset_ns();
+  for (int k = 1; k < 4000; ++k) {
+    sensor_end += kPeriod;
+    clock.observe(sensor_end, sensor_end + kNsPerMs);  // the rest 1 ms
+    const TimeNs stamp = sensor_end + clock.stamping_offset_ns();
+    ASSERT_GE(stamp - previous_stamp, static_cast<TimeNs>(0.99 * static_cast<double>(kPeriod)) - 1) << k;
+    previous_stamp = stamp;
+  }
+  EXPECT_EQ(*clock.offset_ns(), kNsPerMs);
+  EXPECT_EQ(clock.stamping_offset_ns(), kNsPerMs);  // 19 ms made up within 1.9 s of sensor time
+}
+
 TEST(SensorClock, AClockStepStartsAfresh) {
   SensorClock clock;
   clock.observe(10 * kNsPerSecond, 10 * kNsPerSecond + kNsPerMs);

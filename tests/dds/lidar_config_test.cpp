@@ -1,0 +1,120 @@
+// rsud.yaml's lidar: section (issue 11): the sensor's keys (calibration, returns, scan phase, time
+// source, clock tolerance) and the udp and pcap inputs: defaults, every key, located errors, and the
+// calibration file read into the decoder's tables.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
+
+#include "daemon/config.h"
+
+namespace rsu::daemon {
+namespace {
+
+DaemonConfig parse(const std::string& lidar_body) {
+  return parse_config("rsu_id: 1\nlidar:\n  model: vlp32c\n  mount: {x: 0, y: 0, z: 2}\n" + lidar_body,
+                      "/etc/rsud/rsud.yaml");
+}
+
+std::string refusal(const std::string& lidar_body) {
+  try {
+    parse(lidar_body);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(LidarConfig, DefaultsAreTheSensorsOwn) {
+  const DaemonConfig c = parse("  input: {udp: {}}\n");
+  const auto& in = std::get<UdpInput>(c.input);
+  EXPECT_EQ(in.port, 2368);  // the Velodyne data port (an Ouster's: 0, its metadata's, rsud asks the decoder)
+  EXPECT_EQ(in.auxiliary_port, 0);
+  EXPECT_EQ(c.core.time_source, core::TimeSource::kSensor);
+  EXPECT_EQ(c.core.clock_tolerance, 100 * kNsPerMs);
+  EXPECT_EQ(c.core.sensor_options.returns, ReturnSelection::both);
+  EXPECT_EQ(c.core.sensor_options.rotation_start_azimuth_deg, 0.0);
+  EXPECT_TRUE(c.sensor_files.calibration.empty());
+  // velodyne_udp is the same input under its older name.
+  EXPECT_EQ(std::get<UdpInput>(parse("  input: {velodyne_udp: {port: 2368}}\n").input).port, 2368);
+}
+
+TEST(LidarConfig, ReadsEveryKey) {
+  const DaemonConfig c = parse(
+      "  calibration: calib/VLP32.yaml\n"
+      "  returns: strongest\n"
+      "  scan_phase_deg: 180\n"
+      "  time_source: host_receive\n"
+      "  clock_tolerance_ms: 20\n"
+      "  input:\n"
+      "    pcap: {file: captures/road.pcap, pace: max, loop: true, port: 2369, auxiliary_port: 8309}\n");
+  EXPECT_EQ(c.sensor_files.calibration, "/etc/rsud/calib/VLP32.yaml");
+  EXPECT_EQ(c.core.sensor_options.returns, ReturnSelection::strongest);
+  EXPECT_EQ(c.core.sensor_options.rotation_start_azimuth_deg, 180.0);
+  EXPECT_EQ(c.core.time_source, core::TimeSource::kHostReceive);
+  EXPECT_EQ(c.core.clock_tolerance, 20 * kNsPerMs);
+  const auto& in = std::get<PcapInput>(c.input);
+  EXPECT_EQ(in.file, "/etc/rsud/captures/road.pcap");
+  EXPECT_EQ(in.pace, PcapInput::Pace::kMax);
+  EXPECT_TRUE(in.loop);
+  EXPECT_EQ(in.port, 2369);
+  EXPECT_EQ(in.auxiliary_port, 8309);
+  const DaemonConfig udp = parse("  input: {udp: {port: 2370, auxiliary_port: 8308, reorder_packets: 3}}\n");
+  EXPECT_EQ(std::get<UdpInput>(udp.input).auxiliary_port, 8308);
+  EXPECT_EQ(udp.core.packet_order.depth, 3U);
+}
+
+TEST(LidarConfig, ErrorsNameFileLineAndField) {
+  EXPECT_NE(refusal("  returns: dual\n  input: {udp: {}}\n")
+                .find("rsud.yaml:5: lidar.returns: expected both, strongest or last"),
+            std::string::npos);
+  EXPECT_NE(refusal("  time_source: gps\n  input: {udp: {}}\n")
+                .find("lidar.time_source: expected sensor or host_receive"),
+            std::string::npos);
+  EXPECT_NE(refusal("  scan_phase_deg: 360\n  input: {udp: {}}\n")
+                .find("lidar.scan_phase_deg: must be within [0, 360)"),
+            std::string::npos);
+  EXPECT_NE(
+      refusal("  clock_tolerance_ms: 0\n  input: {udp: {}}\n").find("lidar.clock_tolerance_ms: must be > 0"),
+      std::string::npos);
+  EXPECT_NE(refusal("  input: {pcap: {file: a.pcap, pace: fast}}\n")
+                .find("lidar.input.pcap.pace: expected realtime or max"),
+            std::string::npos);
+  EXPECT_NE(
+      refusal("  input: {pcap: {pace: max}}\n").find("lidar.input.pcap: missing required field \"file\""),
+      std::string::npos);
+  EXPECT_NE(refusal("  input: {pcap: {file: a.pcap}, udp: {}}\n").find("exactly one of"), std::string::npos);
+}
+
+// lidar.calibration is read when the configuration is loaded: its tables replace the built-in ones,
+// and a broken file is named with its line.
+TEST(LidarConfig, CalibrationFileIsReadIntoTheDecodersTables) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rsu_lidar_config_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::filesystem::copy_file(std::string(RSU_SOURCE_DIR) + "/tests/data/real/nebula_calibration/VLP32.yaml",
+                             dir / "VLP32.yaml", std::filesystem::copy_options::overwrite_existing);
+  std::ofstream(dir / "broken.yaml") << "lasers:\n  - {laser_id: 0, vert_correction: x, rot_correction: 0}\n";
+  auto config_with = [&](const std::string& calibration) {
+    std::ofstream(dir / "rsud.yaml") << "rsu_id: 1\nsecurity: {mode: insecure}\nlidar:\n  model: vlp32c\n"
+                                     << "  calibration: " << calibration << "\n"
+                                     << "  mount: {x: 0, y: 0, z: 2}\n  input: {udp: {}}\n";
+    return load_config((dir / "rsud.yaml").string());
+  };
+  const DaemonConfig c = config_with("VLP32.yaml");
+  ASSERT_TRUE(c.core.sensor_options.calibrated_model.has_value());
+  EXPECT_NEAR(c.core.sensor_options.calibrated_model->azimuth_offset_deg[1], -4.2, 1e-9);
+  try {
+    config_with("broken.yaml");
+    ADD_FAILURE() << "a broken calibration was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("broken.yaml:"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace rsu::daemon
