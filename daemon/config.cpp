@@ -501,11 +501,13 @@ std::string summarize(const DaemonConfig& c) {
   out << "lidar " << c.core.sensor_model << " at (" << m.x << ", " << m.y << ", " << m.z << ") m, yaw "
       << rad_to_deg(m.yaw) << " deg, pitch " << rad_to_deg(m.pitch) << " deg, roll " << rad_to_deg(m.roll)
       << " deg\n";
+  if (!c.core.sensor_options.metadata_source.empty())
+    out << "lidar metadata " << c.core.sensor_options.metadata_source << "\n";
   out << "lidar "
-      << (c.sensor_files.calibration.empty() ? "built-in tables"
-                                             : "calibration " + c.sensor_files.calibration)
-      << (c.core.sensor_options.metadata_source.empty() ? ""
-                                                         : ", metadata " + c.core.sensor_options.metadata_source)
+      << (c.sensor_files.calibration.empty()
+              ? (c.core.sensor_options.metadata_source.empty() ? "built-in tables"
+                                                               : "tables from the metadata")
+              : "calibration " + c.sensor_files.calibration)
       << ", returns " << to_string(c.core.sensor_options.returns) << ", scan phase "
       << c.core.sensor_options.rotation_start_azimuth_deg << " deg, time source "
       << (c.core.time_source == core::TimeSource::kSensor ? "sensor" : "host_receive") << " (clock tolerance "

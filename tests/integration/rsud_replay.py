@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""gpsd-style golden replay (issue 11): the real rsud replays each real Velodyne capture
-(tests/data/real/SOURCES.md) at maximum pace, and
+"""gpsd-style golden replay (issue 11): the real rsud replays each real capture (tests/data/real/SOURCES.md:
+the Velodyne captures and the Ouster ones with their metadata) at maximum pace, and
 
   - every record of the capture is accounted for in rsud's counters: records = datagrams to the LiDAR's
     ports + to other ports + records that are no UDP datagram; the LiDAR's datagrams = accepted +
@@ -28,32 +28,39 @@ sys.path.insert(0, os.path.join(HERE, "..", "..", "tools", "python"))
 from rsu_processes import free_udp_port  # noqa: E402
 GOLDEN = os.path.join(HERE, "golden")
 
-# capture -> (lidar.model, what it shows). The early-firmware VLP-16 says HDL-32E in its factory byte:
-# the configured model wins.
+# capture -> (lidar.model, what it shows, the Ouster metadata). The early-firmware VLP-16 says HDL-32E in
+# its factory byte: the configured model wins.
 CAPTURES = {
-    "nebula_vlp32c_5scans.pcap": ("vlp32c", "VLP-32C, limited field of view, clock 52 s behind"),
-    "nebula_vlp16_dual_4scans.pcap": ("vlp16", "VLP-16 dual return"),
-    "einride_vlp16_1000pkts.pcap": ("vlp16", "VLP-16 strongest, 13 rotations"),
-    "rlu_vlp16_indoor_84pkts.pcap": ("vlp16", "VLP-16 strongest, clock 30 min off"),
-    "rlu_vlp16_earlyfw_84pkts.pcap": ("vlp16", "early VLP-16 firmware (factory byte 0x21), position packets"),
-    "rlu_hdl32e_driving_876pkts.pcap": ("hdl32e", "HDL-32E driving, position packets with GPS time"),
-    "rlu_hdl32e_short_91pkts.pcap": ("hdl32e", "HDL-32E, less than a rotation"),
+    "nebula_vlp32c_5scans.pcap": ("vlp32c", "VLP-32C, limited field of view, clock 52 s behind", None),
+    "nebula_vlp16_dual_4scans.pcap": ("vlp16", "VLP-16 dual return", None),
+    "einride_vlp16_1000pkts.pcap": ("vlp16", "VLP-16 strongest, 13 rotations", None),
+    "rlu_vlp16_indoor_84pkts.pcap": ("vlp16", "VLP-16 strongest, clock 30 min off", None),
+    "rlu_vlp16_earlyfw_84pkts.pcap": ("vlp16", "early VLP-16 firmware (factory byte 0x21), position packets", None),
+    "rlu_hdl32e_driving_876pkts.pcap": ("hdl32e", "HDL-32E driving, position packets with GPS time", None),
+    "rlu_hdl32e_short_91pkts.pcap": ("hdl32e", "HDL-32E, less than a rotation", None),
+    "ouster/OS-1-32-G_v2.1.1_1024x10.pcap": ("os1-32", "OS-1-32 legacy profile", "ouster/OS-1-32-G_v2.1.1_1024x10.json"),
+    "ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap": (
+        "os1-128", "OS-1-128 low-bandwidth profile, IMU packets", "ouster/OS-1-128_v2.3.0_1024x10.json"),
+    "ouster/OS-0-128-U1_v2.3.0_1024x10.pcap": ("os0-128", "OS-0-128", "ouster/OS-0-128-U1_v2.3.0_1024x10.json"),
+    "ouster/OS-2-128-U1_v2.3.0_1024x10.pcap": ("os2-128", "OS-2-128", "ouster/OS-2-128-U1_v2.3.0_1024x10.json"),
+    "ouster/OS-2-32-U0_v2.0.0_1024x10.pcap": ("os2-32", "OS-2-32", "ouster/OS-2-32-U0_v2.0.0_1024x10.json"),
 }
 GOLDEN_PREFIXES = ("packet.", "decoder.", "capture.", "clock.", "lidar.rotation_hz", "lidar.background_frames")
 
 
-def replay(rsud, capture, model, time_source, work, tag):
+def replay(rsud, capture, model, time_source, work, tag, metadata=None):
     os.makedirs(work, exist_ok=True)
     v2i_port = free_udp_port()  # the V2I socket is not used in a replay, but bound
     stats = os.path.join(work, f"{tag}.stats")
     config = os.path.join(work, f"{tag}.yaml")
     if os.path.exists(stats):
         os.remove(stats)
+    metadata_line = f"\n  metadata: {metadata}" if metadata else ""
     with open(config, "w") as f:
         f.write(f"""rsu_id: 1
 lidar:
   model: {model}
-  time_source: {time_source}
+  time_source: {time_source}{metadata_line}
   mount: {{x: 0, y: 0, z: 2}}
   input:
     pcap: {{file: {capture}, pace: max}}
@@ -92,11 +99,12 @@ def main():
     parser.add_argument("--regenerate", action="store_true", help="write the golden summaries anew")
     a = parser.parse_args()
     failures = []
-    for capture, (model, what) in CAPTURES.items():
+    for capture, (model, what, metadata) in CAPTURES.items():
         path = os.path.abspath(os.path.join(a.data, capture))
-        stem = capture.rsplit(".", 1)[0]
-        first, values, _ = replay(a.rsud, path, model, "host_receive", a.work, stem + "_1")
-        second, _, _ = replay(a.rsud, path, model, "host_receive", a.work, stem + "_2")
+        meta = os.path.abspath(os.path.join(a.data, metadata)) if metadata else None
+        stem = os.path.basename(capture).rsplit(".", 1)[0]
+        first, values, _ = replay(a.rsud, path, model, "host_receive", a.work, stem + "_1", meta)
+        second, _, _ = replay(a.rsud, path, model, "host_receive", a.work, stem + "_2", meta)
         if first != second:
             failures.append(f"{capture}: two replays differ:\n" + "\n".join(difflib.unified_diff(first, second, lineterm="")))
             continue
@@ -115,7 +123,8 @@ def main():
             failures.append(f"{capture} ({what}): differs from {golden}:\n" + "\n".join(
                 difflib.unified_diff(expected, summary, "golden", "this replay", lineterm="")))
         else:
-            print(f"{capture}: {values['packet.accepted']} accepted, {values['packet.position']} position packets, "
+            auxiliary = values.get("packet.position", values.get("packet.imu", "0"))
+            print(f"{capture}: {values['packet.accepted']} accepted, {auxiliary} auxiliary packets, "
                   f"{values['decoder.points']} points, clock {values['clock.offset_ms']} ms: as golden ({what})")
 
     # The 52 s clock with time_source sensor: refused, loudly, naming the offset.

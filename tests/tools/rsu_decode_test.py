@@ -101,6 +101,13 @@ def main():
                      "--returns", "last")
     assert sum(map(len, last)) < sum(map(len, both)), (sum(map(len, last)), sum(map(len, both)))
 
+    # An Ouster (its metadata given): whole frames, the IMU packets counted.
+    out, rotations = decode(tool, os.path.join(a.data, "ouster", "OS-1-128_v2.3.0_1024x10_lb_n3.pcap"),
+                            os.path.join(a.work, "os1_128"), "--model", "os1-128", "--metadata",
+                            os.path.join(a.data, "ouster", "OS-1-128_v2.3.0_1024x10.json"))
+    assert "accepted 192, imu 30" in out and len(rotations) >= 3, out
+    assert max(p["ring"] for rot in rotations for p in rot) == 127, "the 128 rings"
+
     r = run(tool, "--help")
     assert r.returncode == 0 and "rotation_NNNN.pcd" in r.stdout, r
     for args in ([], ["x.pcap"], ["--out", "d"], ["x.pcap", "--out", "d", "--returns", "dual"], ["--bogus"]):

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "common/angles.h"
 #include "io/capture_file.h"
 #include "io/pcd_io.h"
 #include "io/velodyne_calibration.h"
@@ -62,13 +63,15 @@ std::string guess_model(const std::string& capture_path, std::uint16_t port) {
     if (d.dst.port == port && d.payload.size() == rsu::kPacketBytes) {
       const std::string model = model_of_product(d.payload[rsu::kProductIdOffset]);
       if (model.empty()) {
-        throw std::runtime_error("the first data packet's factory byte names no model rsu-decode knows: give --model");
+        throw std::runtime_error(
+            "the first data packet's factory byte names no model rsu-decode knows: give --model");
       }
       std::cout << "model " << model << " (from the first data packet's factory byte)\n";
       return model;
     }
   }
-  throw std::runtime_error("no Velodyne data packet on port " + std::to_string(port) + ": give --model");
+  throw std::runtime_error("no Velodyne data packet on port " + std::to_string(port) +
+                           ": give --model (and --metadata for an Ouster)");
 }
 
 struct Options {
@@ -86,8 +89,8 @@ int decode(const Options& o) {
   rsu::LidarDecoderOptions sensor;
   sensor.returns = o.returns;
   sensor.rotation_start_azimuth_deg = o.scan_phase_deg;
-  const std::string model = o.model.empty() ? guess_model(o.capture, o.port != 0 ? o.port : rsu::kVelodyneDataPort)
-                                            : o.model;
+  const std::string model =
+      o.model.empty() ? guess_model(o.capture, o.port != 0 ? o.port : rsu::kVelodyneDataPort) : o.model;
   if (!o.calibration.empty()) {
     const auto base = rsu::sensor_model_by_name(model);
     if (!base)
@@ -105,7 +108,7 @@ int decode(const Options& o) {
 
   rsu::FrameAssemblerConfig assembly;
   assembly.emit_partial_frames = true;  // a capture's first and last rotations are listed too
-  assembly.cut_azimuth_deg = o.scan_phase_deg;
+  assembly.cut_azimuth_deg = rsu::rad_to_deg(decoder->geometry().rotation_start_azimuth_rad);
   assembly.rotation_hz = decoder->geometry().rotation_hz;
   rsu::FrameAssembler assembler(assembly);
 
@@ -151,7 +154,8 @@ int decode(const Options& o) {
       counts += (counts.empty() ? "" : ", ") + name + " " + std::to_string(value);
   }
   const rsu::PcapSkipped skipped = capture.skipped();
-  std::cout << (counts.empty() ? "no packet of the sensor" : counts) << "; " << other << " datagrams to other ports, "
+  std::cout << (counts.empty() ? "no packet of the sensor" : counts) << "; " << other
+            << " datagrams to other ports, "
             << skipped.not_ipv4 + skipped.not_udp + skipped.fragmented + skipped.malformed
             << " records not UDP or unusable\n";
   if (capture.error() != rsu::PcapError::none) {
@@ -169,12 +173,15 @@ int main(int argc, char** argv) {
   po::options_description visible(kAbout);
   visible.add_options()("help,h", "show this help and exit")(
       "out,o", po::value<std::string>(&o.out), "folder for the rotation_NNNN.pcd files (created)")(
-      "model,m", po::value<std::string>(&o.model), "the sensor: vlp16, vlp32c, hdl32e (default: from the packets)")(
-      "calibration", po::value<std::string>(&o.calibration),
-      "Velodyne calibration YAML (as the ROS velodyne and nebula drivers read it)")(
+      "model,m", po::value<std::string>(&o.model),
+      "the sensor: vlp16, vlp32c, hdl32e (default: from the packets), or an Ouster (os1-128, ..., with "
+      "--metadata)")("calibration", po::value<std::string>(&o.calibration),
+                     "Velodyne calibration YAML (as the ROS velodyne and nebula drivers read it)")(
       "metadata", po::value<std::string>(&o.metadata), "the sensor's metadata file (Ouster JSON)")(
-      "returns", po::value<std::string>(&returns), "of a dual-return sensor: both (default), strongest, last")(
-      "scan-phase", po::value<double>(&o.scan_phase_deg), "azimuth (deg, clockwise from +x) where a rotation starts")(
+      "returns", po::value<std::string>(&returns),
+      "of a dual-return sensor: both (default), strongest, last")(
+      "scan-phase", po::value<double>(&o.scan_phase_deg),
+      "azimuth (deg, clockwise from +x) where a rotation starts")(
       "port", po::value<std::uint16_t>(&o.port), "the sensor's data port (default: the sensor's own)");
   po::options_description hidden;
   hidden.add_options()("capture", po::value<std::string>(&o.capture));
