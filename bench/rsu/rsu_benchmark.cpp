@@ -288,14 +288,15 @@ void BM_SweepReleaseWait(benchmark::State& state) {
   const RsuCoreConfig config = bench_config(model_name);
   std::vector<double> wait_ms;
   for (auto _ : state) {
-    SweepClusterer sweep =
-        laser_aware ? SweepClusterer(config.sweep, config.perception.clustering, {kMount.x, kMount.y},
-                                     model.rotation_hz(), std::span<const double>(offsets))
-                    : SweepClusterer(config.sweep, config.perception.clustering, {kMount.x, kMount.y},
-                                     model.rotation_hz(), spread);
+    perception::SweepClusterer sweep =
+        laser_aware
+            ? perception::SweepClusterer(config.sweep, config.perception.clustering, {kMount.x, kMount.y},
+                                         model.rotation_hz(), std::span<const double>(offsets))
+            : perception::SweepClusterer(config.sweep, config.perception.clustering, {kMount.x, kMount.y},
+                                         model.rotation_hz(), spread);
     std::int64_t packet = -1;
     const auto release = [&] {
-      for (const SweptCluster& c : sweep.release_closed()) {
+      for (const perception::SweptCluster& c : sweep.release_closed()) {
         std::int64_t last = 0;
         for (const LidarPoint& p : c.points)
           last = std::max(last, sim.packet_index_at(p.time_ns));

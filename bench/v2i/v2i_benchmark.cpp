@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "common/random.h"
+#include "tracking/association.h"
 #include "v2i/announcement_validation.h"
-#include "v2i/association.h"
 #include "v2i/message_authenticator.h"
 #include "v2i/message_signer.h"
 #include "v2i/vehicle_registry.h"
@@ -202,7 +202,7 @@ BENCHMARK(BM_SignedDatagramPath);
 // Association of N clusters with N registered vehicles, spread over a 100 m x 100 m junction.
 void BM_Associate(benchmark::State& state) {
   const auto n = static_cast<std::size_t>(state.range(0));
-  std::vector<VehicleHypothesis> vehicles(n);
+  std::vector<tracking::VehicleHypothesis> vehicles(n);
   std::vector<perception::Detection> clusters(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double x = 100.0 * uniform_open01(mix64(2 * i));
@@ -220,7 +220,7 @@ void BM_Associate(benchmark::State& state) {
     fit.corners.fill(Eigen::Vector2d::Zero());  // unused by association
   }
   for (auto _ : state) {
-    benchmark::DoNotOptimize(associate(clusters, vehicles));
+    benchmark::DoNotOptimize(tracking::associate(clusters, vehicles));
   }
 }
 BENCHMARK(BM_Associate)->Arg(10)->Arg(50)->Arg(200);

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "v2i/association.h"
-#include "v2i/vehicle_hypothesis.h"
+#include "tracking/association.h"
+#include "tracking/vehicle_hypothesis.h"
 
 namespace rsu::core {
 
@@ -33,7 +33,7 @@ perception::VehicleFix GatheredVehicleFixer::fix_announced(std::span<const Eigen
                                                            TimeNs sweep_time) const {
   // The yaw prior: the announced yaw carried to the sweep time with the announced motion (the
   // hypothesis model), with its grown uncertainty.
-  const v2i::VehicleHypothesis at_sweep = v2i::predict_hypothesis(a, sweep_time, hypothesis_);
+  const tracking::VehicleHypothesis at_sweep = tracking::predict_hypothesis(a, sweep_time, hypothesis_);
   const double yaw_var = at_sweep.covariance(2, 2);
   perception::AnnouncedVehicle vehicle;
   vehicle.size = {a.size.length_m, a.size.width_m, a.size.height_m};
@@ -45,8 +45,8 @@ perception::VehicleFix GatheredVehicleFixer::fix_announced(std::span<const Eigen
 
 bool GatheredVehicleFixer::fits_vehicle(const perception::RectangleFit& fit,
                                         const v2i::VehicleAnnouncement& a, TimeNs sweep_time) const {
-  return v2i::check_pair(fit, v2i::predict_hypothesis(a, sweep_time, hypothesis_), association_).verdict ==
-         v2i::PairGate::kPass;
+  return tracking::check_pair(fit, tracking::predict_hypothesis(a, sweep_time, hypothesis_), association_)
+             .verdict == tracking::PairGate::kPass;
 }
 
 GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a) const {

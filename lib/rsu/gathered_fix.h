@@ -59,8 +59,8 @@ class GatheredVehicleFixer {
                     TimeNs sweep_time) const;
 
   perception::VehicleFixConfig fix_config_;
-  v2i::HypothesisConfig hypothesis_;
-  v2i::AssociationConfig association_;
+  tracking::HypothesisConfig hypothesis_;
+  tracking::AssociationConfig association_;
   Eigen::Vector3d lidar_position_;
   double coverage_radius_m_;
 };

@@ -9,7 +9,7 @@
 
 namespace rsu::core {
 
-GrownFootprint::GrownFootprint(const v2i::VehicleHypothesis& h, const GatheringConfig& g)
+GrownFootprint::GrownFootprint(const tracking::VehicleHypothesis& h, const GatheringConfig& g)
     : centre_(h.centre), yaw_(h.yaw), min_inside_fraction_(g.min_inside_fraction) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(h.covariance.topLeftCorner<2, 2>());
   const double centre_sigma = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));

@@ -8,7 +8,7 @@
 
 #include "perception/detection.h"
 #include "rsu/rsu_core_config.h"
-#include "v2i/vehicle_hypothesis.h"
+#include "tracking/vehicle_hypothesis.h"
 
 namespace rsu::core {
 
@@ -17,7 +17,7 @@ class GrownFootprint {
   // The announced box at the predicted pose, every corner moved out by footprint_sigmas standard
   // deviations of the predicted centre (largest axis) and of the yaw (at the corners), clamped to
   // [min_margin_m, max_margin_m].
-  GrownFootprint(const v2i::VehicleHypothesis& vehicle, const GatheringConfig& config);
+  GrownFootprint(const tracking::VehicleHypothesis& vehicle, const GatheringConfig& config);
 
   // Share of the detection's points inside the grown footprint.
   double inside_fraction(const perception::Detection& detection) const;

@@ -2,7 +2,8 @@
 
 namespace rsu::core {
 
-void report(const PacketOrderStats& o, const SweepClustererStats& s, const LidarStats& l, CounterList& out) {
+void report(const PacketOrderStats& o, const perception::SweepClustererStats& s, const LidarStats& l,
+            CounterList& out) {
   out.add("packet", "released", o.released);  // into perception, in time order
   out.add("packet", "lost", o.lost);
   out.add("packet", "reordered", o.reordered);

@@ -6,7 +6,7 @@
 
 #include "common/counter_list.h"
 #include "lidar/packet_order.h"
-#include "rsu/sweep_clusterer.h"
+#include "perception/sweep_clusterer.h"
 
 namespace rsu::core {
 
@@ -30,7 +30,7 @@ struct LidarStats {
 // packet.lost / reordered / late_dropped / duplicate / stream_gaps (the reorder stage's), packet.too_late,
 // packet.clock_offset,
 // sweep.* (the sweep clusterer's) and lidar.*.
-void report(const PacketOrderStats& order, const SweepClustererStats& sweep, const LidarStats& stats,
-            CounterList& out);
+void report(const PacketOrderStats& order, const perception::SweepClustererStats& sweep,
+            const LidarStats& stats, CounterList& out);
 
 }  // namespace rsu::core

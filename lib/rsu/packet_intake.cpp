@@ -9,7 +9,7 @@ namespace rsu::core {
 namespace {
 
 // The packet stream's order rule: the sensor's packet period, and a silence as long as the sweep
-// clusterer's restart rule (SweepConfig::max_gap_rotations) is a restart of the stream.
+// clusterer's restart rule (perception::SweepConfig::max_gap_rotations) is a restart of the stream.
 PacketOrder packet_order_for(const RsuCoreConfig& config, const SweepGeometry& geometry) {
   const auto max_gap = static_cast<TimeNs>(config.sweep.max_gap_rotations / geometry.rotation_hz * 1e9);
   return PacketOrder(config.packet_order, geometry.packet_period_ns, std::max<TimeNs>(1, max_gap));

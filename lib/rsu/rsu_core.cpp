@@ -7,7 +7,7 @@
 
 #include "common/angles.h"
 #include "common/counter_list.h"
-#include "v2i/association.h"
+#include "tracking/association.h"
 
 namespace rsu::core {
 namespace {
@@ -30,8 +30,8 @@ const RsuCoreConfig& checked(const RsuCoreConfig& config) {
 
 // The release rule's margin grows by how far beams may lead the rotor at their firing (the VLP-32C's
 // precision azimuth: sensor_model.h), so that the exact rule stays exact.
-SweepConfig sweep_config(const RsuCoreConfig& config, const SweepGeometry& geometry) {
-  SweepConfig c = config.sweep;
+perception::SweepConfig sweep_config(const RsuCoreConfig& config, const SweepGeometry& geometry) {
+  perception::SweepConfig c = config.sweep;
   c.release_margin_deg += rad_to_deg(geometry.azimuth_lead_rad);
   return c;
 }
@@ -83,15 +83,15 @@ LidarStepResult RsuCore::process(std::span<const LidarPoint> points, Release rel
     clusterer_.add(p, background_.classify(p) == perception::PointClass::foreground);
   sweep_.advance(points);
   // Clusters: Euclidean clustering, each cluster released as soon as the sweep has passed it.
-  std::vector<SweptCluster> clusters =
+  std::vector<perception::SweptCluster> clusters =
       release == Release::everything ? clusterer_.release_all() : clusterer_.release_closed();
   // Fit: a rectangle for each cluster (L-shape fitting, paper Sec. 3.1).
   std::vector<perception::Detection> detections = detect(std::move(clusters));
   if (!detections.empty()) {
     // Predict: the announced vehicles carried to the batch's sweep time.
-    const std::vector<v2i::VehicleHypothesis> vehicles = predict_announced(detections, now);
+    const std::vector<tracking::VehicleHypothesis> vehicles = predict_announced(detections, now);
     // Associate: which detection is which vehicle (gates, one global assignment).
-    const v2i::AssociationResult pairs = v2i::associate(detections, vehicles, config_.association);
+    const tracking::AssociationResult pairs = tracking::associate(detections, vehicles, config_.association);
     // Gather: each vehicle's detections, across batches, until the sweep has passed it (fragments).
     lidar_stats_.clusters_unmatched += gatherer_.gather(std::move(detections), vehicles, pairs, sweep_);
   }
@@ -103,9 +103,9 @@ LidarStepResult RsuCore::process(std::span<const LidarPoint> points, Release rel
   return result;
 }
 
-std::vector<perception::Detection> RsuCore::detect(std::vector<SweptCluster>&& clusters) {
+std::vector<perception::Detection> RsuCore::detect(std::vector<perception::SweptCluster>&& clusters) {
   std::vector<perception::Detection> detections;
-  for (const SweptCluster& cluster : clusters) {
+  for (const perception::SweptCluster& cluster : clusters) {
     if (cluster.points.empty())
       continue;
     perception::Detection d = perception::detect(cluster.points, mount_.xy(), config_.perception.fix.fit);
@@ -123,18 +123,18 @@ std::vector<perception::Detection> RsuCore::detect(std::vector<SweptCluster>&& c
 
 // The registered vehicles not corrected yet in this rotation, predicted to the batch's sweep time: the
 // median of its detections' (they were swept within a few degrees of each other).
-std::vector<v2i::VehicleHypothesis> RsuCore::predict_announced(
+std::vector<tracking::VehicleHypothesis> RsuCore::predict_announced(
     std::span<const perception::Detection> detections, TimeNs now) {
   std::vector<TimeNs> times;
   for (const perception::Detection& d : detections)
     times.push_back(d.sweep_time_ns);
   std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
   const TimeNs batch_time = times[times.size() / 2];
-  std::vector<v2i::VehicleHypothesis> vehicles;
+  std::vector<tracking::VehicleHypothesis> vehicles;
   for (const v2i::RegisteredVehicle* v : announcements_.registry().active(now)) {
     if (!corrections_.corrected_this_rotation(v->announcement.vehicle_id, batch_time,
                                               sweep_.rotation_period_ns()))
-      vehicles.push_back(v2i::predict_hypothesis(v->announcement, batch_time, config_.hypothesis));
+      vehicles.push_back(tracking::predict_hypothesis(v->announcement, batch_time, config_.hypothesis));
   }
   lidar_stats_.vehicles_in_batches += vehicles.size();
   return vehicles;

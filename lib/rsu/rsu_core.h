@@ -7,8 +7,8 @@
 //   LiDAR packets -> PacketIntake (decoder, reorder, shedding) -> LidarMount (map frame)
 //       while learning: whole rotations train the background model (or load_background())
 //       then, batch by batch as the sweep passes (RsuCore::process, the map of the daemon):
-//       foreground -> clusters (SweepClusterer) -> fit (perception::detect) -> predict the announced
-//       vehicles -> associate (v2i::associate) -> gather (VehicleGatherer) -> fix
+//       foreground -> clusters (perception::SweepClusterer) -> fit (perception::detect) -> predict the
+//       announced vehicles -> associate (tracking::associate) -> gather (VehicleGatherer) -> fix
 //       (GatheredVehicleFixer: perception::fix_vehicle) -> correction (CorrectionBuilder)
 #pragma once
 
@@ -28,6 +28,7 @@
 #include "lidar/point.h"
 #include "perception/background_model.h"
 #include "perception/detection.h"
+#include "perception/sweep_clusterer.h"
 #include "rsu/announcement_intake.h"
 #include "rsu/correction_builder.h"
 #include "rsu/datagram_outcome.h"
@@ -36,10 +37,9 @@
 #include "rsu/lidar_stats.h"
 #include "rsu/packet_intake.h"
 #include "rsu/rsu_core_config.h"
-#include "rsu/sweep_clusterer.h"
 #include "rsu/sweep_position.h"
 #include "rsu/vehicle_gatherer.h"
-#include "v2i/vehicle_hypothesis.h"
+#include "tracking/vehicle_hypothesis.h"
 
 namespace rsu::core {
 
@@ -129,7 +129,7 @@ class RsuCore {
   // in ms (NaN before any packet) and the measured rotation rate.
   std::vector<std::pair<std::string, double>> gauges() const { return packets_.gauges(); }
   const PacketOrderStats& packet_order_stats() const { return packets_.order_stats(); }
-  const SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
+  const perception::SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
   const LidarStats& lidar_stats() const { return lidar_stats_; }
   const Eigen::Vector2d& lidar_xy() const { return mount_.xy(); }
 
@@ -138,9 +138,9 @@ class RsuCore {
 
   // One batch of the sweep, the paper's steps in order (the .cpp quotes it in docs/architecture.md).
   LidarStepResult process(std::span<const LidarPoint> map_points, Release release, TimeNs now);
-  std::vector<perception::Detection> detect(std::vector<SweptCluster>&& clusters);
-  std::vector<v2i::VehicleHypothesis> predict_announced(std::span<const perception::Detection> detections,
-                                                        TimeNs now);
+  std::vector<perception::Detection> detect(std::vector<perception::SweptCluster>&& clusters);
+  std::vector<tracking::VehicleHypothesis> predict_announced(
+      std::span<const perception::Detection> detections, TimeNs now);
   void correct(const HeldVehicle& held, TimeNs now, LidarStepResult& result);
 
   LidarStepResult learn(std::span<const LidarPoint> map_points, bool whole_frame);
@@ -153,7 +153,7 @@ class RsuCore {
   PacketIntake packets_;
   FrameAssembler assembler_;  // whole rotations for background learning
   perception::BackgroundModel background_;
-  SweepClusterer clusterer_;
+  perception::SweepClusterer clusterer_;
   SweepPosition sweep_;
   bool background_ready_ = false;
   AnnouncementIntake announcements_;

@@ -13,13 +13,14 @@
 #include "lidar/packet_order.h"
 #include "lidar/sensor_model.h"
 #include "perception/pipeline.h"
+#include "perception/sweep_clusterer.h"
+#include "tracking/association.h"
+#include "tracking/vehicle_hypothesis.h"
 #include "v2i/announcement_validation.h"
-#include "v2i/association.h"
 #include "v2i/message_authenticator.h"
 #include "v2i/security/ed25519.h"
 #include "v2i/security/trust_list.h"
 #include "v2i/source_rate_limiter.h"
-#include "v2i/vehicle_hypothesis.h"
 #include "v2i/vehicle_registry.h"
 
 namespace rsu::core {
@@ -29,20 +30,6 @@ struct BackgroundLearningConfig {
   // Whole rotations recorded at start-up, while no vehicle is expected in view, that train the model.
   // Ignored when the caller loads a background (e.g. PCD files) with RsuCore::load_background().
   int learning_frames = 10;
-};
-
-// The sector release rule of SweepClusterer (sweep_clusterer.h).
-struct SweepConfig {
-  // Extra azimuth the sweep must be past a cluster before it is released, on top of the spread of
-  // the sensor's per-laser azimuth offsets (computed from the model): covers the interpolation of
-  // firing azimuths between blocks (the VLP-32C manual's rule puts a pair up to 0.13 deg ahead of the
-  // rotor at its firing at 600 rpm, sensor_model.h) and a slightly tilted mount.
-  double release_margin_deg = 0.5;
-  // Foreground points waiting for their cluster to close; beyond this the oldest are dropped (a flood
-  // of foreground, e.g. before any background exists, cannot grow memory without bound).
-  std::size_t max_pending_points = 200000;
-  // A gap in the point stream longer than this many rotations, or time going backwards, restarts it.
-  double max_gap_rotations = 2.0;
 };
 
 // How a matched vehicle's clusters are gathered before its fix (RsuCore, file comment of rsu_core.h).
@@ -105,7 +92,7 @@ struct RsuCoreConfig {
   // would be associated with the vehicles' announcements of another moment. The measured offset
   // includes the packets' transit (a millisecond on a direct link).
   TimeNs clock_tolerance = 100 * kNsPerMs;
-  SweepConfig sweep;
+  perception::SweepConfig sweep;  // when a cluster is released (perception/sweep_clusterer.h)
   GatheringConfig gathering;
   // Background, clustering and the per-vehicle fix (perception::fix_vehicle): the library's defaults,
   // the same the pilot experiment measures, unless the configuration file changes them.
@@ -118,8 +105,8 @@ struct RsuCoreConfig {
   // V2I: validation limits, registry (expiry, capacity, per-source rate), association gates.
   v2i::AnnouncementLimits announcement_limits;
   v2i::VehicleRegistryConfig registry;
-  v2i::AssociationConfig association;
-  v2i::HypothesisConfig hypothesis;
+  tracking::AssociationConfig association;
+  tracking::HypothesisConfig hypothesis;
   // A cheap per-source-host limit applied to every datagram BEFORE decoding, so a flood of garbage
   // costs one table lookup per datagram. Looser than the registry's per-source announcement limit.
   v2i::RateLimitConfig datagram_flood{.bucket = {.rate_per_s = 200.0, .burst = 100.0}, .max_sources = 4096};

@@ -1,6 +1,6 @@
 // Where the LiDAR's sweep is (the latest point of the stream: its beam azimuth and firing time) and
 // when it will have passed a place on the map far enough that no cluster there can still grow (the
-// SweepClusterer's closing rule, sweep_clusterer.h): what tells RsuCore that every cluster of a
+// perception::SweepClusterer's closing rule, sweep_clusterer.h): what tells RsuCore that every cluster of a
 // vehicle has been released.
 #pragma once
 
@@ -17,7 +17,7 @@ namespace rsu::core {
 
 class SweepPosition {
  public:
-  // `cluster_tolerance_m`: the clustering tolerance; `release_margin_deg`: SweepConfig's margin.
+  // `cluster_tolerance_m`: the clustering tolerance; `release_margin_deg`: perception::SweepConfig's margin.
   SweepPosition(const LidarMount& mount, double cluster_tolerance_m, double release_margin_deg,
                 const SweepGeometry& geometry);
 

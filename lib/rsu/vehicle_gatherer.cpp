@@ -7,19 +7,20 @@
 
 namespace rsu::core {
 
-VehicleGatherer::VehicleGatherer(const GatheringConfig& gathering, const v2i::AssociationConfig& association,
+VehicleGatherer::VehicleGatherer(const GatheringConfig& gathering,
+                                 const tracking::AssociationConfig& association,
                                  const Eigen::Vector2d& lidar_xy)
     : config_(gathering), association_(association), lidar_xy_(lidar_xy) {}
 
 VehicleGatherer::Members VehicleGatherer::members(std::span<const perception::Detection> detections,
-                                                  std::span<const v2i::VehicleHypothesis> vehicles,
+                                                  std::span<const tracking::VehicleHypothesis> vehicles,
                                                   std::span<const GrownFootprint> footprints,
-                                                  const v2i::AssociationResult& association) const {
+                                                  const tracking::AssociationResult& association) const {
   Members m;
   m.of_vehicle.resize(vehicles.size());
   m.assigned_distance.assign(vehicles.size(), -1.0);
   std::vector<bool> taken(detections.size(), false);
-  for (const v2i::AssociatedPair& pair : association.pairs) {
+  for (const tracking::AssociatedPair& pair : association.pairs) {
     m.of_vehicle[pair.vehicle].push_back(pair.cluster);
     m.assigned_distance[pair.vehicle] = pair.distance_sq;
     taken[pair.cluster] = true;
@@ -42,8 +43,8 @@ VehicleGatherer::Members VehicleGatherer::members(std::span<const perception::De
     for (std::size_t j = 0; by_gate && j < vehicles.size(); ++j) {
       if (m.of_vehicle[j].empty())
         continue;
-      const v2i::PairCheck check = v2i::check_pair(detections[c].fit, vehicles[j], association_);
-      if (check.verdict == v2i::PairGate::kPass && check.distance_sq < best_distance) {
+      const tracking::PairCheck check = tracking::check_pair(detections[c].fit, vehicles[j], association_);
+      if (check.verdict == tracking::PairGate::kPass && check.distance_sq < best_distance) {
         best_distance = check.distance_sq;
         best = static_cast<std::ptrdiff_t>(j);
       }
@@ -77,7 +78,7 @@ HeldVehicle& VehicleGatherer::held_for(std::uint64_t vehicle_id, TimeNs first_ti
 // LiDAR, whose visible face falls inside the vehicle's gate): the vehicle is held until the sweep has
 // passed its grown footprint, so that its own detection, released later, is assigned too and wins as
 // the nearer (mis-association, README "Robustness").
-TimeNs VehicleGatherer::release_time(const HeldVehicle& held, const v2i::VehicleHypothesis& vehicle,
+TimeNs VehicleGatherer::release_time(const HeldVehicle& held, const tracking::VehicleHypothesis& vehicle,
                                      const GrownFootprint& footprint,
                                      std::span<const Eigen::Vector2d> outline, bool own,
                                      const SweepPosition& sweep) const {
@@ -91,11 +92,12 @@ TimeNs VehicleGatherer::release_time(const HeldVehicle& held, const v2i::Vehicle
 }
 
 std::size_t VehicleGatherer::gather(std::vector<perception::Detection>&& detections,
-                                    std::span<const v2i::VehicleHypothesis> vehicles,
-                                    const v2i::AssociationResult& association, const SweepPosition& sweep) {
+                                    std::span<const tracking::VehicleHypothesis> vehicles,
+                                    const tracking::AssociationResult& association,
+                                    const SweepPosition& sweep) {
   std::vector<GrownFootprint> footprints;
   footprints.reserve(vehicles.size());
-  for (const v2i::VehicleHypothesis& v : vehicles)
+  for (const tracking::VehicleHypothesis& v : vehicles)
     footprints.emplace_back(v, config_);
   const Members m = members(detections, vehicles, footprints, association);
   for (std::size_t j = 0; j < vehicles.size(); ++j) {

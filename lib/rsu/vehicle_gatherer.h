@@ -26,8 +26,8 @@
 #include "rsu/grown_footprint.h"
 #include "rsu/rsu_core_config.h"
 #include "rsu/sweep_position.h"
-#include "v2i/association.h"
-#include "v2i/vehicle_hypothesis.h"
+#include "tracking/association.h"
+#include "tracking/vehicle_hypothesis.h"
 
 namespace rsu::core {
 
@@ -59,14 +59,14 @@ struct HeldVehicle {
 
 class VehicleGatherer {
  public:
-  VehicleGatherer(const GatheringConfig& gathering, const v2i::AssociationConfig& association,
+  VehicleGatherer(const GatheringConfig& gathering, const tracking::AssociationConfig& association,
                   const Eigen::Vector2d& lidar_xy);
 
   // One batch: its detections, the vehicles offered (predicted to the batch's sweep time) and the
   // association between them. Returns how many detections joined no vehicle.
   std::size_t gather(std::vector<perception::Detection>&& detections,
-                     std::span<const v2i::VehicleHypothesis> vehicles,
-                     const v2i::AssociationResult& association, const SweepPosition& sweep);
+                     std::span<const tracking::VehicleHypothesis> vehicles,
+                     const tracking::AssociationResult& association, const SweepPosition& sweep);
   // The held vehicles the sweep has passed (every one if `everything`: a whole rotation, the drain),
   // in the order they were first gathered.
   std::vector<HeldVehicle> release(bool everything, const SweepPosition& sweep);
@@ -79,17 +79,17 @@ class VehicleGatherer {
     std::size_t unmatched = 0;
   };
   Members members(std::span<const perception::Detection> detections,
-                  std::span<const v2i::VehicleHypothesis> vehicles,
+                  std::span<const tracking::VehicleHypothesis> vehicles,
                   std::span<const GrownFootprint> footprints,
-                  const v2i::AssociationResult& association) const;
+                  const tracking::AssociationResult& association) const;
   HeldVehicle& held_for(std::uint64_t vehicle_id, TimeNs first_time);
   // When a vehicle that got detections in this batch may be released (file comment of the .cpp).
-  TimeNs release_time(const HeldVehicle& held, const v2i::VehicleHypothesis& vehicle,
+  TimeNs release_time(const HeldVehicle& held, const tracking::VehicleHypothesis& vehicle,
                       const GrownFootprint& footprint, std::span<const Eigen::Vector2d> outline, bool own,
                       const SweepPosition& sweep) const;
 
   GatheringConfig config_;
-  v2i::AssociationConfig association_;
+  tracking::AssociationConfig association_;
   Eigen::Vector2d lidar_xy_;
   std::vector<HeldVehicle> held_;
 };

@@ -1,9 +1,9 @@
-#include "v2i/assignment.h"
+#include "tracking/assignment.h"
 
 #include <algorithm>
 #include <limits>
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 namespace {
 
 // Rows are inserted one at a time. For each, a Dijkstra-like search over reduced costs
@@ -112,4 +112,4 @@ std::optional<Assignment> solve_assignment(const Eigen::MatrixXd& cost) {
   return out;
 }
 
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking

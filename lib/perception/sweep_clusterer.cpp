@@ -1,4 +1,4 @@
-#include "rsu/sweep_clusterer.h"
+#include "perception/sweep_clusterer.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,18 +8,13 @@
 
 #include "common/angles.h"
 
-namespace rsu::core {
+namespace rsu::perception {
 
 namespace {
 
 constexpr double kTwoPi = 2.0 * kPi;
 
-// The component's azimuth span and whether it is closed (file comment of sweep_clusterer.h).
-struct ComponentState {
-  double min_u = std::numeric_limits<double>::infinity();
-  double max_u = -std::numeric_limits<double>::infinity();
-  bool closed = true;
-};
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 }  // namespace
 
@@ -138,6 +133,27 @@ void SweepClusterer::add(const LidarPoint& p, bool foreground) {
       std::hypot(static_cast<double>(p.x) - lidar_xy_.x(), static_cast<double>(p.y) - lidar_xy_.y()));
 }
 
+std::vector<SweepClusterer::ComponentState> SweepClusterer::component_states(const Clustering& components,
+                                                                             double a_future) const {
+  const double tolerance = clustering_.tolerance_m;
+  std::vector<ComponentState> state(components.clusters.size());
+  for (std::size_t c = 0; c < components.clusters.size(); ++c) {
+    ComponentState& s = state[c];
+    for (const std::uint32_t i : components.clusters[c]) {
+      s.min_u = std::min(s.min_u, azimuth_[i]);
+      s.max_u = std::max(s.max_u, azimuth_[i]);
+      if (s.closed && a_future != -kInf) {
+        const double behind = a_future - azimuth_[i];
+        const double distance = behind <= 0.0         ? 0.0
+                                : behind >= kPi / 2.0 ? range_[i]
+                                                      : range_[i] * std::sin(behind);
+        s.closed = distance > tolerance;
+      }
+    }
+  }
+  return state;
+}
+
 void SweepClusterer::drop_stale() {
   const double oldest_allowed = sweep_ - kPi;
   compact_pending([&](std::size_t i) {
@@ -176,24 +192,8 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
 
   std::vector<std::uint32_t> all(points_.size());
   std::iota(all.begin(), all.end(), 0U);
-  const perception::Clustering components = perception::cluster_grid(points_, all, clustering_);
-
-  const double tolerance = clustering_.tolerance_m;
-  std::vector<ComponentState> state(components.clusters.size());
-  for (std::size_t c = 0; c < components.clusters.size(); ++c) {
-    ComponentState& s = state[c];
-    for (const std::uint32_t i : components.clusters[c]) {
-      s.min_u = std::min(s.min_u, azimuth_[i]);
-      s.max_u = std::max(s.max_u, azimuth_[i]);
-      if (s.closed && !everything) {
-        const double behind = a_future - azimuth_[i];
-        const double distance = behind <= 0.0         ? 0.0
-                                : behind >= kPi / 2.0 ? range_[i]
-                                                      : range_[i] * std::sin(behind);
-        s.closed = distance > tolerance;
-      }
-    }
-  }
+  const Clustering components = cluster_grid(points_, all, clustering_);
+  const std::vector<ComponentState> state = component_states(components, everything ? -kInf : a_future);
 
   std::vector<bool> take(points_.size(), false);
   for (std::size_t c = 0; c < components.clusters.size(); ++c) {
@@ -208,7 +208,7 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     if (overlaps_open) {
       continue;
     }
-    const perception::Cluster& members = components.clusters[c];
+    const Cluster& members = components.clusters[c];
     for (const std::uint32_t i : members) {
       take[i] = true;
     }
@@ -240,4 +240,4 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   return out;
 }
 
-}  // namespace rsu::core
+}  // namespace rsu::perception

@@ -1,13 +1,13 @@
-#include "v2i/association.h"
+#include "tracking/association.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "common/angles.h"
 
-#include "v2i/assignment.h"
+#include "tracking/assignment.h"
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 namespace {
 
 bool is_finite(const perception::RectangleFit& c) {
@@ -34,7 +34,7 @@ struct UnseenSpread {
 
 UnseenSpread unseen_half_extent(const perception::RectangleFit& c, const VehicleHypothesis& v,
                                 const AssociationConfig& cfg) {
-  const BoxSize& size = v.size;
+  const v2i::BoxSize& size = v.size;
   const double slack_long = size.length_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
   const double slack_wide = size.width_m * cfg.size_relative_tolerance + cfg.size_absolute_tolerance_m;
   // With the heading known (AssociationConfig::pairing_max_yaw_sigma_rad), only the pairing it gives.
@@ -67,7 +67,8 @@ UnseenSpread unseen_half_extent(const perception::RectangleFit& c, const Vehicle
   return {any ? Eigen::Vector2d(0.5 * spread) : Eigen::Vector2d::Zero(), axis_yaw};
 }
 
-bool size_consistent(const perception::RectangleFit& c, const BoxSize& size, const AssociationConfig& cfg) {
+bool size_consistent(const perception::RectangleFit& c, const v2i::BoxSize& size,
+                     const AssociationConfig& cfg) {
   const double longer = std::max(c.length0, c.length1);
   const double shorter = std::min(c.length0, c.length1);
   return longer <= size.length_m * (1.0 + cfg.size_relative_tolerance) + cfg.size_absolute_tolerance_m &&
@@ -184,4 +185,4 @@ AssociationResult associate(std::span<const perception::Detection> detections,
   return result;
 }
 
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking

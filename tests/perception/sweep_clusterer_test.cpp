@@ -1,6 +1,6 @@
 // SweepClusterer: clusters are released exactly when the sweep has passed them far enough that no
 // later point can join them (the geometric rule in sweep_clusterer.h), computed here independently.
-#include "rsu/sweep_clusterer.h"
+#include "perception/sweep_clusterer.h"
 
 #include <gtest/gtest.h>
 
@@ -20,7 +20,7 @@
 #include "sim/lidar_simulator.h"
 #include "sim/scene.h"
 
-namespace rsu::core {
+namespace rsu::perception {
 namespace {
 
 constexpr double kHz = 10.0;
@@ -37,8 +37,8 @@ LidarPoint at(double r, double azimuth_deg, int rotation = 0) {
   return p;
 }
 
-perception::ClusteringConfig clustering() {
-  perception::ClusteringConfig c;
+ClusteringConfig clustering() {
+  ClusteringConfig c;
   c.tolerance_m = 0.7;
   c.min_points = 5;
   c.max_points = 1000;
@@ -311,7 +311,7 @@ void check_exact_against_offline(const SensorModel& model, const std::vector<Pla
     ++component_size[label[k]];
   }
 
-  perception::ClusteringConfig all = clustering();
+  ClusteringConfig all = clustering();
   all.min_points = 1;
   all.max_points = std::numeric_limits<std::size_t>::max();
   SweepConfig config;
@@ -427,4 +427,4 @@ TEST(SweepClusterer, ExactAgainstOfflineClusteringVlp32c) {
 }
 
 }  // namespace
-}  // namespace rsu::core
+}  // namespace rsu::perception

@@ -1,4 +1,4 @@
-#include "v2i/association.h"
+#include "tracking/association.h"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,10 @@
 #include "common/angles.h"
 #include "common/random.h"
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 namespace {
+
+using v2i::BoxSize;
 
 const BoxSize kCar{4.89, 1.92, 1.70};
 
@@ -217,4 +219,4 @@ TEST(Association, BadInputsAreSkippedNotFatal) {
 }
 
 }  // namespace
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking

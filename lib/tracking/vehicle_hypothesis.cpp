@@ -1,13 +1,13 @@
-#include "v2i/vehicle_hypothesis.h"
+#include "tracking/vehicle_hypothesis.h"
 
 #include <cmath>
 
 #include "fusion/ctrv_model.h"
 #include "fusion/measurement_model.h"
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 
-VehicleHypothesis predict_hypothesis(const VehicleAnnouncement& a, TimeNs sweep_time,
+VehicleHypothesis predict_hypothesis(const v2i::VehicleAnnouncement& a, TimeNs sweep_time,
                                      const HypothesisConfig& config) {
   namespace f = rsu::fusion;
   f::StateVector state;
@@ -45,4 +45,4 @@ VehicleHypothesis predict_hypothesis(const VehicleAnnouncement& a, TimeNs sweep_
   return out;
 }
 
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking

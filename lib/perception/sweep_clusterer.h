@@ -30,8 +30,8 @@
 // azimuths (not exactly monotone across packets) and a slightly tilted mount (azimuths are the
 // sensor's, ranges are measured from the LiDAR's map position).
 // A closed cluster is released when, in addition, no open cluster overlaps its azimuth span, so that
-// vehicles side by side in one line of sight reach association together (RsuCore associates each
-// released batch with one global assignment).
+// vehicles side by side in one line of sight reach association together (the RSU associates each
+// released batch with one global assignment: lib/rsu/rsu_core.h).
 //
 // Bookkeeping: points pending for more than half a rotation are dropped (counted) so that the next
 // rotation's points never merge with this one's (only points within d of the LiDAR itself can stay
@@ -40,6 +40,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -48,9 +49,22 @@
 #include "common/time.h"
 #include "lidar/point.h"
 #include "perception/euclidean_clustering.h"
-#include "rsu/rsu_core_config.h"
 
-namespace rsu::core {
+namespace rsu::perception {
+
+// The release rule (file comment).
+struct SweepConfig {
+  // Extra azimuth the sweep must be past a cluster before it is released, on top of the spread of
+  // the sensor's per-laser azimuth offsets (computed from the model): covers the interpolation of
+  // firing azimuths between blocks (the VLP-32C manual's rule puts a pair up to 0.13 deg ahead of the
+  // rotor at its firing at 600 rpm, sensor_model.h) and a slightly tilted mount.
+  double release_margin_deg = 0.5;
+  // Foreground points waiting for their cluster to close; beyond this the oldest are dropped (a flood
+  // of foreground, e.g. before any background exists, cannot grow memory without bound).
+  std::size_t max_pending_points = 200000;
+  // A gap in the point stream longer than this many rotations, or time going backwards, restarts it.
+  double max_gap_rotations = 2.0;
+};
 
 struct SweptCluster {
   std::vector<LidarPoint> points;  // map frame, in arrival order
@@ -107,7 +121,17 @@ class SweepClusterer {
   const SweepClustererStats& stats() const { return stats_; }
 
  private:
+  // A component's azimuth span and whether it is closed (file comment).
+  struct ComponentState {
+    double min_u = std::numeric_limits<double>::infinity();
+    double max_u = -std::numeric_limits<double>::infinity();
+    bool closed = true;
+  };
+
   void init(double rotation_hz);
+  // Every component's state with the sweep's future points at azimuths >= a_future (-inf: all are
+  // closed, the end of the stream).
+  std::vector<ComponentState> component_states(const Clustering& components, double a_future) const;
   std::vector<SweptCluster> release(bool everything);
   void drop_stale();
   // Keeps the pending points for which drop(i) is false, in order (points_, azimuth_, range_ together).
@@ -150,4 +174,4 @@ class SweepClusterer {
   SweepClustererStats stats_;
 };
 
-}  // namespace rsu::core
+}  // namespace rsu::perception

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "perception/detection.h"
-#include "v2i/vehicle_hypothesis.h"
+#include "tracking/vehicle_hypothesis.h"
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 
 struct AssociationConfig {
   // Chi-square gate on the 2-dof centre distance: 9.21 is the 99 % quantile. Leaving a vehicle
@@ -76,4 +76,4 @@ AssociationResult associate(std::span<const perception::Detection> detections,
                             std::span<const VehicleHypothesis> vehicles,
                             const AssociationConfig& config = {});
 
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking

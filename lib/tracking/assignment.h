@@ -7,7 +7,7 @@
 #include <optional>
 #include <vector>
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 
 struct Assignment {
   // row_to_col[r] is the column given to row r, or -1 when there are more rows than columns and r got
@@ -21,4 +21,4 @@ struct Assignment {
 // finite cost instead.
 std::optional<Assignment> solve_assignment(const Eigen::MatrixXd& cost);
 
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking

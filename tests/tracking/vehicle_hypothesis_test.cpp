@@ -1,14 +1,17 @@
-#include "v2i/vehicle_hypothesis.h"
+#include "tracking/vehicle_hypothesis.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "../v2i/test_announcement.h"
 #include "common/angles.h"
-#include "test_announcement.h"
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 namespace {
+
+using v2i::VehicleAnnouncement;
+namespace testing = v2i::testing;
 
 constexpr TimeNs kT0 = 50 * kNsPerSecond;
 
@@ -76,4 +79,4 @@ TEST(VehicleHypothesis, UnknownSpeedStretchesTheGateAlongTheHeading) {
 }
 
 }  // namespace
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking

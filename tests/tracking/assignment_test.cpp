@@ -1,4 +1,4 @@
-#include "v2i/assignment.h"
+#include "tracking/assignment.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 
 #include "common/random.h"
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 namespace {
 
 // Minimum total over every injective assignment of the smaller side, by enumerating permutations.
@@ -93,4 +93,4 @@ TEST(Assignment, EmptyAndNonFiniteInputs) {
 }
 
 }  // namespace
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking

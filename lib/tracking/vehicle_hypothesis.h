@@ -9,14 +9,14 @@
 #include "common/time.h"
 #include "v2i/messages.h"
 
-namespace rsu::v2i {
+namespace rsu::tracking {
 
 struct VehicleHypothesis {
   std::uint64_t vehicle_id = 0;
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // footprint box centre, map frame
   double yaw = 0.0;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  // (centre x, centre y, yaw)
-  BoxSize size;
+  v2i::BoxSize size;
 };
 
 struct HypothesisConfig {
@@ -33,7 +33,7 @@ struct HypothesisConfig {
 };
 
 // The hypothesis for `announcement` at `sweep_time` (earlier or later than its generation time).
-VehicleHypothesis predict_hypothesis(const VehicleAnnouncement& announcement, TimeNs sweep_time,
+VehicleHypothesis predict_hypothesis(const v2i::VehicleAnnouncement& announcement, TimeNs sweep_time,
                                      const HypothesisConfig& config = {});
 
-}  // namespace rsu::v2i
+}  // namespace rsu::tracking
