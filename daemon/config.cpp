@@ -42,6 +42,15 @@ std::uint64_t unsigned_of(const YamlField& f, double max) {
   return static_cast<std::uint64_t>(v);
 }
 
+// A socket receive buffer: at least 64 KiB (less would drop a burst of one LiDAR rotation's packets),
+// at most 1 GiB (the kernel's int).
+std::size_t receive_buffer_of(const YamlField& f) {
+  const std::uint64_t v = unsigned_of(f, 1 << 30);
+  if (v < (64u << 10))
+    f.fail("must be at least 65536 bytes");
+  return static_cast<std::size_t>(v);
+}
+
 std::string address_of(const YamlField& f) {
   const std::string text = f.text();
   if (text.empty())
@@ -76,7 +85,7 @@ bool bool_of(const YamlField& f) {
 }
 
 UdpInput read_udp_input(const YamlField& u) {
-  u.expect_map({"bind_address", "port", "auxiliary_port", "reorder_packets"});
+  u.expect_map({"bind_address", "port", "auxiliary_port", "reorder_packets", "receive_buffer_bytes"});
   UdpInput in;
   in.port = 0;  // the sensor's data port unless set: read_lidar() (Velodyne) or rsud (the metadata's)
   if (u.has("bind_address"))
@@ -87,6 +96,8 @@ UdpInput read_udp_input(const YamlField& u) {
     in.auxiliary_port = port_or_zero_of(u.child("auxiliary_port"));
   if (u.has("reorder_packets"))
     in.reorder_packets = unsigned_of(u.child("reorder_packets"), 64);
+  if (u.has("receive_buffer_bytes"))
+    in.receive_buffer_bytes = receive_buffer_of(u.child("receive_buffer_bytes"));
   return in;
 }
 
@@ -271,11 +282,14 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
 }
 
 void read_v2i(const YamlField& f, DaemonConfig& c) {
-  f.expect_map({"listen_address", "port", "require_reply_to_source_address", "advertisement"});
+  f.expect_map(
+      {"listen_address", "port", "require_reply_to_source_address", "advertisement", "receive_buffer_bytes"});
   if (f.has("listen_address"))
     c.v2i_listen_address = address_of(f.child("listen_address"));
   if (f.has("port"))
     c.v2i_port = port_of(f.child("port"));
+  if (f.has("receive_buffer_bytes"))
+    c.v2i_receive_buffer_bytes = receive_buffer_of(f.child("receive_buffer_bytes"));
   if (f.has("require_reply_to_source_address")) {
     const YamlField b = f.child("require_reply_to_source_address");
     const std::string v = b.text();

@@ -30,6 +30,10 @@ struct UdpInput {
   // Packets held to put reordered ones back in time order (lidar/packet_order.h); each adds one
   // packet period of latency (VLP-32C 0.66 ms). 0: a late packet is dropped and counted.
   std::size_t reorder_packets = 0;
+  // Asked of the kernel for the data socket (read back and warned about when net.core.rmem_max caps
+  // it): ~1500 packets/s (VLP-32C) or ~2600 (a 128-ring sensor at 20 Hz), so 4 MiB hold over a second of
+  // them should the loop ever stall.
+  std::size_t receive_buffer_bytes = 4 << 20;
 };
 
 // A recorded capture (classic pcap: Ethernet, 802.1Q or Linux cooked link type) replayed as if it
@@ -138,6 +142,9 @@ struct DaemonConfig {
   std::vector<std::string> background_pcd_files;  // when set: the background, instead of learning
   std::string v2i_listen_address = "0.0.0.0";
   std::uint16_t v2i_port = 4500;
+  // Asked of the kernel for the V2I socket: 1000 vehicles at 10 Hz are 10 000 announcements/s of
+  // ~200 bytes (with their bookkeeping ~1 KiB each in the kernel): 8 MiB hold ~0.8 s of them.
+  std::size_t v2i_receive_buffer_bytes = 8 << 20;
   AdvertisementConfig advertisement;
   DdsConfig dds;
   LoggingConfig logging;

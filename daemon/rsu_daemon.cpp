@@ -12,6 +12,7 @@
 #include "daemon/host_clock.h"
 #include "daemon/peer_bus.h"
 #include "daemon/systemd_notify.h"
+#include "daemon/udp_socket.h"
 #include "io/pcd_io.h"
 #include "lidar/velodyne_packet.h"
 #include "sim/lidar_simulator.h"
@@ -29,18 +30,6 @@ asio::ip::address parse_address(const std::string& text, const char* what) {
   if (ec)
     throw std::runtime_error(std::string(what) + ": \"" + text + "\" is not an IP address");
   return address;
-}
-
-void bind_udp(asio::ip::udp::socket& socket, const asio::ip::udp::endpoint& endpoint, const char* what) {
-  boost::system::error_code ec;
-  socket.open(endpoint.protocol(), ec);
-  if (!ec)
-    socket.bind(endpoint, ec);
-  if (ec) {
-    throw std::runtime_error(std::string("cannot bind the ") + what + " socket to " +
-                             endpoint.address().to_string() + ":" + std::to_string(endpoint.port()) + ": " +
-                             ec.message());
-  }
 }
 
 std::chrono::steady_clock::duration seconds(double s) {
@@ -78,9 +67,9 @@ TimeNs RsuDaemon::clock_now() const {
 void RsuDaemon::start() {
   const udp::endpoint v2i(parse_address(config_.v2i_listen_address, "v2i.listen_address"), config_.v2i_port);
   bind_udp(v2i_socket_, v2i, "V2I");
-  // Room for bursts of announcements and packets while a cluster is being corrected.
+  // Room for bursts of announcements while a cluster is being corrected.
+  request_receive_buffer(v2i_socket_, config_.v2i_receive_buffer_bytes, "V2I");
   boost::system::error_code ignored;
-  v2i_socket_.set_option(asio::socket_base::receive_buffer_size(1 << 20), ignored);
   if (config_.advertisement.enabled)
     v2i_socket_.set_option(asio::socket_base::broadcast(true), ignored);
   spdlog::info("listening for V2I announcements on {}:{}", v2i.address().to_string(), v2i.port());
@@ -142,11 +131,9 @@ void RsuDaemon::start_input() {
     const auto address = parse_address(u->bind_address, "lidar.input.udp.bind_address");
     const udp::endpoint endpoint(address, u->port != 0 ? u->port : ports.data);
     bind_udp(lidar_socket_, endpoint, "LiDAR");
-    boost::system::error_code ignored;
-    // ~1500 packets/s (VLP-32C): 4 MB holds over 2 s of them should the loop ever stall.
-    lidar_socket_.set_option(asio::socket_base::receive_buffer_size(4 << 20), ignored);
-    spdlog::info("receiving {} packets on {}:{}", core_.lidar_decoder().model_name(), endpoint.address().to_string(),
-                 endpoint.port());
+    request_receive_buffer(lidar_socket_, u->receive_buffer_bytes, "LiDAR");
+    spdlog::info("receiving {} packets on {}:{}", core_.lidar_decoder().model_name(),
+                 endpoint.address().to_string(), endpoint.port());
     receive_lidar(lidar_socket_, lidar_buffer_, lidar_sender_);
     if (u->auxiliary_port != 0) {
       const udp::endpoint auxiliary(address, u->auxiliary_port);
@@ -614,7 +601,22 @@ void RsuDaemon::on_advertise() {
 
 void RsuDaemon::on_stats() {
   log_counters(true);
+  warn_of_kernel_drops("V2I", v2i_socket_, v2i_kernel_drops_);
+  warn_of_kernel_drops("LiDAR", lidar_socket_, lidar_kernel_drops_);
   write_stats_file();
+}
+
+void RsuDaemon::warn_of_kernel_drops(const char* what, udp::socket& socket, std::uint64_t& reported) {
+  if (!socket.is_open())
+    return;
+  const auto drops = kernel_drops(socket.native_handle());
+  if (!drops || *drops <= reported)
+    return;
+  spdlog::warn(
+      "{} socket: the kernel dropped {} datagram(s) since the last summary ({} in all): rsud did not "
+      "read them in time (raise the receive buffer, or see what kept the loop busy)",
+      what, *drops - reported, *drops);
+  reported = *drops;
 }
 
 void RsuDaemon::log_counters(bool only_nonzero) const {
@@ -634,7 +636,7 @@ void RsuDaemon::log_counters(bool only_nonzero) const {
     spdlog::info("stats: {}", peers_->stats_line());
 }
 
-void RsuDaemon::write_stats_file() const {
+void RsuDaemon::write_stats_file() {
   if (config_.stats_file.empty())
     return;
   const std::string tmp = config_.stats_file + ".tmp";
@@ -655,6 +657,10 @@ void RsuDaemon::write_stats_file() const {
       out << name << " " << value << "\n";
     for (const auto& [name, value] : core_.gauges())
       out << name << " " << value << "\n";
+    // Datagrams the kernel dropped before rsud could read them (its socket buffer was full): what was
+    // sent is what rsud counted plus these.
+    write_kernel_drops(out, "v2i", v2i_socket_);
+    write_kernel_drops(out, "lidar", lidar_socket_);
     if (capture_) {
       const PcapSkipped skipped = capture_->skipped();
       out << "capture.records " << capture_->records() << "\n";
@@ -676,6 +682,13 @@ void RsuDaemon::write_stats_file() const {
   }
   std::error_code ec;
   std::filesystem::rename(tmp, config_.stats_file, ec);
+}
+
+void RsuDaemon::write_kernel_drops(std::ostream& out, const char* prefix, udp::socket& socket) {
+  if (!socket.is_open())
+    return;
+  if (const auto drops = kernel_drops(socket.native_handle()))
+    out << prefix << ".kernel_drops " << *drops << "\n";
 }
 
 // ---- signals --------------------------------------------------------------------------------------

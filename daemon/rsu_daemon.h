@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -84,7 +85,10 @@ class RsuDaemon {
   void on_signal(int signal_number);
   void reload();
   void drain_and_stop();
-  void write_stats_file() const;
+  void write_stats_file();
+  static void warn_of_kernel_drops(const char* what, boost::asio::ip::udp::socket& socket,
+                                   std::uint64_t& reported);
+  static void write_kernel_drops(std::ostream& out, const char* prefix, boost::asio::ip::udp::socket& socket);
   // The run's clock: the host's, or during a capture replay the capture's.
   TimeNs clock_now() const;
   void log_counters(bool only_nonzero) const;
@@ -154,6 +158,8 @@ class RsuDaemon {
   std::uint64_t corrections_sent_ = 0;
   std::uint64_t correction_sends_failed_ = 0;
   std::uint64_t lidar_packets_rejected_ = 0;
+  std::uint64_t v2i_kernel_drops_ = 0;  // as last warned about
+  std::uint64_t lidar_kernel_drops_ = 0;
   steady::time_point started_ = steady::now();
   steady::time_point last_insecure_warning_{};
   steady::time_point last_clock_warning_{};

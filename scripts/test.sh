@@ -18,7 +18,7 @@
 #               TSan-built rsud on 2 shared cores cannot give). The rest is single-threaded
 #               computation: TSan would only slow it down. Only their targets are built (build.sh
 #               tsan); the simulator and the fleet driving the live tests come from build/.
-#   fuzz        every libFuzzer harness for 15 s (scripts/fuzz.sh)
+#   fuzz        every libFuzzer harness for 10 s (scripts/fuzz.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -70,7 +70,7 @@ if [ "${1:-}" != "--quick" ]; then
   end "TSan tests"
 
   begin "fuzz"
-  # Every parser of outside input under libFuzzer for 15 s each (fuzz/, clang build in build-fuzz/).
-  scripts/fuzz.sh 15
+  # Every parser of outside input under libFuzzer for 10 s each (fuzz/, clang build in build-fuzz/).
+  scripts/fuzz.sh 10
   end "fuzz"
 fi

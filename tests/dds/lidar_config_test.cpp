@@ -62,8 +62,11 @@ TEST(LidarConfig, ReadsEveryKey) {
   EXPECT_TRUE(in.loop);
   EXPECT_EQ(in.port, 2369);
   EXPECT_EQ(in.auxiliary_port, 8309);
-  const DaemonConfig udp = parse("  input: {udp: {port: 2370, auxiliary_port: 8308, reorder_packets: 3}}\n");
+  const DaemonConfig udp = parse(
+      "  input: {udp: {port: 2370, auxiliary_port: 8308, reorder_packets: 3, receive_buffer_bytes: "
+      "1048576}}\n");
   EXPECT_EQ(std::get<UdpInput>(udp.input).auxiliary_port, 8308);
+  EXPECT_EQ(std::get<UdpInput>(udp.input).receive_buffer_bytes, 1048576U);
   EXPECT_EQ(udp.core.packet_order.depth, 3U);
 }
 
@@ -87,6 +90,9 @@ TEST(LidarConfig, ErrorsNameFileLineAndField) {
       refusal("  input: {pcap: {pace: max}}\n").find("lidar.input.pcap: missing required field \"file\""),
       std::string::npos);
   EXPECT_NE(refusal("  input: {pcap: {file: a.pcap}, udp: {}}\n").find("exactly one of"), std::string::npos);
+  EXPECT_NE(refusal("  input: {udp: {receive_buffer_bytes: 4096}}\n")
+                .find("lidar.input.udp.receive_buffer_bytes: must be at least 65536 bytes"),
+            std::string::npos);
 }
 
 // lidar.calibration is read when the configuration is loaded: its tables replace the built-in ones,

@@ -295,9 +295,18 @@ def case_bad_input(h):
               "validation.length_out_of_range": 6, "security.insecure_mode": 1}
     for k, v in expect.items():
         assert s.get(k) == v, "%s = %s, expected %d" % (k, s.get(k), v)
-    # 3 garbage + 3 truncated, and the flood's first ~100 (the burst) before the limit cut in.
-    assert 6 + 100 <= s["decode.parse_error"] <= 6 + 1000, s["decode.parse_error"]
-    assert s["datagram.flood_limited"] >= 3000, s["datagram.flood_limited"]
+    # Every flood datagram is accounted for: parsed (3 garbage + 3 truncated besides), refused by the
+    # flood limit, or dropped by the kernel before rsud could read it (a slow, e.g. sanitized, rsud on
+    # busy cores); the kernel may also have dropped a few of the vehicle's announcements meanwhile.
+    drops = s["v2i.kernel_drops"]
+    flood_parsed = s["decode.parse_error"] - 6
+    flood_accounted = flood_parsed + s["datagram.flood_limited"] + drops
+    assert 5000 <= flood_accounted <= 5000 + 20, (flood_parsed, s["datagram.flood_limited"], drops)
+    received = 5000 - drops
+    assert received >= 1000, "the kernel dropped %d of the 5000 flood datagrams" % drops
+    # The flood's first ~100 (the burst) are parsed before the limit cuts in, then it refuses the rest.
+    assert 100 <= flood_parsed <= 1000, flood_parsed
+    assert s["datagram.flood_limited"] >= received - 1000, (s["datagram.flood_limited"], received)
     log = h.log()
     for reason in ("decode:parse_error", "decode:too_large", "validation:non_finite"):
         n = log.count("bad input (%s)" % reason)

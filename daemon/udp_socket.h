@@ -1,0 +1,25 @@
+#pragma once
+// The daemon's UDP sockets: binding with a clear error, the receive buffer asked of the kernel and read
+// back, and the kernel's own count of datagrams it dropped for a socket (its buffer was full), so that
+// what was sent and what rsud received can be told apart in its statistics.
+#include <boost/asio/ip/udp.hpp>
+
+#include <cstdint>
+#include <optional>
+
+namespace rsu::daemon {
+
+// Opens and binds `socket`, or throws naming `what` and the endpoint.
+void bind_udp(boost::asio::ip::udp::socket& socket, const boost::asio::ip::udp::endpoint& endpoint,
+              const char* what);
+
+// Asks for a receive buffer of `bytes` and returns what the kernel granted. Linux caps the request at
+// net.core.rmem_max without an error; a grant below the request is
+// logged as a warning naming the sysctl that caps it (deploy/ ships a sysctl.d snippet).
+std::size_t request_receive_buffer(boost::asio::ip::udp::socket& socket, std::size_t bytes, const char* what);
+
+// Datagrams the kernel dropped for this socket since it was opened (SO_MEMINFO's drop count), or nothing
+// where the kernel cannot say (before Linux 4.12).
+std::optional<std::uint64_t> kernel_drops(int socket_fd);
+
+}  // namespace rsu::daemon
