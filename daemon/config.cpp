@@ -495,7 +495,8 @@ void load_lidar_files(DaemonConfig& c) {
   }
 }
 
-DaemonConfig load_config(const std::string& path) {
+DaemonConfig load_config(const ConfigSource& source) {
+  const std::string& path = source.path;
   std::string text;
   try {
     text = io::read_text_file(path);
@@ -503,6 +504,8 @@ DaemonConfig load_config(const std::string& path) {
     throw ConfigError(e.what());
   }
   DaemonConfig config = parse_config(text, path);
+  if (!source.key_file.empty())
+    config.security.key_file = source.key_file;
   load_lidar_files(config);
   load_security(config);
   return config;

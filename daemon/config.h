@@ -171,8 +171,16 @@ void load_security(DaemonConfig& config);
 // calibration is applied here). Throws ConfigError naming the file (and line) when one is missing or
 // malformed.
 void load_lidar_files(DaemonConfig& config);
-// parse_config + load_lidar_files + load_security.
-DaemonConfig load_config(const std::string& path);
+// Where rsud's configuration comes from: the file, and what the command line overrides in it.
+struct ConfigSource {
+  std::string path;
+  // Non-empty: replaces security.key_file (rsud --key; under the shipped systemd unit the credential
+  // systemd loaded for rsud, %d/rsu.key, since the service's own user cannot read /etc/rsud/keys/rsu.key).
+  std::string key_file;
+};
+
+// parse_config + the overrides + load_lidar_files + load_security.
+DaemonConfig load_config(const ConfigSource& source);
 
 // A few lines describing the configuration (for --check-config and the start-up log).
 std::string summarize(const DaemonConfig& config);

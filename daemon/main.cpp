@@ -73,7 +73,10 @@ int main(int argc, char** argv) {
   options.add_options()("help,h", "show this help and exit")("version", "print the version and exit")(
       "config,c", po::value<std::string>()->default_value("/etc/rsud/rsud.yaml"),
       "configuration file (YAML)")(
-      "check-config", "parse and validate the configuration, print a summary, exit 0 (valid) or 1");
+      "check-config", "parse and validate the configuration, print a summary, exit 0 (valid) or 1")(
+      "key", po::value<std::string>()->value_name("FILE"),
+      "the RSU's secret key file, instead of security.key_file (the shipped systemd unit passes the "
+      "credential it loaded: --key %d/rsu.key)");
   po::variables_map vm;
   try {
     po::store(po::parse_command_line(argc, argv, options), vm);
@@ -90,11 +93,14 @@ int main(int argc, char** argv) {
     std::cout << "rsud " << RSUD_VERSION << "\n";
     return 0;
   }
-  const std::string path = vm["config"].as<std::string>();
+  rsu::daemon::ConfigSource source{vm["config"].as<std::string>(), {}};
+  if (vm.count("key"))
+    source.key_file = vm["key"].as<std::string>();
+  const std::string& path = source.path;
 
   rsu::daemon::DaemonConfig config;
   try {
-    config = rsu::daemon::load_config(path);
+    config = rsu::daemon::load_config(source);
     if (vm.count("check-config")) {
       check_config(config);
       std::cout << path << ": OK\n" << rsu::daemon::summarize(config);
@@ -118,7 +124,7 @@ int main(int argc, char** argv) {
   }
   try {
     boost::asio::io_context io;
-    rsu::daemon::RsuDaemon daemon(io, std::move(config), path);
+    rsu::daemon::RsuDaemon daemon(io, std::move(config), source);
     daemon.start();
     io.run();
     return daemon.exit_code();

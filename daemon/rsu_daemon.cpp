@@ -38,10 +38,10 @@ std::chrono::steady_clock::duration seconds(double s) {
 
 }  // namespace
 
-RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, std::string config_path)
+RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, ConfigSource source)
     : io_(io),
       config_(std::move(config)),
-      config_path_(std::move(config_path)),
+      source_(std::move(source)),
       core_(config_.core),
       bad_input_(config_.logging.bad_input_log_first, seconds(config_.logging.summary_interval_s)),
       v2i_socket_(io),
@@ -708,9 +708,9 @@ void RsuDaemon::on_signal(int signal_number) {
 
 void RsuDaemon::reload() {
   notify_reloading();
-  spdlog::info("SIGHUP: reloading {}", config_path_);
+  spdlog::info("SIGHUP: reloading {}", source_.path);
   try {
-    DaemonConfig next = load_config(config_path_);
+    DaemonConfig next = load_config(source_);
     const core::ReloadSummary summary = core_.reload(next.core, clock_now());
     spdlog::info("configuration reloaded: {} of {} registered vehicle(s) kept, background {}",
                  summary.vehicles_after, summary.vehicles_before,

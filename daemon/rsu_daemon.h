@@ -36,8 +36,8 @@ class PeerBus;
 
 class RsuDaemon {
  public:
-  // `config_path` is re-read on SIGHUP.
-  RsuDaemon(boost::asio::io_context& io, DaemonConfig config, std::string config_path);
+  // `source` is read again on SIGHUP.
+  RsuDaemon(boost::asio::io_context& io, DaemonConfig config, ConfigSource source);
   ~RsuDaemon();
 
   // Binds the sockets, loads the background (if configured) and arms the timers and signals. Throws
@@ -97,7 +97,7 @@ class RsuDaemon {
 
   boost::asio::io_context& io_;
   DaemonConfig config_;
-  std::string config_path_;
+  ConfigSource source_;
   core::RsuCore core_;
   BadInputLog bad_input_;
 

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "dds/dds_error.h"
+#include "io/text_file.h"
 
 namespace rsu::dds {
 
@@ -14,7 +15,8 @@ Participant::Participant(const ParticipantConfig& config) : domain_id_(config.do
   if (!config.cyclone_config.empty()) {
     // Cyclone would only log a parse failure of a missing file: say plainly which file is missing.
     if (!std::ifstream(config.cyclone_config))
-      throw std::runtime_error("dds: cannot read the Cyclone configuration " + config.cyclone_config);
+      throw std::runtime_error("dds: cannot read the Cyclone configuration " + config.cyclone_config + ": " +
+                               io::errno_text());
     const std::string uri = "file://" + std::filesystem::absolute(config.cyclone_config).string();
     const dds_entity_t domain = dds_create_domain(config.domain_id, uri.c_str());
     if (domain == DDS_RETCODE_PRECONDITION_NOT_MET) {

@@ -1,4 +1,5 @@
 #include "io/capture_file.h"
+#include "io/text_file.h"
 
 namespace rsu::io {
 namespace {
@@ -36,7 +37,7 @@ void CaptureFile::open() {
   in_.clear();
   in_.open(path_, std::ios::binary);
   if (!in_) {
-    throw CaptureError(path_ + ": cannot open");
+    throw CaptureError(path_ + ": cannot open: " + errno_text());
   }
   reader_ = PcapReader();
   at_end_ = false;

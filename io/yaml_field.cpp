@@ -1,16 +1,15 @@
 #include "io/yaml_field.h"
 
-#include <fstream>
+#include "io/text_file.h"
 
 namespace rsu::io {
 
 std::string read_text_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in)
-    throw YamlError(path + ":0: <file>: cannot open");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  try {
+    return read_whole_file(path);
+  } catch (const FileError& e) {
+    throw YamlError(path + ":0: <file>: " + e.problem());
+  }
 }
 
 }  // namespace rsu::io

@@ -33,7 +33,7 @@ inline YAML::Node parse_yaml(const std::string& text, const std::string& source_
     throw YamlError(source_name + ":" + std::to_string(e.mark.line + 1) + ": <syntax>: " + e.msg);
   }
 }
-// Reads a file; a missing file becomes "<path>:0: <file>: cannot open".
+// Reads a file; one that cannot be opened becomes "<path>:0: <file>: cannot open: <the OS's reason>".
 std::string read_text_file(const std::string& path);
 
 class YamlField {

@@ -108,7 +108,7 @@ TEST(LidarConfig, CalibrationFileIsReadIntoTheDecodersTables) {
     std::ofstream(dir / "rsud.yaml") << "rsu_id: 1\nsecurity: {mode: insecure}\nlidar:\n  model: vlp32c\n"
                                      << "  calibration: " << calibration << "\n"
                                      << "  mount: {x: 0, y: 0, z: 2}\n  input: {udp: {}}\n";
-    return load_config((dir / "rsud.yaml").string());
+    return load_config({(dir / "rsud.yaml").string(), {}});
   };
   const DaemonConfig c = config_with("VLP32.yaml");
   ASSERT_TRUE(c.core.sensor_options.calibrated_model.has_value());

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 
+#include "io/text_file.h"
 #include "v2i/security/ed25519.h"
 #include "v2i/security/key_text.h"
 #include "v2i/security/trust_list.h"
@@ -44,17 +45,21 @@ constexpr const char* kAbout =
     "\n"
     "options";
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in)
-    throw std::runtime_error("cannot read " + path.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+// The folders a key or trust list goes into, made when missing (mode 0755: the trust list in them must
+// stay readable by rsud's own user; the secret key alone is 0600).
+void make_parent_folders(const fs::path& file) {
+  const fs::path parent = file.parent_path();
+  if (parent.empty())
+    return;
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec)
+    throw std::runtime_error("cannot create the folder " + parent.string() + ": " + ec.message());
 }
 
 // Writes `text` to `path` with `mode`; refuses an existing file unless `force`.
 void write_new_file(const fs::path& path, const std::string& text, mode_t mode, bool force) {
+  make_parent_folders(path);
   const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (force ? O_TRUNC : O_EXCL);
   const int fd = ::open(path.c_str(), flags, mode);
   if (fd < 0) {
@@ -76,7 +81,7 @@ void write_new_file(const fs::path& path, const std::string& text, mode_t mode, 
 }
 
 void add_to_trust_list(const fs::path& list, const TrustEntry& entry) {
-  const std::string existing = fs::exists(list) ? read_text(list) : std::string();
+  const std::string existing = fs::exists(list) ? rsu::io::read_whole_file(list) : std::string();
   std::string updated = existing;
   if (!updated.empty() && updated.back() != '\n')
     updated += '\n';
@@ -85,9 +90,10 @@ void add_to_trust_list(const fs::path& list, const TrustEntry& entry) {
   updated += trust_entry_text(entry);
   // The whole result must parse: a malformed list or a key listed twice is refused, nothing written.
   parse_trust_list_text(updated, list.string());
+  make_parent_folders(list);
   std::ofstream out(list, std::ios::app);
   if (!out || !(out << updated.substr(existing.size())) || !out.flush())
-    throw std::runtime_error("cannot append to " + list.string());
+    throw std::runtime_error("cannot append to " + list.string() + ": " + rsu::io::errno_text());
 }
 
 int run(int argc, char** argv) {
@@ -141,7 +147,7 @@ int run(int argc, char** argv) {
     std::cout << "key id " << to_hex(key.key_id()) << ": wrote " << secret_path.string()
               << " (secret, mode 0600) and " << public_path.string() << "\n";
   } else {
-    public_key = parse_public_key_text(read_text(public_key_path), public_key_path);
+    public_key = parse_public_key_text(rsu::io::read_whole_file(public_key_path), public_key_path);
   }
   if (!trust_list.empty()) {
     // Parse the ids with the trust list's own rules (a one-line list).

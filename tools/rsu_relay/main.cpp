@@ -14,6 +14,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "io/text_file.h"
 #include "tools/rsu_relay/relay.h"
 #include "v2i/security/key_text.h"
 #include "vehicle_client/udp_endpoint_text.h"
@@ -99,13 +100,11 @@ void add_link_options(po::options_description& d) {
 }
 
 std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
-    throw po::error("cannot read \"" + path + "\"");
+  try {
+    return io::read_whole_file(path);
+  } catch (const io::FileError& e) {
+    throw po::error(e.what());
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 // Empty when --help was given (and printed).
@@ -217,7 +216,8 @@ int run(const Options& o) {
   if (!o.stats_path.empty()) {
     std::FILE* f = std::fopen(o.stats_path.c_str(), "w");
     if (f == nullptr) {
-      std::fprintf(stderr, "rsu-relay: cannot write --stats \"%s\"\n", o.stats_path.c_str());
+      std::fprintf(stderr, "rsu-relay: --stats: %s: cannot open: %s\n", o.stats_path.c_str(),
+                   io::errno_text().c_str());
       return 1;
     }
     write_stats(f, relay.stats());

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "io/text_file.h"
 #include "vehicle_client/udp_endpoint_text.h"
 
 namespace rsu::tools {
@@ -50,7 +51,8 @@ Relay::Relay(asio::io_context& io, const RelayConfig& config)
   if (!config_.tamper_log_path.empty()) {
     tamper_log_ = std::fopen(config_.tamper_log_path.c_str(), "w");
     if (tamper_log_ == nullptr) {
-      throw std::runtime_error("cannot write --tamper-log \"" + config_.tamper_log_path + "\"");
+      throw std::runtime_error("--tamper-log: " + config_.tamper_log_path +
+                               ": cannot open: " + io::errno_text());
     }
     std::fprintf(tamper_log_, "sweep_time_ns,rsu_id,sequence,altered,burst,x,y,cxx,cyy\n");
   }

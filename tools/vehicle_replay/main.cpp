@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "io/text_file.h"
 #include "vehicle/vehicle_core.h"
 #include "vehicle_client/cli/csv_writers.h"
 #include "vehicle_client/ndt_csv.h"
@@ -37,7 +38,7 @@ std::vector<std::string> split(const std::string& line) {
 std::vector<vehicle_client::ReceivedCorrection> read_corrections(const std::string& path) {
   std::ifstream in(path);
   if (!in) {
-    throw std::runtime_error("cannot read \"" + path + "\"");
+    throw std::runtime_error(path + ": cannot open: " + io::errno_text());
   }
   std::string line;
   std::getline(in, line);
@@ -83,7 +84,7 @@ int run(const po::variables_map& vm) {
   if (vm.count("corrections")) {
     decisions = std::fopen(vm["corrections"].as<std::string>().c_str(), "w");
     if (decisions == nullptr) {
-      throw std::runtime_error("cannot write --corrections");
+      throw std::runtime_error("--corrections: cannot open: " + io::errno_text());
     }
     std::fprintf(decisions, "%s\n", vehicle_client::cli::kCorrectionHeader);
   }

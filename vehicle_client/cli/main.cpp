@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "io/text_file.h"
 #include "v2i/security/key_text.h"
 #include "v2i/security/trust_list.h"
 #include "vehicle/vehicle_core.h"
@@ -89,13 +90,11 @@ struct Options {
 };
 
 std::string read_file(const std::string& path, const char* option) {
-  std::ifstream in(path);
-  if (!in) {
-    throw std::invalid_argument(std::string(option) + ": cannot read \"" + path + "\"");
+  try {
+    return io::read_whole_file(path);
+  } catch (const io::FileError& e) {
+    throw std::runtime_error(std::string(option) + ": " + e.what());
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 void warn_insecure() {
@@ -231,7 +230,8 @@ class Session {
     if (!options_.corrections_path.empty()) {
       corrections_.reset(std::fopen(options_.corrections_path.c_str(), "w"));
       if (!corrections_) {
-        throw std::runtime_error("cannot write --corrections file \"" + options_.corrections_path + "\"");
+        throw std::runtime_error("--corrections: " + options_.corrections_path +
+                                 ": cannot open: " + io::errno_text());
       }
       std::fprintf(corrections_.get(), "%s\n", kCorrectionHeader);
     }

@@ -3,6 +3,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "io/text_file.h"
+
 namespace rsu::vehicle_client::cli {
 namespace {
 
@@ -69,7 +71,7 @@ void write_stats_file(const std::string& path, const VehicleClientStats& c,
                       const vehicle::VehicleCore& core) {
   std::ofstream out(path);
   if (!out) {
-    throw std::runtime_error("cannot write --stats file \"" + path + "\"");
+    throw std::runtime_error("--stats: " + path + ": cannot open: " + io::errno_text());
   }
   out << "announcements.sent " << c.announcements_sent << "\ncorrections.accepted " << c.accepted()
       << "\ncorrections.rejected " << c.rejected() << "\n";
