@@ -4,7 +4,10 @@
 // a small capture and a small PCD, and packets of the real Ouster captures (tests/data/real/ouster) in
 // ouster_packet_fuzzer's framing. The configuration and scenario seeds are the shipped files
 // (deploy/rsud.yaml, scenarios/*.yaml) and the Ouster metadata seeds the real metadata files, copied by
-// hand. Usage: fuzz_seed_corpus <dir>.
+// hand; the Velodyne seeds also hold packets of the real Velodyne captures (tests/data/real), the pcap
+// seeds the first records of two of them, and the calibration seeds nebula's factory files. Usage:
+// fuzz_seed_corpus <dir>.
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +16,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "common/time.h"
@@ -229,6 +233,80 @@ Bytes cut_packet(const Bytes& packet, std::size_t edge, std::size_t column_heade
   return out;
 }
 
+Bytes real_file(const std::string& name) {
+  std::ifstream in(fs::path(RSU_SOURCE_DIR) / "tests/data/real" / name, std::ios::binary);
+  if (!in)
+    throw std::runtime_error(name + ": cannot open");
+  return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// The payloads of a real Velodyne capture sent to `port`, from the n-th on, `count` of them.
+std::vector<Bytes> real_payloads(const std::string& capture, std::uint16_t port, std::size_t from,
+                                 std::size_t count) {
+  std::vector<Bytes> out;
+  for (const rsu::UdpDatagram& d : rsu::parse_pcap(real_file(capture)).datagrams) {
+    if (d.dst.port != port)
+      continue;
+    if (from > 0) {
+      --from;
+      continue;
+    }
+    if (out.size() == count)
+      break;
+    out.push_back(d.payload);
+  }
+  return out;
+}
+
+// velodyne_packet_fuzzer's framing: flags (bits 0-1 model, 3-4 returns), u16 step (us), u16 size code.
+void write_velodyne_real(const fs::path& dir) {
+  const auto seed = [&](const char* name, std::uint8_t flags, std::uint32_t step_us, std::uint32_t size_code,
+                        const std::vector<Bytes>& payloads) {
+    Bytes input{flags};
+    put_u16(input, step_us);
+    put_u16(input, size_code);
+    for (const Bytes& p : payloads)
+      input.insert(input.end(), p.begin(), p.end());
+    write_file(dir / name, input);
+  };
+  seed("vlp16_dual_real", 0, 664, 0, real_payloads("nebula_vlp16_dual_4scans.pcap", 2368, 0, 6));
+  seed("vlp16_dual_strongest_real", 1 << 3, 664, 0,
+       real_payloads("nebula_vlp16_dual_4scans.pcap", 2368, 6, 4));
+  seed("vlp32c_field_of_view_gap_real", 1, 664, 0, real_payloads("nebula_vlp32c_5scans.pcap", 2368, 74, 4));
+  seed("hdl32e_real", 2, 553, 0, real_payloads("rlu_hdl32e_driving_876pkts.pcap", 2368, 0, 6));
+  seed("hdl32e_position_gprmc_real", 2, 5000, 1,
+       real_payloads("rlu_hdl32e_driving_876pkts.pcap", 8308, 0, 3));
+  seed("vlp16_early_firmware_real", 0, 1327, 0, real_payloads("rlu_vlp16_earlyfw_84pkts.pcap", 2368, 0, 4));
+}
+
+// The first records of two real captures, as they are on disk (global header included).
+void write_pcap_real(const fs::path& dir) {
+  const auto first_records = [](const std::string& capture, std::size_t records) {
+    const Bytes file = real_file(capture);
+    std::size_t at = 24;
+    for (std::size_t i = 0; i < records && at + 16 <= file.size(); ++i) {
+      const std::size_t captured =
+          file[at + 8] | (file[at + 9] << 8) | (file[at + 10] << 16) | (std::size_t{file[at + 11]} << 24);
+      at += 16 + captured;
+    }
+    return Bytes(file.begin(), file.begin() + static_cast<std::ptrdiff_t>(std::min(at, file.size())));
+  };
+  // 12 records: data packets and position packets whose IPv4 length is wrong (early VLP-16 firmware).
+  write_file(dir / "vlp16_early_firmware_real.pcap", first_records("rlu_vlp16_earlyfw_84pkts.pcap", 12));
+  write_file(dir / "vlp32c_real.pcap", first_records("nebula_vlp32c_5scans.pcap", 6));
+}
+
+// velodyne_calibration_fuzzer's framing: the model byte (0 VLP-16, 1 VLP-32C), then the file.
+void write_calibration(const fs::path& dir) {
+  for (const auto& [name, model, file] : {std::tuple{"vlp16_factory", 0, "nebula_calibration/VLP16.yaml"},
+                                          std::tuple{"vlp32c_factory", 1, "nebula_calibration/VLP32.yaml"}}) {
+    Bytes seed{static_cast<std::uint8_t>(model)};
+    const Bytes text = real_file(file);
+    seed.insert(seed.end(), text.begin(), text.end());
+    write_file(dir / name, seed);
+  }
+}
+
 // Ouster: the format byte of ouster_packet_fuzzer.cpp, then u16-length records of packets from the
 // real captures (as recorded, or cut down to the harness's smaller formats 2 and 3).
 void write_ouster(const fs::path& dir) {
@@ -274,7 +352,10 @@ int main(int argc, char** argv) {
   write_v2i(root / "v2i_datagram");
   write_rsu(root / "rsu_datagram");
   write_velodyne(root / "velodyne_packet");
+  write_velodyne_real(root / "velodyne_packet");
   write_pcap(root / "pcap");
+  write_pcap_real(root / "pcap");
+  write_calibration(root / "velodyne_calibration");
   write_pcd(root / "pcd");
   write_ouster(root / "ouster_packet");
   std::cout << "seed corpora written to " << root << "\n";

@@ -1,20 +1,50 @@
-// Fuzzes the pcap parser (lib/lidar/pcap.h) that replays recorded Velodyne traffic: any file must give
-// its complete UDP datagrams, counted skips and at most one error, never a crash.
+// Fuzzes the pcap reader (lib/lidar/pcap.h) that rsud and rsu-decode replay captures with: any file must
+// give its complete UDP datagrams, counted skips and at most one error, never a crash; and read in
+// pieces (as a file is, chunk by chunk) it must give exactly what the whole file gives.
+//
+// Input: the capture's bytes; their first byte also picks the piece size (1 to 256 bytes).
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <span>
+#include <vector>
 
 #include "lidar/pcap.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const rsu::PcapParseResult result = rsu::parse_pcap(std::span<const std::uint8_t>(data, size));
+  const std::span<const std::uint8_t> bytes(data, size);
+  const rsu::PcapParseResult result = rsu::parse_pcap(bytes);
   (void)rsu::to_string(result.error);
   std::size_t payload_bytes = 0;
   for (const rsu::UdpDatagram& d : result.datagrams)
     payload_bytes += d.payload.size();
+  // Payloads are copied out of the input: they cannot exceed it (fragments put together excepted:
+  // each fragment's bytes are in the input too).
   if (payload_bytes > size) {
-    std::abort();  // payloads are copied out of the input: they cannot exceed it
+    std::abort();
+  }
+
+  const std::size_t piece = size > 0 ? std::size_t{data[0]} + 1 : 1;
+  rsu::PcapReader reader;
+  std::vector<rsu::UdpDatagram> pieces;
+  rsu::UdpDatagram d;
+  for (std::size_t at = 0; at < size; at += piece) {
+    reader.feed(bytes.subspan(at, std::min(piece, size - at)));
+    for (;;) {
+      const rsu::PcapReader::Next next = reader.next(d);
+      if (next == rsu::PcapReader::Next::datagram)
+        pieces.push_back(d);
+      else if (next != rsu::PcapReader::Next::skipped)
+        break;
+    }
+  }
+  if (reader.finish() != result.error || pieces.size() != result.datagrams.size()) {
+    std::abort();  // read in pieces, the capture reads the same
+  }
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    if (pieces[i].payload != result.datagrams[i].payload || pieces[i].time_ns != result.datagrams[i].time_ns)
+      std::abort();
   }
   return 0;
 }
