@@ -137,7 +137,12 @@ void AnnouncementIntake::report(CounterList& out) const {
   out.add_all("datagram", datagram_stages_);
   out.add_all("peer", peer_stages_);
   out.add_all("decode", decode_counts_, v2i::DecodeStatus::kEmpty);  // kOk is no refusal
-  out.add_all("auth", authenticator_.counts());
+  // auth.* counts the datagrams that reached authentication: an undecodable one (AuthVerdict::kMalformed)
+  // is counted once, by its decode.* reason, so that every refused datagram has exactly one reason.
+  const EnumCounter<v2i::AuthVerdict>& auth = authenticator_.counts();
+  for (const auto verdict : {v2i::AuthVerdict::kAccepted, v2i::AuthVerdict::kAcceptedUnverified})
+    out.add("auth", to_string(verdict), auth.count(verdict));
+  out.add_all("auth", auth, v2i::AuthVerdict::kUnsigned);
   out.add("auth", "signers_tracked", authenticator_.replay().tracked());
   out.add("auth", "sequence_restarts", authenticator_.replay().stats().restarts);
   out.add("auth", "signers_evicted", authenticator_.replay().stats().evictions);
