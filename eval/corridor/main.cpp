@@ -12,6 +12,7 @@
 #include "eval/corridor/experiment_config.h"
 #include "eval/corridor/report.h"
 #include "eval/corridor/vehicle_ndt_run.h"
+#include "tools/cli/version.h"
 
 namespace po = boost::program_options;
 using namespace rsu;
@@ -63,9 +64,11 @@ int run_report(const eval::CorridorExperimentConfig& config, const std::filesyst
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-corridor"))
+    return 0;
   po::options_description options(
       "rsu-corridor {ndt|report} EXPERIMENT [--out DIR]: the paper's realistic experiment (Sec. 4)");
-  options.add_options()("help,h", "show this help")(
+  options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
       "out,o", po::value<std::string>()->default_value("out/corridor"), "output folder")(
       "command", po::value<std::string>(), "ndt or report")(
       "experiment", po::value<std::string>(), "experiment file, e.g. scenarios/corridor_experiment.yaml");
@@ -88,6 +91,9 @@ int main(int argc, char** argv) {
     if (command == "report")
       return run_report(config, out);
     std::fprintf(stderr, "rsu-corridor: unknown command \"%s\" (ndt or report)\n", command.c_str());
+    return 2;
+  } catch (const po::error& e) {  // unknown option, missing value: a usage error
+    std::fprintf(stderr, "rsu-corridor: %s (see --help)\n", e.what());
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "rsu-corridor: %s\n", e.what());

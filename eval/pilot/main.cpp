@@ -14,6 +14,7 @@
 #include "eval/pilot/pilot_matrix.h"
 #include "eval/pilot/pilot_summary.h"
 #include "sim/scenario.h"
+#include "tools/cli/version.h"
 
 namespace po = boost::program_options;
 
@@ -100,7 +101,7 @@ const char* kFixConfigNote =
 int run_single(int argc, char** argv) {
   rsu::eval::PilotConfig defaults;
   po::options_description options("rsu-pilot [options]: the paper's pilot experiment (Sec. 3.1)");
-  options.add_options()("help,h", "show this help")(
+  options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
       "out,o", po::value<std::string>()->default_value("out/pilot"), "output folder")(
       "models", po::value<std::string>()->default_value("vlp16,vlp32c"), "comma-separated LiDAR models")(
       "lidar-height", po::value<double>()->default_value(defaults.lidar_height_m),
@@ -155,7 +156,7 @@ int run_matrix_command(int argc, char** argv) {
   po::options_description options(
       "rsu-pilot matrix [options]: the pilot over LiDAR mounts x models x vehicles; writes one folder per "
       "cell (cells.csv, summary.json) and matrix.md / matrix.csv");
-  options.add_options()("help,h", "show this help")(
+  options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
       "out,o", po::value<std::string>()->default_value("out/pilot_matrix"), "output folder")(
       "mounts", po::value<std::string>()->default_value("2,4,6,8"), "LiDAR heights, m")(
       "models", po::value<std::string>()->default_value("vlp16,vlp32c,generic128"), "LiDAR models")(
@@ -211,6 +212,8 @@ int run_matrix_command(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-pilot"))
+    return 0;
   try {
     if (argc > 1 && std::string(argv[1]) == "matrix")
       return run_matrix_command(argc - 1, argv + 1);

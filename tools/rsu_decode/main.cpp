@@ -20,6 +20,7 @@
 #include "lidar/frame_assembler.h"
 #include "lidar/lidar_decoder.h"
 #include "lidar/velodyne_packet.h"
+#include "tools/cli/version.h"
 
 namespace {
 
@@ -168,10 +169,12 @@ int decode(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-decode"))
+    return 0;
   Options o;
   std::string returns = "both";
   po::options_description visible(kAbout);
-  visible.add_options()("help,h", "show this help and exit")(
+  visible.add_options()("help,h", "show this help and exit")("version", rsu::cli::kVersionHelp)(
       "out,o", po::value<std::string>(&o.out), "folder for the rotation_NNNN.pcd files (created)")(
       "model,m", po::value<std::string>(&o.model),
       "the sensor: vlp16, vlp32c, hdl32e (default: from the packets), or an Ouster (os1-128, ..., with "

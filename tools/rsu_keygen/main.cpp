@@ -17,6 +17,7 @@
 #include <string>
 
 #include "io/text_file.h"
+#include "tools/cli/version.h"
 #include "v2i/security/ed25519.h"
 #include "v2i/security/key_text.h"
 #include "v2i/security/trust_list.h"
@@ -26,6 +27,12 @@ namespace {
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
 using namespace rsu::v2i::security;
+
+// A command line that cannot be run as given: exit code 2, as for every program's usage errors.
+class UsageError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
 
 constexpr const char* kAbout =
     "rsu-keygen: Ed25519 keys and trust lists for signed V2I messages.\n"
@@ -103,8 +110,9 @@ int run(int argc, char** argv) {
   std::string ids_text;
   std::string public_key_path;
   po::options_description visible(kAbout);
-  visible.add_options()("help,h", "show this help")("force", "overwrite existing key files")(
-      "trust-list", po::value<std::string>(&trust_list), "trust list file to add the public key to")(
+  visible.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+      "force", "overwrite existing key files")("trust-list", po::value<std::string>(&trust_list),
+                                               "trust list file to add the public key to")(
       "role", po::value<std::string>(&role_text), "rsu or vehicle (with --trust-list)")(
       "ids", po::value<std::string>(&ids_text),
       "the ids the key may sign for, e.g. 7 or 7,8 (with --trust-list)")(
@@ -116,18 +124,18 @@ int run(int argc, char** argv) {
   po::variables_map vm;
   po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
   if (vm.count("help") || argc == 1) {
-    std::cout << visible << "\n";
-    return 0;
+    (argc == 1 ? std::cerr : std::cout) << visible << "\n";
+    return argc == 1 ? 2 : 0;  // nothing asked: a usage error, as in every program
   }
   po::notify(vm);
   if (name.empty() == public_key_path.empty())
-    throw std::invalid_argument("give either NAME (make a key pair) or --public-key (list an existing key)");
+    throw UsageError("give either NAME (make a key pair) or --public-key (list an existing key)");
   if (!public_key_path.empty() && trust_list.empty())
-    throw std::invalid_argument("--public-key needs --trust-list");
+    throw UsageError("--public-key needs --trust-list");
   if (trust_list.empty() != role_text.empty() || trust_list.empty() != ids_text.empty())
-    throw std::invalid_argument("--trust-list, --role and --ids go together");
+    throw UsageError("--trust-list, --role and --ids go together");
   if (!role_text.empty() && role_text != "rsu" && role_text != "vehicle")
-    throw std::invalid_argument("--role must be rsu or vehicle, got \"" + role_text + "\"");
+    throw UsageError("--role must be rsu or vehicle, got \"" + role_text + "\"");
 
   PublicKey public_key{};
   if (!name.empty()) {
@@ -163,8 +171,16 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-keygen"))
+    return 0;
   try {
     return run(argc, argv);
+  } catch (const po::error& e) {  // unknown option, missing value
+    std::cerr << "rsu-keygen: " << e.what() << " (see --help)\n";
+    return 2;
+  } catch (const UsageError& e) {
+    std::cerr << "rsu-keygen: " << e.what() << " (see --help)\n";
+    return 2;
   } catch (const std::exception& e) {
     std::cerr << "rsu-keygen: " << e.what() << "\n";
     return 1;

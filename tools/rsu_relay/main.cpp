@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "io/text_file.h"
+#include "tools/cli/version.h"
 #include "tools/rsu_relay/relay.h"
 #include "v2i/security/key_text.h"
 #include "vehicle_client/udp_endpoint_text.h"
@@ -115,8 +116,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
   double burst_period_s = 0.0, burst_length_s = 0.0;
   long long tamper_from_ns = 0;
   Options o;
-  d.add_options()("help,h", "show this help")("vehicle", po::value<std::string>(&vehicle)->required(),
-                                              "ADDR:PORT where the vehicle receives corrections")(
+  d.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+      "vehicle", po::value<std::string>(&vehicle)->required(),
+      "ADDR:PORT where the vehicle receives corrections")(
       "listen", po::value<std::vector<std::string>>(&listen)->required(),
       "ADDR:PORT taking the vehicle's announcements for the matching --rsu (repeat)")(
       "rsu", po::value<std::vector<std::string>>(&rsus)->required(),
@@ -230,6 +232,8 @@ int run(const Options& o) {
 }  // namespace rsu::tools
 
 int main(int argc, char** argv) {
+  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-relay"))
+    return 0;
   std::optional<rsu::tools::Options> options;
   try {
     options = rsu::tools::parse_options(argc, argv);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "tools/cli/version.h"
 #include "tools/rsu_sim/commands.h"
 
 namespace {
@@ -18,12 +19,15 @@ constexpr const char* kUsage =
     "  simulate SCENARIO   simulate frames; write PCD frames, a Velodyne pcap, the truth and a top-down\n"
     "                      picture's data into --out (see rsu-sim simulate --help)\n"
     "  stream SCENARIO     send the scenario's Velodyne packets over UDP (see rsu-sim stream --help)\n"
+    "  --version           print the version and exit\n"
     "\n"
     "Scenario files: scenarios/*.yaml (pilot.yaml, corridor.yaml).\n";
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-sim"))
+    return 0;
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
     std::fputs(kUsage, argc < 2 ? stderr : stdout);
     return argc < 2 ? 2 : 0;

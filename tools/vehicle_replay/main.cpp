@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "io/text_file.h"
+#include "tools/cli/version.h"
 #include "vehicle/vehicle_core.h"
 #include "vehicle_client/cli/csv_writers.h"
 #include "vehicle_client/ndt_csv.h"
@@ -138,13 +139,15 @@ int run(const po::variables_map& vm) {
 }  // namespace rsu::tools
 
 int main(int argc, char** argv) {
+  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-vehicle-replay"))
+    return 0;
   namespace po = boost::program_options;
   po::options_description d(
       "rsu-vehicle-replay --corrections-in CORRECTIONS.csv [--corrections OUT.csv] [--no-integrity] < "
       "ndt.csv "
       "> fused.csv\n(the NDT CSV and the corrections file rsu-vehicle read and wrote in a live "
       "run)\n\noptions");
-  d.add_options()("help,h", "show this help")(
+  d.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
       "corrections-in", po::value<std::string>()->required(),
       "the corrections rsu-vehicle received (its --corrections file)")(
       "corrections", po::value<std::string>(), "write them again with the replay's decisions")(

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "io/text_file.h"
+#include "tools/cli/version.h"
 #include "v2i/security/key_text.h"
 #include "v2i/security/trust_list.h"
 #include "vehicle/vehicle_core.h"
@@ -129,8 +130,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
   std::string trust_path;
   double max_age_ms = 1000.0;
   po::options_description d(kAbout);
-  d.add_options()("help,h", "show this help")("vehicle-id", po::value<std::uint64_t>(&vehicle_id)->required(),
-                                              "non-zero vehicle id (stable for the trip)")(
+  d.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+      "vehicle-id", po::value<std::uint64_t>(&vehicle_id)->required(),
+      "non-zero vehicle id (stable for the trip)")(
       "length", po::value<double>(&o.client.size.length_m)->default_value(4.89, "4.89"),
       "footprint box length, m")("width",
                                  po::value<double>(&o.client.size.width_m)->default_value(1.92, "1.92"),
@@ -371,6 +373,8 @@ int run(const Options& options) {
 }  // namespace rsu::vehicle_client::cli
 
 int main(int argc, char** argv) {
+  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-vehicle"))
+    return 0;
   std::optional<rsu::vehicle_client::cli::Options> options;
   try {
     options = rsu::vehicle_client::cli::parse_options(argc, argv);

@@ -1,0 +1,23 @@
+#!/bin/sh
+# One command-line convention across the programs: `--version` prints "<program> <version>" and exits 0
+# (even where other options are required), an unknown option is a usage error (exit 2), and so is
+# rsu-keygen or rsu-sim given nothing to do. Usage: cli_convention.sh VERSION PROGRAM...
+set -u
+version=$1; shift
+for program in "$@"; do
+  name=$(basename "$program")
+  out=$("$program" --version 2>&1); rc=$?
+  [ $rc -eq 0 ] && [ "$out" = "$name $version" ] || { echo "FAIL: $name --version: exit $rc, \"$out\""; exit 1; }
+  "$program" --no-such-option >/dev/null 2>&1; rc=$?
+  [ $rc -eq 2 ] || { echo "FAIL: $name --no-such-option: exit $rc, expected 2"; exit 1; }
+  "$program" --help >/dev/null 2>&1 || { echo "FAIL: $name --help"; exit 1; }
+  echo "ok: $out"
+done
+for program in "$@"; do
+  case $(basename "$program") in
+    rsu-keygen|rsu-sim)
+      "$program" >/dev/null 2>&1; rc=$?
+      [ $rc -eq 2 ] || { echo "FAIL: $program with no arguments: exit $rc, expected 2"; exit 1; } ;;
+  esac
+done
+echo OK
