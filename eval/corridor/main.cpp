@@ -69,14 +69,16 @@ int main(int argc, char** argv) {
   po::options_description options(
       "rsu-corridor {ndt|report} EXPERIMENT [--out DIR]: the paper's realistic experiment (Sec. 4)");
   options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
-      "out,o", po::value<std::string>()->default_value("out/corridor"), "output folder")(
-      "command", po::value<std::string>(), "ndt or report")(
+      "out,o", po::value<std::string>()->default_value("out/corridor"), "output folder");
+  // The positional arguments, named in the usage line above rather than listed as options.
+  po::options_description all;
+  all.add(options).add_options()("command", po::value<std::string>(), "ndt or report")(
       "experiment", po::value<std::string>(), "experiment file, e.g. scenarios/corridor_experiment.yaml");
   po::positional_options_description positional;
   positional.add("command", 1).add("experiment", 1);
   po::variables_map vm;
   try {
-    po::store(po::command_line_parser(argc, argv).options(options).positional(positional).run(), vm);
+    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
     po::notify(vm);
     if (vm.count("help") || !vm.count("command") || !vm.count("experiment")) {
       std::cout << options;

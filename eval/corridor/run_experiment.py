@@ -216,8 +216,8 @@ def live_run(run, exp, scenario_path, scenario, case, out, background=None, link
     start_at = (epoch + first_ndt_ns) / 1e9
     time.sleep(max(0.0, start_at - time.time()))
     vehicle_proc = run.spawn([run.tool("vehicle_client/rsu-vehicle"), "--vehicle-id", str(vehicle["id"]),
-                              "--length", str(shape.get("length", 4.89)), "--width", str(shape.get("width", 1.92)),
-                              "--height", str(shape.get("height", 1.70))] + v2i_route + [
+                              "--length-m", str(shape.get("length", 4.89)), "--width-m", str(shape.get("width", 1.92)),
+                              "--height-m", str(shape.get("height", 1.70))] + v2i_route + [
                               "--realtime", "--drain-ms", str(int(drain_ms)),
                               "--key", os.path.join(keys, "vehicle.key"),
                               "--trust-list", os.path.join(keys, "vehicle_trust.list"),

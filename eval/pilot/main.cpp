@@ -14,6 +14,7 @@
 #include "eval/pilot/pilot_matrix.h"
 #include "eval/pilot/pilot_summary.h"
 #include "sim/scenario.h"
+#include "tools/cli/renamed_options.h"
 #include "tools/cli/version.h"
 
 namespace po = boost::program_options;
@@ -43,10 +44,10 @@ std::vector<T> split_list(const std::string& text) {
 // Options both commands share: the grid, the prior, the seed, the threads.
 po::options_description grid_options(const rsu::eval::PilotConfig& defaults, double step, double spin) {
   po::options_description o("grid");
-  o.add_options()("distance-min", po::value<double>()->default_value(defaults.distance_min_m), "m")(
-      "distance-max", po::value<double>()->default_value(defaults.distance_max_m), "m")(
-      "distance-step", po::value<double>()->default_value(step), "m")(
-      "spin-rate", po::value<double>()->default_value(spin),
+  o.add_options()("distance-min-m", po::value<double>()->default_value(defaults.distance_min_m), "m")(
+      "distance-max-m", po::value<double>()->default_value(defaults.distance_max_m), "m")(
+      "distance-step-m", po::value<double>()->default_value(step), "m")(
+      "spin-rate-deg-per-s", po::value<double>()->default_value(spin),
       "deg/s of the spinning vehicle (at 10 Hz: 20 = 2 deg per frame, 180 frames per turn)")(
       "prior-error-deg", po::value<double>()->default_value(defaults.prior_error_deg),
       "bound of the uniform error of the vehicle's yaw prior (improved correction)")(
@@ -57,10 +58,10 @@ po::options_description grid_options(const rsu::eval::PilotConfig& defaults, dou
 
 rsu::eval::PilotConfig base_config(const po::variables_map& vm) {
   rsu::eval::PilotConfig c;
-  c.distance_min_m = vm["distance-min"].as<double>();
-  c.distance_max_m = vm["distance-max"].as<double>();
-  c.distance_step_m = vm["distance-step"].as<double>();
-  c.spin_rate_deg_s = vm["spin-rate"].as<double>();
+  c.distance_min_m = vm["distance-min-m"].as<double>();
+  c.distance_max_m = vm["distance-max-m"].as<double>();
+  c.distance_step_m = vm["distance-step-m"].as<double>();
+  c.spin_rate_deg_s = vm["spin-rate-deg-per-s"].as<double>();
   c.prior_error_deg = vm["prior-error-deg"].as<double>();
   c.noise.seed = vm["seed"].as<std::uint64_t>();
   c.threads = vm["threads"].as<int>();
@@ -104,7 +105,7 @@ int run_single(int argc, char** argv) {
   options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
       "out,o", po::value<std::string>()->default_value("out/pilot"), "output folder")(
       "models", po::value<std::string>()->default_value("vlp16,vlp32c"), "comma-separated LiDAR models")(
-      "lidar-height", po::value<double>()->default_value(defaults.lidar_height_m),
+      "lidar-height-m", po::value<double>()->default_value(defaults.lidar_height_m),
       "LiDAR height above the ground, m (the paper's: 2)")(
       "vehicle", po::value<std::string>(),
       "vehicle YAML (`shape:` with the scenario files' vehicle fields; scenarios/vehicles/); default: "
@@ -125,7 +126,7 @@ int run_single(int argc, char** argv) {
   const std::filesystem::path out = vm["out"].as<std::string>();
   std::filesystem::create_directories(out);
   rsu::eval::PilotConfig base = base_config(vm);
-  base.lidar_height_m = vm["lidar-height"].as<double>();
+  base.lidar_height_m = vm["lidar-height-m"].as<double>();
   if (vm.count("vehicle")) {
     const auto v = rsu::sim::load_vehicle_shape_file(vm["vehicle"].as<std::string>());
     base.vehicle = v.shape;
@@ -214,6 +215,13 @@ int run_matrix_command(int argc, char** argv) {
 int main(int argc, char** argv) {
   if (rsu::cli::print_version_if_asked(argc, argv, "rsu-pilot"))
     return 0;
+  rsu::cli::accept_renamed_options(argc, argv,
+                                   {{"distance-min", "distance-min-m"},
+                                    {"distance-max", "distance-max-m"},
+                                    {"distance-step", "distance-step-m"},
+                                    {"spin-rate", "spin-rate-deg-per-s"},
+                                    {"lidar-height", "lidar-height-m"}},
+                                   "rsu-pilot");
   try {
     if (argc > 1 && std::string(argv[1]) == "matrix")
       return run_matrix_command(argc - 1, argv + 1);

@@ -20,6 +20,7 @@
 #include "lidar/frame_assembler.h"
 #include "lidar/lidar_decoder.h"
 #include "lidar/velodyne_packet.h"
+#include "tools/cli/renamed_options.h"
 #include "tools/cli/version.h"
 
 namespace {
@@ -171,6 +172,7 @@ int decode(const Options& o) {
 int main(int argc, char** argv) {
   if (rsu::cli::print_version_if_asked(argc, argv, "rsu-decode"))
     return 0;
+  rsu::cli::accept_renamed_options(argc, argv, {{"scan-phase", "scan-phase-deg"}}, "rsu-decode");
   Options o;
   std::string returns = "both";
   po::options_description visible(kAbout);
@@ -183,7 +185,7 @@ int main(int argc, char** argv) {
       "metadata", po::value<std::string>(&o.metadata), "the sensor's metadata file (Ouster JSON)")(
       "returns", po::value<std::string>(&returns),
       "of a dual-return sensor: both (default), strongest, last")(
-      "scan-phase", po::value<double>(&o.scan_phase_deg),
+      "scan-phase-deg", po::value<double>(&o.scan_phase_deg),
       "azimuth (deg, clockwise from +x) where a rotation starts")(
       "port", po::value<std::uint16_t>(&o.port), "the sensor's data port (default: the sensor's own)");
   po::options_description hidden;
@@ -210,7 +212,7 @@ int main(int argc, char** argv) {
               << (o.capture.empty() ? "a CAPTURE is required"
                   : o.out.empty()   ? "--out DIR is required"
                   : !selection      ? "--returns must be both, strongest or last"
-                                    : "--scan-phase must be within [0, 360)")
+                                    : "--scan-phase-deg must be within [0, 360)")
               << "\n\n"
               << visible;
     return 2;

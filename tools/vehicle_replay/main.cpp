@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "io/text_file.h"
+#include "tools/cli/renamed_options.h"
 #include "tools/cli/version.h"
 #include "vehicle/vehicle_core.h"
 #include "vehicle_client/cli/csv_writers.h"
@@ -91,8 +92,8 @@ int run(const po::variables_map& vm) {
   }
   vehicle::VehicleCore core(config);
   std::printf("%s\n", vehicle_client::cli::kFusedHeader);
-  const double sigma_xy = vm["ndt-sigma-xy"].as<double>();
-  const double sigma_yaw = vm["ndt-sigma-yaw"].as<double>();
+  const double sigma_xy = vm["ndt-sigma-xy-m"].as<double>();
+  const double sigma_yaw = vm["ndt-sigma-yaw-rad"].as<double>();
   std::size_t next = 0;
   const auto handle_until = [&](TimeNs t) {
     for (; next < corrections.size() && corrections[next].received_time <= t; ++next) {
@@ -141,6 +142,9 @@ int run(const po::variables_map& vm) {
 int main(int argc, char** argv) {
   if (rsu::cli::print_version_if_asked(argc, argv, "rsu-vehicle-replay"))
     return 0;
+  rsu::cli::accept_renamed_options(
+      argc, argv, {{"ndt-sigma-xy", "ndt-sigma-xy-m"}, {"ndt-sigma-yaw", "ndt-sigma-yaw-rad"}},
+      "rsu-vehicle-replay");
   namespace po = boost::program_options;
   po::options_description d(
       "rsu-vehicle-replay --corrections-in CORRECTIONS.csv [--corrections OUT.csv] [--no-integrity] < "
@@ -154,9 +158,9 @@ int main(int argc, char** argv) {
       "no-integrity", "fuse without the integrity checks (rsu-vehicle --no-integrity)")(
       "degraded-variance-scale",
       po::value<double>()->default_value(rsu::vehicle::VehicleCoreConfig{}.degraded_ndt_variance_scale),
-      "a degraded NDT pose's covariance times this")("ndt-sigma-xy", po::value<double>()->default_value(0.2),
-                                                     "as rsu-vehicle's")(
-      "ndt-sigma-yaw", po::value<double>()->default_value(0.02), "as rsu-vehicle's");
+      "a degraded NDT pose's covariance times this")(
+      "ndt-sigma-xy-m", po::value<double>()->default_value(0.2), "as rsu-vehicle's")(
+      "ndt-sigma-yaw-rad", po::value<double>()->default_value(0.02), "as rsu-vehicle's");
   po::variables_map vm;
   try {
     po::store(po::parse_command_line(argc, argv, d), vm);

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "io/text_file.h"
+#include "tools/cli/renamed_options.h"
 #include "tools/cli/version.h"
 #include "v2i/security/key_text.h"
 #include "v2i/security/trust_list.h"
@@ -50,10 +51,11 @@ constexpr const char* kAbout =
     "  sxx,syy,syaw (all three) and converged,iterations,fitness,degeneracy, in any order:\n"
     "  time_ns on the common clock (ns; GNSS/PTP time, or host time since the Unix epoch in tests);\n"
     "  x, y in the map frame (ENU, m) of the vehicle's reference point; yaw rad CCW from east;\n"
-    "  sxx, syy, syaw: variances (m^2, m^2, rad^2); without them --ndt-sigma-xy/--ndt-sigma-yaw apply;\n"
+    "  sxx, syy, syaw: variances (m^2, m^2, rad^2); without them --ndt-sigma-xy-m/--ndt-sigma-yaw-rad "
+    "apply;\n"
     "  converged (0/1), iterations, fitness (PCL's score, m^2), degeneracy (how many times more weakly\n"
     "  the match holds the vehicle in its weakest horizontal direction than in its strongest): the\n"
-    "  match's quality indicator. A pose not converged, at --ndt-max-iterations, above --ndt-max-fitness\n"
+    "  match's quality indicator. A pose not converged, at --ndt-max-iterations, above --ndt-max-fitness-m2\n"
     "  or --ndt-max-degeneracy is DEGRADED: only then may RSU fixes take over the pose. Without these\n"
     "  columns the poses are taken at their word.\n"
     "  Bad input stops the program with the line number.\n"
@@ -106,7 +108,7 @@ void warn_insecure() {
 
 // When the vehicle's own NDT counts as degraded, and whether corrections are checked at all (issue 18).
 void add_integrity_options(po::options_description& d, Options& o) {
-  d.add_options()("ndt-max-fitness",
+  d.add_options()("ndt-max-fitness-m2",
                   po::value<double>(&o.core.ndt_quality.max_fitness_m2)->default_value(0.5, "0.5"),
                   "a fitness (m^2) above this marks the pose degraded")(
       "ndt-max-iterations", po::value<int>(&o.core.ndt_quality.max_iterations)->default_value(30),
@@ -133,14 +135,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
   d.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
       "vehicle-id", po::value<std::uint64_t>(&vehicle_id)->required(),
       "non-zero vehicle id (stable for the trip)")(
-      "length", po::value<double>(&o.client.size.length_m)->default_value(4.89, "4.89"),
-      "footprint box length, m")("width",
+      "length-m", po::value<double>(&o.client.size.length_m)->default_value(4.89, "4.89"),
+      "footprint box length, m")("width-m",
                                  po::value<double>(&o.client.size.width_m)->default_value(1.92, "1.92"),
                                  "footprint box width, m")(
-      "height", po::value<double>(&o.client.size.height_m)->default_value(1.70, "1.70"), "box height, m")(
-      "ref-offset-x", po::value<double>()->default_value(0.0),
+      "height-m", po::value<double>(&o.client.size.height_m)->default_value(1.70, "1.70"), "box height, m")(
+      "ref-offset-x-m", po::value<double>()->default_value(0.0),
       "reference point minus box centre along vehicle x (forward), m; e.g. -1.3 for a rear axle")(
-      "ref-offset-y", po::value<double>()->default_value(0.0), "the same along vehicle y (left), m")(
+      "ref-offset-y-m", po::value<double>()->default_value(0.0), "the same along vehicle y (left), m")(
       "rsu", po::value<std::vector<std::string>>(&o.client.rsu_endpoints)->required(),
       "RSU announcement endpoint HOST:PORT ([ADDR]:PORT for IPv6); repeat for several RSUs")(
       "bind", po::value<std::string>(&bind)->default_value(bind),
@@ -164,9 +166,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
       "max-age-ms", po::value<double>(&max_age_ms)->default_value(max_age_ms, "1000"),
       "refuse corrections generated more than this before (or after) this host's clock")(
       "insecure", "send unsigned announcements and accept unsigned corrections (local development only)")(
-      "ndt-sigma-xy", po::value<double>(&o.ndt_sigma_xy)->default_value(o.ndt_sigma_xy, "0.2"),
+      "ndt-sigma-xy-m", po::value<double>(&o.ndt_sigma_xy)->default_value(o.ndt_sigma_xy, "0.2"),
       "NDT position standard deviation, m, for rows without variances")(
-      "ndt-sigma-yaw", po::value<double>(&o.ndt_sigma_yaw)->default_value(o.ndt_sigma_yaw, "0.02"),
+      "ndt-sigma-yaw-rad", po::value<double>(&o.ndt_sigma_yaw)->default_value(o.ndt_sigma_yaw, "0.02"),
       "NDT yaw standard deviation, rad, for rows without variances");
   add_integrity_options(d, o);
   po::variables_map vm;
@@ -183,7 +185,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   for (const std::string& rsu : o.client.rsu_endpoints) {
     parse_udp_endpoint(rsu);  // throws naming the bad one
   }
-  o.client.reference_offset = {vm["ref-offset-x"].as<double>(), vm["ref-offset-y"].as<double>()};
+  o.client.reference_offset = {vm["ref-offset-x-m"].as<double>(), vm["ref-offset-y-m"].as<double>()};
   const auto bind_endpoint = parse_udp_endpoint(bind, true);
   o.client.bind_address = bind_endpoint.address().is_unspecified() ? "" : bind_endpoint.address().to_string();
   o.client.bind_port = bind_endpoint.port();
@@ -196,12 +198,12 @@ std::optional<Options> parse_options(int argc, char** argv) {
     throw std::invalid_argument("--announce-period-ms must be within [0, 60000]");
   }
   if (!(o.ndt_sigma_xy > 0.0 && o.ndt_sigma_yaw > 0.0)) {
-    throw std::invalid_argument("--ndt-sigma-xy and --ndt-sigma-yaw must be positive");
+    throw std::invalid_argument("--ndt-sigma-xy-m and --ndt-sigma-yaw-rad must be positive");
   }
   if (!(o.core.ndt_quality.max_fitness_m2 > 0.0) || o.core.ndt_quality.max_iterations < 1 ||
       !(o.core.ndt_quality.max_degeneracy >= 1.0)) {
     throw std::invalid_argument(
-        "--ndt-max-fitness must be positive, --ndt-max-iterations and --ndt-max-degeneracy at least 1");
+        "--ndt-max-fitness-m2 must be positive, --ndt-max-iterations and --ndt-max-degeneracy at least 1");
   }
   o.core.check_integrity = vm.count("no-integrity") == 0;
   o.core.fuse_corrections = !o.announce_only;
@@ -375,6 +377,16 @@ int run(const Options& options) {
 int main(int argc, char** argv) {
   if (rsu::cli::print_version_if_asked(argc, argv, "rsu-vehicle"))
     return 0;
+  rsu::cli::accept_renamed_options(argc, argv,
+                                   {{"length", "length-m"},
+                                    {"width", "width-m"},
+                                    {"height", "height-m"},
+                                    {"ref-offset-x", "ref-offset-x-m"},
+                                    {"ref-offset-y", "ref-offset-y-m"},
+                                    {"ndt-sigma-xy", "ndt-sigma-xy-m"},
+                                    {"ndt-sigma-yaw", "ndt-sigma-yaw-rad"},
+                                    {"ndt-max-fitness", "ndt-max-fitness-m2"}},
+                                   "rsu-vehicle");
   std::optional<rsu::vehicle_client::cli::Options> options;
   try {
     options = rsu::vehicle_client::cli::parse_options(argc, argv);
