@@ -7,6 +7,14 @@ rsud=$1 shipped=$2 work=$3 keygen=$4
 rm -rf "$work" && mkdir -p "$work/keys"
 "$keygen" "$work/keys/rsu" >/dev/null || { echo "FAIL: rsu-keygen"; exit 1; }
 "$keygen" "$work/keys/car" --trust-list "$work/keys/trust.list" --role vehicle --ids 7 >/dev/null || exit 1
+# Under a strict umask the folders, public key and trust list rsu-keygen makes stay readable by rsud's
+# own user (the unit's DynamicUser=); the secret key alone is 0600.
+(umask 077 && "$keygen" "$work/strict/keys/rsu" --trust-list "$work/strict/keys/trust.list" --role rsu --ids 1 \
+  >/dev/null) || { echo "FAIL: rsu-keygen under umask 077"; exit 1; }
+for f in strict:755 strict/keys:755 strict/keys/rsu.pub:644 strict/keys/trust.list:644 strict/keys/rsu.key:600; do
+  mode=$(stat -c %a "$work/${f%:*}")
+  [ "$mode" = "${f#*:}" ] || { echo "FAIL: umask 077: $work/${f%:*} is mode $mode, expected ${f#*:}"; exit 1; }
+done
 # rsu-keygen: the secret key is mode 0600; nothing is overwritten without --force; a key is listed once.
 [ "$(stat -c %a "$work/keys/rsu.key")" = 600 ] || { echo "FAIL: rsu.key is not mode 0600"; exit 1; }
 before=$(cat "$work/keys/rsu.key")

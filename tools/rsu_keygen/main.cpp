@@ -52,16 +52,20 @@ constexpr const char* kAbout =
     "\n"
     "options";
 
-// The folders a key or trust list goes into, made when missing (mode 0755: the trust list in them must
-// stay readable by rsud's own user; the secret key alone is 0600).
+// The folders a key or trust list goes into, made when missing with mode 0755 whatever the umask (the
+// trust list and public keys in them must stay readable by rsud's own user; the secret key alone is 0600,
+// and reaches rsud as a systemd credential).
 void make_parent_folders(const fs::path& file) {
-  const fs::path parent = file.parent_path();
-  if (parent.empty())
-    return;
-  std::error_code ec;
-  fs::create_directories(parent, ec);
-  if (ec)
-    throw std::runtime_error("cannot create the folder " + parent.string() + ": " + ec.message());
+  fs::path folder;
+  for (const fs::path& part : file.parent_path()) {
+    folder /= part;
+    if (::mkdir(folder.c_str(), 0755) == 0) {
+      if (::chmod(folder.c_str(), 0755) != 0)
+        throw std::runtime_error("cannot set the mode of " + folder.string() + ": " + rsu::io::errno_text());
+    } else if (errno != EEXIST) {
+      throw std::runtime_error("cannot create the folder " + folder.string() + ": " + rsu::io::errno_text());
+    }
+  }
 }
 
 // Writes `text` to `path` with `mode`; refuses an existing file unless `force`.
@@ -97,7 +101,11 @@ void add_to_trust_list(const fs::path& list, const TrustEntry& entry) {
   updated += trust_entry_text(entry);
   // The whole result must parse: a malformed list or a key listed twice is refused, nothing written.
   parse_trust_list_text(updated, list.string());
-  make_parent_folders(list);
+  if (existing.empty()) {
+    // A new list is public (mode 0644, whatever the umask): rsud's own user reads it.
+    write_new_file(list, updated, 0644, true);
+    return;
+  }
   std::ofstream out(list, std::ios::app);
   if (!out || !(out << updated.substr(existing.size())) || !out.flush())
     throw std::runtime_error("cannot append to " + list.string() + ": " + rsu::io::errno_text());
