@@ -1,10 +1,13 @@
-// The RSU's per-frame perception, as the paper runs it (Sec. 3-4): remove the static background, cluster
-// what is left, fit a rectangle to each cluster (L-shape fitting). Association of clusters with the
-// connected vehicles that announced their size is another step's job; it calls correct() per matched
-// vehicle to turn its points into a size-corrected fix (fix_vehicle, vehicle_fix.h).
+// The RSU's perception of one whole frame, as the paper runs it (Sec. 3-4): remove the static
+// background, cluster what is left, fit a rectangle to each cluster (L-shape fitting). It is a thin
+// composition of the parts rsud runs batch by batch (rsu::core::RsuCore::process, docs/architecture.md):
+// BackgroundModel::classify, the SweepClusterer (a whole frame released whole, as rsud does with a PCD
+// frame), perception::detect and, per matched vehicle, fix_vehicle (vehicle_fix.h). Association with the
+// vehicles that announced their size is tracking's job; the caller calls correct() per matched vehicle.
+// Used by the per-frame benchmark and the perception tests; rsud itself runs the parts through RsuCore.
 //
 // Points come in the map frame (the caller applies the LiDAR mount pose) and keep their ring, azimuth and
-// firing time; the LiDAR's map position is fixed for the pipeline's lifetime.
+// firing time, in firing order; the LiDAR's map position is fixed for the pipeline's lifetime.
 #pragma once
 
 #include <optional>
@@ -19,15 +22,12 @@
 #include "perception/detection.h"
 #include "perception/euclidean_clustering.h"
 #include "perception/ground_height_filter.h"
-#include "perception/l_shape_fitting.h"
 #include "perception/range_image_background.h"
 #include "perception/reference_frame_background.h"
-#include "perception/size_correction.h"
+#include "perception/sweep_clusterer.h"
 #include "perception/vehicle_fix.h"
 
 namespace rsu::perception {
-
-enum class ClusteringMethod { reference, grid };
 
 struct PerceptionConfig;
 // The background part of a perception configuration.
@@ -42,7 +42,6 @@ struct PerceptionConfig {
   ReferenceFrameBackgroundConfig reference_frame;
   RangeImageBackgroundConfig range_image;
 
-  ClusteringMethod clustering_method = ClusteringMethod::grid;
   // Autoware's tolerance and minimum, but a larger maximum: a car 10 m from a 32- or 128-ring LiDAR
   // returns several thousand points, and Autoware's 1000 would drop it whole.
   ClusteringConfig clustering{
@@ -50,12 +49,6 @@ struct PerceptionConfig {
 
   // The rectangle fit (fix.fit, also used for each cluster's fit) and the size correction.
   VehicleFixConfig fix;
-};
-
-// One cluster of the frame: its detection (points, sweep time, rectangle: detection.h) and which of
-// the frame's points it is made of.
-struct DetectedObject : Detection {
-  std::vector<std::uint32_t> point_indices;  // into the processed frame
 };
 
 struct PerceptionStats {
@@ -69,7 +62,7 @@ struct PerceptionStats {
 };
 
 struct PerceptionResult {
-  std::vector<DetectedObject> objects;
+  std::vector<Detection> objects;  // one per released cluster, in order of its first point
   PerceptionStats stats;
 };
 
@@ -83,6 +76,7 @@ class PerceptionPipeline {
   // foreground.
   void add_background_frame(std::span<const LidarPoint> points_in_map_frame);
 
+  // Foreground -> clusters -> fit, the frame released whole at its end.
   PerceptionResult process(std::span<const LidarPoint> points_in_map_frame) const;
 
   // The fix of one object, for the vehicle matched to it (fix_vehicle with this pipeline's settings).
@@ -92,8 +86,6 @@ class PerceptionPipeline {
   Eigen::Vector2d lidar_xy() const { return lidar_position_.head<2>(); }
 
  private:
-  Clustering cluster(std::span<const LidarPoint> points, const std::vector<std::uint32_t>& indices) const;
-
   PerceptionConfig config_;
   Eigen::Vector3d lidar_position_;
   BackgroundModel background_;

@@ -1,8 +1,11 @@
 // The whole per-frame pipeline on synthetic 3D frames whose vehicles the test placed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -34,6 +37,14 @@ const TrueBox* nearest_vehicle(const test::Scene3d& scene, const Eigen::Vector2d
   return best;
 }
 
+// The firing time of each point of `frame`, by its coordinates (the objects keep only those).
+std::map<std::array<double, 3>, TimeNs> firing_times(const std::vector<LidarPoint>& frame) {
+  std::map<std::array<double, 3>, TimeNs> out;
+  for (const LidarPoint& p : frame)
+    out[{static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)}] = p.time_ns;
+  return out;
+}
+
 void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, const test::Scene3d& scene,
                                         const std::vector<LidarPoint>& frame) {
   const PerceptionResult result = pipeline.process(frame);
@@ -42,7 +53,8 @@ void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, cons
   EXPECT_EQ(s.foreground_points + s.background_points + s.invalid_points, frame.size());
   ASSERT_EQ(result.objects.size(), scene.vehicles.size());
   EXPECT_EQ(s.failed_fits, 0U);
-  for (const DetectedObject& object : result.objects) {
+  const auto times = firing_times(frame);
+  for (const Detection& object : result.objects) {
     ASSERT_TRUE(object.fit.ok());
     const TrueBox& truth = *nearest_vehicle(scene, object.fit.center);
     // Every point of the object lies on (or, with noise, next to) its vehicle's footprint.
@@ -54,9 +66,12 @@ void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, cons
     }
     // Sweep time: the mean firing time of the object's points.
     double mean_t = 0.0;
-    for (const std::uint32_t i : object.point_indices)
-      mean_t += static_cast<double>(frame[i].time_ns);
-    mean_t /= static_cast<double>(object.point_indices.size());
+    for (const Eigen::Vector3d& q : object.points) {
+      const auto t = times.find({q.x(), q.y(), q.z()});
+      ASSERT_NE(t, times.end());
+      mean_t += static_cast<double>(t->second);
+    }
+    mean_t /= static_cast<double>(object.points.size());
     EXPECT_NEAR(static_cast<double>(object.sweep_time_ns), mean_t, 1.0);
 
     const VehicleFix fix = pipeline.correct(
@@ -78,12 +93,11 @@ TEST(PerceptionPipeline, RangeImageBackground) {
                                      test::points_of(test::scan_3d(s.busy, s.lidar, 0.55, rng)));
 }
 
-TEST(PerceptionPipeline, ReferenceFrameBackgroundWithReferenceClustering) {
+TEST(PerceptionPipeline, ReferenceFrameBackground) {
   Street s;
   std::mt19937_64 rng(2);
   PerceptionConfig config;
   config.background = BackgroundMethod::reference_frame;
-  config.clustering_method = ClusteringMethod::reference;
   PerceptionPipeline pipeline(config, s.lidar.position);
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.2, rng)));
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.7, rng)));
@@ -103,22 +117,35 @@ TEST(PerceptionPipeline, GroundHeightInAnEmptySceneLikeThePilot) {
                                      test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
 }
 
-TEST(PerceptionPipeline, GridAndReferenceClusteringGiveTheSameObjects) {
+// The sweep clusterer, released whole, clusters a frame exactly as the obviously right reference
+// clustering (breadth-first, brute force) does on the same foreground.
+TEST(PerceptionPipeline, ObjectsAreTheReferenceClustersOfTheForeground) {
   Street s;
   std::mt19937_64 rng(4);
-  PerceptionConfig grid_config;
-  grid_config.background = BackgroundMethod::reference_frame;
-  PerceptionConfig ref_config = grid_config;
-  ref_config.clustering_method = ClusteringMethod::reference;
-  PerceptionPipeline a(grid_config, s.lidar.position), b(ref_config, s.lidar.position);
-  const auto background = test::points_of(test::scan_3d(s.empty, s.lidar, 0.5, rng));
-  a.add_background_frame(background);
-  b.add_background_frame(background);
+  PerceptionConfig config;
+  config.background = BackgroundMethod::reference_frame;
+  PerceptionPipeline pipeline(config, s.lidar.position);
+  BackgroundModel background(background_model_config(config), s.lidar.position.head<2>());
+  const auto empty = test::points_of(test::scan_3d(s.empty, s.lidar, 0.5, rng));
+  pipeline.add_background_frame(empty);
+  background.add_background_frame(empty);
   const auto frame = test::points_of(test::scan_3d(s.busy, s.lidar, 0.1, rng));
-  const auto ra = a.process(frame), rb = b.process(frame);
-  ASSERT_EQ(ra.objects.size(), rb.objects.size());
-  for (std::size_t i = 0; i < ra.objects.size(); ++i)
-    EXPECT_EQ(ra.objects[i].point_indices, rb.objects[i].point_indices);
+  const Clustering reference =
+      cluster_reference(frame, background.select_foreground(frame).indices, config.clustering);
+  const PerceptionResult result = pipeline.process(frame);
+  ASSERT_EQ(result.objects.size(), reference.clusters.size());
+  ASSERT_FALSE(reference.clusters.empty());
+  for (std::size_t i = 0; i < reference.clusters.size(); ++i) {
+    std::vector<std::array<double, 3>> want, got;
+    for (const std::uint32_t k : reference.clusters[i])
+      want.push_back({static_cast<double>(frame[k].x), static_cast<double>(frame[k].y),
+                      static_cast<double>(frame[k].z)});
+    for (const Eigen::Vector3d& q : result.objects[i].points)
+      got.push_back({q.x(), q.y(), q.z()});
+    std::sort(want.begin(), want.end());
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, want);
+  }
 }
 
 TEST(PerceptionPipeline, Algorithm1IsSelectable) {
@@ -132,9 +159,9 @@ TEST(PerceptionPipeline, Algorithm1IsSelectable) {
   const PerceptionPipeline paper(config, s.lidar.position);
   const auto result = paper.process(test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
   ASSERT_GE(result.objects.size(), 1U);  // the front, and maybe the roof on its own
-  const DetectedObject* front = &result.objects[0];
+  const Detection* front = &result.objects[0];
   for (const auto& o : result.objects) {
-    if (o.point_indices.size() > front->point_indices.size())
+    if (o.points.size() > front->points.size())
       front = &o;
   }
   EXPECT_LT(std::abs(front->fit.center.x() - 12.555), 0.1);  // the front face at x = 15 - 4.89 / 2
