@@ -29,72 +29,39 @@ struct Scatter {
   }
 };
 
-}  // namespace
-
-RectangleFit refine_on_faces(const RectangleFit& fit, std::span<const Eigen::Vector2d> points,
-                             const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& fit_config,
-                             const FaceRefinementConfig& config) {
-  if (!fit.ok()) {
-    return fit;
-  }
-  // Work relative to the fit's centre (conditioning).
-  const Eigen::Vector2d origin = fit.center;
-  const double d = fit_config.edge_support_m;
-
-  // Faces along e1 are edges 0 and 2; along e2, edges 1 and 3.
-  Scatter along_e1;
-  Scatter along_e2;
-  for (const auto& p : points) {
-    if (!p.allFinite()) {
+// The seen edge of `fit` whose face `r` (relative to `origin`) supports: within `d` of it and away from
+// its corners; -1 for none.
+int supported_edge(const RectangleFit& fit, const Eigen::Vector2d& origin, const Eigen::Vector2d& r, double d,
+                   const FaceRefinementConfig& config) {
+  int best_edge = -1;
+  double best_dist = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 4; ++k) {
+    const auto uk = static_cast<std::size_t>(k);
+    if (!fit.edges[uk].seen) {
       continue;
     }
-    const Eigen::Vector2d r = p - origin;
-    int best_edge = -1;
-    double best_dist = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < 4; ++k) {
-      const auto uk = static_cast<std::size_t>(k);
-      if (!fit.edges[uk].seen) {
-        continue;
-      }
-      const Eigen::Vector2d a = fit.corners[uk] - origin;
-      const Eigen::Vector2d b = fit.corners[(uk + 1) % 4] - origin;
-      const double len = (b - a).norm();
-      const Eigen::Vector2d t = (b - a) / len;
-      const double s = (r - a).dot(t);
-      const double excl = std::min(config.corner_exclusion_m, len / 4.0);
-      const double dist = std::abs((r - a).dot(Eigen::Vector2d(t.y(), -t.x())));
-      if (s >= excl && s <= len - excl && dist <= d && dist < best_dist) {
-        best_dist = dist;
-        best_edge = k;
-      }
-    }
-    if (best_edge == 0 || best_edge == 2) {
-      along_e1.add(r);
-    } else if (best_edge == 1 || best_edge == 3) {
-      along_e2.add(r);
+    const Eigen::Vector2d a = fit.corners[uk] - origin;
+    const Eigen::Vector2d b = fit.corners[(uk + 1) % 4] - origin;
+    const double len = (b - a).norm();
+    const Eigen::Vector2d t = (b - a) / len;
+    const double s = (r - a).dot(t);
+    const double excl = std::min(config.corner_exclusion_m, len / 4.0);
+    const double dist = std::abs((r - a).dot(Eigen::Vector2d(t.y(), -t.x())));
+    if (s >= excl && s <= len - excl && dist <= d && dist < best_dist) {
+      best_dist = dist;
+      best_edge = k;
     }
   }
-  const bool use1 = along_e1.n >= config.min_face_points;
-  const bool use2 = along_e2.n >= config.min_face_points;
-  if (!use1 && !use2) {
-    return fit;
-  }
-  // n: the unit normal of the e1-faces (i.e. the e2 direction).
-  const Eigen::Matrix2d m = (use1 ? along_e1.centred() : Eigen::Matrix2d::Zero()) -
-                            (use2 ? along_e2.centred() : Eigen::Matrix2d::Zero());
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m);
-  const Eigen::Vector2d n = eig.eigenvectors().col(0);
-  const Eigen::Vector2d new_e1(n.y(), -n.x());
-  // The change of the e1 direction, mod pi (the eigenvector's sign is arbitrary).
-  const double change = std::remainder(std::atan2(new_e1.y(), new_e1.x()) - fit.yaw, std::numbers::pi);
-  if (!(std::abs(change) <= config.max_change_rad)) {
-    return fit;
-  }
+  return best_edge;
+}
 
+// `fit` turned by `change` (its yaw kept in [0, pi/2): crossing it relabels the axes) and rebuilt around
+// the finite `points`.
+RectangleFit turned(const RectangleFit& fit, double change, std::span<const Eigen::Vector2d> points,
+                    const Eigen::Vector2d& origin, const Eigen::Vector2d& lidar_xy,
+                    const LShapeFitConfig& fit_config) {
   RectangleFit out = fit;
-  double yaw = fit.yaw + change;
-  // Keep the documented range [0, pi/2): crossing it relabels the axes, which the rebuild below handles.
-  yaw = std::fmod(yaw, std::numbers::pi / 2.0);
+  double yaw = std::fmod(fit.yaw + change, std::numbers::pi / 2.0);
   if (yaw < 0.0) {
     yaw += std::numbers::pi / 2.0;
   }
@@ -119,6 +86,51 @@ RectangleFit refine_on_faces(const RectangleFit& fit, std::span<const Eigen::Vec
   set_rectangle_geometry(out, origin, c1_min, c1_max, c2_min, c2_max);
   set_edge_observations(out, finite, lidar_xy, fit_config);
   return out;
+}
+
+}  // namespace
+
+RectangleFit refine_on_faces(const RectangleFit& fit, std::span<const Eigen::Vector2d> points,
+                             const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& fit_config,
+                             const FaceRefinementConfig& config) {
+  if (!fit.ok()) {
+    return fit;
+  }
+  // Work relative to the fit's centre (conditioning).
+  const Eigen::Vector2d origin = fit.center;
+
+  // Faces along e1 are edges 0 and 2; along e2, edges 1 and 3.
+  Scatter along_e1;
+  Scatter along_e2;
+  for (const auto& p : points) {
+    if (!p.allFinite()) {
+      continue;
+    }
+    const Eigen::Vector2d r = p - origin;
+    const int edge = supported_edge(fit, origin, r, fit_config.edge_support_m, config);
+    if (edge == 0 || edge == 2) {
+      along_e1.add(r);
+    } else if (edge == 1 || edge == 3) {
+      along_e2.add(r);
+    }
+  }
+  const bool use1 = along_e1.n >= config.min_face_points;
+  const bool use2 = along_e2.n >= config.min_face_points;
+  if (!use1 && !use2) {
+    return fit;
+  }
+  // n: the unit normal of the e1-faces (i.e. the e2 direction).
+  const Eigen::Matrix2d m = (use1 ? along_e1.centred() : Eigen::Matrix2d::Zero()) -
+                            (use2 ? along_e2.centred() : Eigen::Matrix2d::Zero());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m);
+  const Eigen::Vector2d n = eig.eigenvectors().col(0);
+  const Eigen::Vector2d new_e1(n.y(), -n.x());
+  // The change of the e1 direction, mod pi (the eigenvector's sign is arbitrary).
+  const double change = std::remainder(std::atan2(new_e1.y(), new_e1.x()) - fit.yaw, std::numbers::pi);
+  if (!(std::abs(change) <= config.max_change_rad)) {
+    return fit;
+  }
+  return turned(fit, change, points, origin, lidar_xy, fit_config);
 }
 
 }  // namespace rsu::perception

@@ -111,6 +111,49 @@ const char* to_string(CloudReject reason) {
   return "unknown";
 }
 
+namespace {
+
+// The layout's slot for field `f` (x, y, z, intensity, ring, time), or none: an unknown name, no
+// values, or a floating `t` (Ouster's t is integer nanoseconds; a floating one is someone else's).
+FieldSlot* slot_for(const PointFieldView& f, PointCloud2Layout& l) {
+  if (f.count == 0 || (f.name == "t" && is_float(f.datatype)))
+    return nullptr;
+  if (f.name == "x")
+    return &l.x;
+  if (f.name == "y")
+    return &l.y;
+  if (f.name == "z")
+    return &l.z;
+  if (f.name == "intensity")
+    return &l.intensity;
+  if (f.name == "ring")
+    return &l.ring;
+  if (f.name == "time" || (f.name == "t" && !l.time.present))
+    return &l.time;
+  return nullptr;
+}
+
+// What is wrong with the cloud's size (points, rows, data) given its point step, if anything.
+CloudReject size_problem(const PointCloud2View& cloud, const CloudLimits& limits) {
+  const std::uint64_t points = std::uint64_t{cloud.width} * cloud.height;
+  if (points > limits.max_points)
+    return CloudReject::kTooManyPoints;
+  const std::uint64_t row_bytes = std::uint64_t{cloud.width} * cloud.point_step;
+  if (row_bytes > kU32Max)
+    return CloudReject::kSizeOverflow;
+  if (cloud.row_step < row_bytes)
+    return CloudReject::kRowStepTooSmall;
+  // The last row needs only its points, not its padding; every earlier row its whole row_step.
+  const std::uint64_t needed = cloud.height == 0 || cloud.width == 0
+                                   ? 0
+                                   : std::uint64_t{cloud.height - 1} * cloud.row_step + row_bytes;
+  if (cloud.data.size() < needed)
+    return CloudReject::kDataTooShort;
+  return CloudReject::kNone;
+}
+
+}  // namespace
+
 LayoutResult parse_layout(const PointCloud2View& cloud, const CloudLimits& limits) {
   LayoutResult r;
   auto reject = [&r](CloudReject why) {
@@ -147,23 +190,9 @@ LayoutResult parse_layout(const PointCloud2View& cloud, const CloudLimits& limit
     if (f.count > 0)
       extents.push_back({f.offset, end});
 
-    FieldSlot* slot = nullptr;
-    if (f.name == "x")
-      slot = &l.x;
-    else if (f.name == "y")
-      slot = &l.y;
-    else if (f.name == "z")
-      slot = &l.z;
-    else if (f.name == "intensity")
-      slot = &l.intensity;
-    else if (f.name == "ring")
-      slot = &l.ring;
-    else if (f.name == "time" || (f.name == "t" && !l.time.present))
-      slot = &l.time;
-    if (slot == nullptr || f.count == 0)
+    FieldSlot* slot = slot_for(f, l);
+    if (slot == nullptr)
       continue;
-    if (f.name == "t" && is_float(f.datatype))
-      continue;  // Ouster's t is integer nanoseconds; a floating `t` is someone else's field
     *slot = FieldSlot{true, f.offset, f.datatype};
     if (slot == &l.time)
       l.time_in_seconds = is_float(f.datatype);
@@ -183,20 +212,7 @@ LayoutResult parse_layout(const PointCloud2View& cloud, const CloudLimits& limit
       return reject(CloudReject::kCoordinateType);
   }
 
-  const std::uint64_t points = std::uint64_t{cloud.width} * cloud.height;
-  if (points > limits.max_points)
-    return reject(CloudReject::kTooManyPoints);
-  const std::uint64_t row_bytes = std::uint64_t{cloud.width} * cloud.point_step;
-  if (row_bytes > kU32Max)
-    return reject(CloudReject::kSizeOverflow);
-  if (cloud.row_step < row_bytes)
-    return reject(CloudReject::kRowStepTooSmall);
-  // The last row needs only its points, not its padding; every earlier row its whole row_step.
-  const std::uint64_t needed = cloud.height == 0 || cloud.width == 0
-                                   ? 0
-                                   : std::uint64_t{cloud.height - 1} * cloud.row_step + row_bytes;
-  if (cloud.data.size() < needed)
-    return reject(CloudReject::kDataTooShort);
+  r.reject = size_problem(cloud, limits);
   return r;
 }
 
