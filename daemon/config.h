@@ -21,7 +21,7 @@ namespace rsu::daemon {
 // The LiDAR's UDP packets as they arrive (lidar.input.udp; velodyne_udp is the same, its older name).
 struct UdpInput {
   std::string bind_address = "0.0.0.0";
-  // Velodyne: 2368 unless set (DESIGN.md §2); Ouster: 0 unless set, the metadata's udp_port_lidar (0:
+  // Velodyne: 2368 unless set (docs/design.md §2); Ouster: 0 unless set, the metadata's udp_port_lidar (0:
   // the decoder's default data port).
   std::uint16_t port = 2368;
   // A second port for the sensor's packets without points (Velodyne position packets, 8308: their
@@ -92,7 +92,7 @@ struct PeerBusConfig {
   dds::QosConfig qos{.reliability = dds::Reliability::kBestEffort, .history_depth = 256};
 };
 
-// The DDS data bus (Cyclone DDS, ROS 2 compatible; DESIGN.md §5). Off by default.
+// The DDS data bus (Cyclone DDS, ROS 2 compatible; docs/design.md §5). Off by default.
 struct DdsConfig {
   bool enabled = false;
   dds::ParticipantConfig participant;

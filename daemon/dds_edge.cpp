@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "daemon/dds_config.h"
-#include "daemon/host_clock.h"
+#include "edge/host_clock.h"
 #include "ros/correction_pose.h"
 #include "ros/ros_time.h"
 
@@ -88,7 +88,7 @@ void DdsEdge::take_clouds() {
 }
 
 void DdsEdge::on_cloud(const PointCloud2& cloud, const dds_sample_info_t& info) {
-  const TimeNs taken = now_ns();
+  const TimeNs taken = edge::host_now_ns();
   ++clouds_received_;
   if (take_latency_ns_.size() < kLatencyWindow)
     take_latency_ns_.push_back(taken - info.source_timestamp);
@@ -172,7 +172,7 @@ void DdsEdge::publish(const std::vector<core::OutgoingCorrection>& corrections) 
         slot = std::make_unique<VehicleWriter>(VehicleWriter{std::move(topic), std::move(writer), 0});
       }
       PoseStamped msg{};
-      msg.header.stamp = to_msg_time(c.sweep_time);  // when the LiDAR swept the vehicle (DESIGN.md §3)
+      msg.header.stamp = to_msg_time(c.sweep_time);  // when the LiDAR swept the vehicle (docs/design.md §3)
       msg.header.frame_id = config_.frame_id.data();
       fill_pose(c, msg.pose);
       slot->writer.write(msg);

@@ -1,5 +1,5 @@
 // rsud: the roadside-unit daemon. Localizes announced connected vehicles with the roadside LiDAR and
-// sends them corrections (DESIGN.md §1, issue #4). See --help; deploy/ holds the systemd unit and an
+// sends them corrections (docs/design.md §1, issue #4). See --help; deploy/ holds the systemd unit and an
 // example configuration.
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
 
@@ -15,6 +15,7 @@
 #include "daemon/config.h"
 #include "daemon/logging.h"
 #include "daemon/rsu_daemon.h"
+#include "edge/address_text.h"
 #include "io/capture_file.h"
 #include "rsu/rsu_core.h"
 #include "sim/scenario.h"
@@ -31,11 +32,8 @@ namespace po = boost::program_options;
 // accepts it), the addresses and that the files it names exist.
 void check_config(const rsu::daemon::DaemonConfig& config) {
   const rsu::core::RsuCore core(config.core);  // throws std::invalid_argument when unusable
-  boost::system::error_code ec;
   auto check_address = [&](const std::string& text, const std::string& field) {
-    boost::asio::ip::make_address(text, ec);
-    if (ec)
-      throw std::runtime_error(config.source + ": " + field + ": \"" + text + "\" is not an IP address");
+    rsu::edge::parse_ip_address(text, config.source + ": " + field);
   };
   check_address(config.v2i_listen_address, "v2i.listen_address");
   if (config.advertisement.enabled)

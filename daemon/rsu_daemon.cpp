@@ -9,10 +9,11 @@
 #include <stdexcept>
 
 #include "daemon/dds_edge.h"
-#include "daemon/host_clock.h"
 #include "daemon/peer_bus.h"
 #include "daemon/systemd_notify.h"
 #include "daemon/udp_socket.h"
+#include "edge/address_text.h"
+#include "edge/host_clock.h"
 #include "io/pcd_io.h"
 #include "lidar/velodyne_packet.h"
 #include "sim/lidar_simulator.h"
@@ -23,14 +24,6 @@ namespace rsu::daemon {
 namespace asio = boost::asio;
 
 namespace {
-
-asio::ip::address parse_address(const std::string& text, const char* what) {
-  boost::system::error_code ec;
-  const auto address = asio::ip::make_address(text, ec);
-  if (ec)
-    throw std::runtime_error(std::string(what) + ": \"" + text + "\" is not an IP address");
-  return address;
-}
 
 std::chrono::steady_clock::duration seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
@@ -61,11 +54,12 @@ RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, ConfigSource sou
 RsuDaemon::~RsuDaemon() = default;
 
 TimeNs RsuDaemon::clock_now() const {
-  return replaying_ ? replay_now_ : now_ns();
+  return replaying_ ? replay_now_ : edge::host_now_ns();
 }
 
 void RsuDaemon::start() {
-  const udp::endpoint v2i(parse_address(config_.v2i_listen_address, "v2i.listen_address"), config_.v2i_port);
+  const udp::endpoint v2i(edge::parse_ip_address(config_.v2i_listen_address, "v2i.listen_address"),
+                          config_.v2i_port);
   bind_udp(v2i_socket_, v2i, "V2I");
   // Room for bursts of announcements while a cluster is being corrected.
   request_receive_buffer(v2i_socket_, config_.v2i_receive_buffer_bytes, "V2I");
@@ -128,10 +122,9 @@ void RsuDaemon::every(asio::steady_timer& timer, steady::duration period, void (
 void RsuDaemon::start_input() {
   if (const auto* u = std::get_if<UdpInput>(&config_.input)) {
     const SensorPorts ports = core_.lidar_decoder().default_ports();
-    const auto address = parse_address(u->bind_address, "lidar.input.udp.bind_address");
+    const auto address = edge::parse_ip_address(u->bind_address, "lidar.input.udp.bind_address");
     const udp::endpoint endpoint(address, u->port != 0 ? u->port : ports.data);
     bind_udp(lidar_socket_, endpoint, "LiDAR");
-    request_receive_buffer(lidar_socket_, u->receive_buffer_bytes, "LiDAR");
     spdlog::info("receiving {} packets on {}:{}", core_.lidar_decoder().model_name(),
                  endpoint.address().to_string(), endpoint.port());
     receive_lidar(lidar_socket_, lidar_buffer_, lidar_sender_);

@@ -19,7 +19,7 @@ enum class Durability : std::uint8_t { kVolatile, kTransientLocal };
 
 struct QosConfig {
   // Reliable by default: a best-effort reader loses a whole fragmented sample (a ~1 MB PointCloud2
-  // is ~800 fragments) to one lost fragment (DESIGN.md §5). ROS 2's sensor-data profile is best
+  // is ~800 fragments) to one lost fragment (docs/design.md §5). ROS 2's sensor-data profile is best
   // effort: set it so to match such publishers (a reliable reader never matches a best-effort writer).
   Reliability reliability = Reliability::kReliable;
   Durability durability = Durability::kVolatile;
@@ -35,7 +35,7 @@ struct QosDeleter {
 using QosPtr = std::unique_ptr<dds_qos_t, QosDeleter>;
 
 // Cyclone QoS for `config`, with XCDR1 as the only data representation (ROS 2 speaks XCDR1 only,
-// DESIGN.md §5).
+// docs/design.md §5).
 QosPtr make_qos(const QosConfig& config);
 
 // Reads {reliability: reliable|best_effort, durability: volatile|transient_local, history_depth: N,

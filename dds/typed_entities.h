@@ -1,5 +1,5 @@
 // Typed topic, reader and writer over the C types idlc generates (dds/idl/*.idl): RAII handles,
-// Cyclone errors as DdsError. ROS 2 topic names are "rt/<ros name>" on the wire (DESIGN.md §5):
+// Cyclone errors as DdsError. ROS 2 topic names are "rt/<ros name>" on the wire (docs/design.md §5):
 // ros_topic() makes them.
 //
 // Threading: a reader's `on_data_available` runs on a Cyclone thread. It must not touch the owner's

@@ -1,11 +1,11 @@
-#include "vehicle_client/udp_endpoint_text.h"
+#include "edge/address_text.h"
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/address.hpp>
 #include <charconv>
 #include <stdexcept>
 
-namespace rsu::vehicle_client {
+namespace rsu::edge {
 
 namespace asio = boost::asio;
 
@@ -23,6 +23,14 @@ unsigned short parse_port(const std::string& text, const std::string& whole, boo
 }
 
 }  // namespace
+
+asio::ip::address parse_ip_address(const std::string& text, const std::string& what) {
+  boost::system::error_code ec;
+  const asio::ip::address address = asio::ip::make_address(text, ec);
+  if (ec)
+    throw std::invalid_argument(what + ": \"" + text + "\" is not an IP address");
+  return address;
+}
 
 asio::ip::udp::endpoint parse_udp_endpoint(const std::string& text, bool allow_port_zero) {
   std::string host;
@@ -66,4 +74,4 @@ std::string to_text(const asio::ip::udp::endpoint& endpoint) {
   return (endpoint.address().is_v6() ? "[" + address + "]" : address) + ":" + std::to_string(endpoint.port());
 }
 
-}  // namespace rsu::vehicle_client
+}  // namespace rsu::edge

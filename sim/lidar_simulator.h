@@ -3,7 +3,7 @@
 //
 // Every firing of the FiringSchedule (lidar/firing_schedule.h) becomes one ray cast at the firing's
 // own time, so a moving vehicle is smeared exactly as in a real sweep. Noise follows the paper's
-// simulator (RobotecGPULidar in AWSIM, DESIGN.md §2): the ray's elevation and azimuth are perturbed
+// simulator (RobotecGPULidar in AWSIM, docs/design.md §2): the ray's elevation and azimuth are perturbed
 // (sigma angle_sigma_rad) and Gaussian noise (sigma range_sigma_m) is added to the range, which is
 // then quantised to the sensor's distance unit. The reported point is rebuilt like a decoder does:
 // the quantised range along the NOMINAL beam, since a real sensor reports its nominal angles.

@@ -1,5 +1,5 @@
 // A scene as plain data: what is where. Scenario files (sim/scenario.h) are parsed into it; the ray
-// caster (sim/raycaster.h) builds meshes from it. Map frame: ENU, metres, radians (DESIGN.md §3).
+// caster (sim/raycaster.h) builds meshes from it. Map frame: ENU, metres, radians (docs/design.md §3).
 #pragma once
 
 #include <cstdint>
@@ -53,7 +53,7 @@ struct Shrub {
 
 // Vehicle body proportions. The footprint (plan-view bounding rectangle) is exactly length x width,
 // centred at the vehicle's reference point; mirrors stay inside the width. Defaults: Lexus RX450h
-// (DESIGN.md §2).
+// (docs/design.md §2).
 struct VehicleShape {
   double length = 4.89;
   double width = 1.92;
@@ -112,7 +112,7 @@ struct Scene {
   Reflectivity reflectivity;
 };
 
-// Simulated sensor noise (DESIGN.md §2: the paper's simulator defaults).
+// Simulated sensor noise (docs/design.md §2: the paper's simulator defaults).
 struct NoiseModel {
   double range_sigma_m = 0.02;
   double angle_sigma_rad = 0.001;

@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "vehicle_client/udp_endpoint_text.h"
+#include "edge/address_text.h"
 
 namespace rsu::vehicle_client {
 
@@ -53,7 +53,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
       throw std::invalid_argument("no clock given");
     }
     for (const std::string& text : config_.rsu_endpoints) {
-      rsus_.push_back(parse_udp_endpoint(text));
+      rsus_.push_back(edge::parse_udp_endpoint(text));
       if (rsus_.back().protocol() != rsus_.front().protocol()) {
         throw std::invalid_argument("RSU endpoints mix IPv4 and IPv6: " + config_.rsu_endpoints.front() +
                                     ", " + text);
@@ -176,7 +176,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
     boost::system::error_code ec;
     probe.connect(rsu, ec);
     if (ec) {
-      throw std::invalid_argument("no route to RSU " + to_text(rsu) + ": " + ec.message());
+      throw std::invalid_argument("no route to RSU " + edge::to_text(rsu) + ": " + ec.message());
     }
     return probe.local_endpoint().address().to_string();
   }
@@ -271,7 +271,7 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
         ++stats_.datagrams_received;
         v2i::Correction correction;
         if (filter_.check({buffer_.data(), bytes}, clock_(), correction) == CorrectionVerdict::kAccepted) {
-          received = ReceivedCorrection{std::move(correction), clock_(), to_text(sender_)};
+          received = ReceivedCorrection{std::move(correction), clock_(), edge::to_text(sender_)};
           pending_.push_back(*received);
           while (pending_.size() > std::max<std::size_t>(config_.max_pending_corrections, 1)) {
             pending_.pop_front();

@@ -62,7 +62,7 @@ class VehicleClient {
   // (no RSU, vehicle id 0, unparsable endpoint, mixed address families, signed mode without a key)
   // and boost::system::system_error when the socket cannot be bound.
   VehicleClient(boost::asio::io_context& io, const VehicleClientConfig& config,
-                Clock clock = system_clock_now);
+                Clock clock = edge::host_now_ns);
   ~VehicleClient();  // stops; the callback is not called after it returns
   VehicleClient(const VehicleClient&) = delete;
   VehicleClient& operator=(const VehicleClient&) = delete;
@@ -97,7 +97,7 @@ class VehicleClient {
 // A VehicleClient with its own io_context and thread, for callers without an event loop (the CLI).
 class ThreadedVehicleClient {
  public:
-  explicit ThreadedVehicleClient(const VehicleClientConfig& config, Clock clock = system_clock_now);
+  explicit ThreadedVehicleClient(const VehicleClientConfig& config, Clock clock = edge::host_now_ns);
   ~ThreadedVehicleClient();
   ThreadedVehicleClient(const ThreadedVehicleClient&) = delete;
   ThreadedVehicleClient& operator=(const ThreadedVehicleClient&) = delete;

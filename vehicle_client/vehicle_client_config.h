@@ -19,7 +19,7 @@ namespace rsu::vehicle_client {
 
 struct VehicleClientConfig {
   std::uint64_t vehicle_id = 0;  // non-zero, stable for the trip
-  // Footprint box; the default is the Lexus RX450h of the paper's experiments (DESIGN.md §2).
+  // Footprint box; the default is the Lexus RX450h of the paper's experiments (docs/design.md §2).
   v2i::BoxSize size{4.89, 1.92, 1.70};
   // The reference point of the announced pose minus the box centre, vehicle frame (x forward, y left).
   Eigen::Vector2d reference_offset = Eigen::Vector2d::Zero();

@@ -1,7 +1,7 @@
 // The vehicle's own LiDAR self-localization for the realistic experiment (paper Sec. 4): NDT scan
 // matching (pcl::NormalDistributionsTransform) against a point-cloud map, with only scan matching (no GNSS,
 // no IMU, as in the paper), the initial guess from the previous pose plus constant-velocity motion.
-// Parameters are Autoware's ndt_scan_matcher and its input preprocessing defaults (DESIGN.md §2); the
+// Parameters are Autoware's ndt_scan_matcher and its input preprocessing defaults (docs/design.md §2); the
 // scenario file states every one of them.
 #pragma once
 

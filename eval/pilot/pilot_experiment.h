@@ -1,4 +1,4 @@
-// The paper's pilot experiment (Sec. 3.1, Table 1; DESIGN.md §2), reproduced: a LiDAR above an empty
+// The paper's pilot experiment (Sec. 3.1, Table 1; docs/design.md §2), reproduced: a LiDAR above an empty
 // ground plane (2 m in the paper), the vehicle spinning about its centre at 20 deg/s while the LiDAR runs
 // at 10 Hz (2 deg per frame), one full turn per distance, distances 3 m to 40 m in 0.5 m steps. Each
 // frame is a cell (distance, yaw) of the paper's heat maps; every cell is measured three ways, all
@@ -31,7 +31,7 @@ struct PilotConfig {
   double ground_filter_height_m = 0.2;  // the pilot's "drop zero-height points"
   std::string vehicle_name = "suv";     // for reports
   sim::VehicleShape vehicle;            // Lexus RX450h by default
-  sim::NoiseModel noise;                // DESIGN.md §2 defaults
+  sim::NoiseModel noise;                // docs/design.md §2 defaults
   // The fix's configuration: rsud's (the library defaults, deploy/rsud.yaml). The method field is
   // overridden per measured method.
   perception::VehicleFixConfig fix;

@@ -1,5 +1,5 @@
 // The pilot experiment's figures: accuracy per method (the paper's "error < 0.1 m from 6 to 36 m"), and
-// whether each fix's stated covariance is honest (DESIGN.md §3: a stated uncertainty is a promise).
+// whether each fix's stated covariance is honest (docs/design.md §3: a stated uncertainty is a promise).
 //
 // Integrity as GNSS augmentation reports it: a fix is beyond 3 sigma when its error lies outside the
 // 3-sigma bound of its own stated covariance (yaw: |error| > 3 sigma; position: the 2-dof NEES beyond its

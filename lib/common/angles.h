@@ -1,4 +1,4 @@
-// Angle helpers. Radians everywhere in code; yaw is counter-clockwise from +x (east) (DESIGN.md §3).
+// Angle helpers. Radians everywhere in code; yaw is counter-clockwise from +x (east) (docs/design.md §3).
 #pragma once
 
 #include <cmath>
@@ -8,8 +8,12 @@ namespace rsu {
 
 constexpr double kPi = std::numbers::pi;
 
-constexpr double deg_to_rad(double deg) { return deg * kPi / 180.0; }
-constexpr double rad_to_deg(double rad) { return rad * 180.0 / kPi; }
+constexpr double deg_to_rad(double deg) {
+  return deg * kPi / 180.0;
+}
+constexpr double rad_to_deg(double rad) {
+  return rad * 180.0 / kPi;
+}
 
 // Wraps to (-pi, pi].
 inline double wrap_angle(double a) {
@@ -24,6 +28,8 @@ inline double wrap_angle_positive(double a) {
 }
 
 // Smallest absolute difference between two angles, in [0, pi].
-inline double angle_distance(double a, double b) { return std::abs(wrap_angle(a - b)); }
+inline double angle_distance(double a, double b) {
+  return std::abs(wrap_angle(a - b));
+}
 
 }  // namespace rsu

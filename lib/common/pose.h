@@ -1,4 +1,4 @@
-// Poses in the map frame (ENU, metres, radians; DESIGN.md §3).
+// Poses in the map frame (ENU, metres, radians; docs/design.md §3).
 #pragma once
 
 #include <Eigen/Geometry>

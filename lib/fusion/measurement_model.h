@@ -15,7 +15,7 @@ struct PoseInnovation {
 };
 
 // The footprint box centre of a vehicle whose reference point has the given pose; reference_offset is
-// the reference point minus the box centre in the vehicle frame (as announced, DESIGN.md §3).
+// the reference point minus the box centre in the vehicle frame (as announced, docs/design.md §3).
 Eigen::Vector2d box_centre_from_reference(double x, double y, double yaw,
                                           const Eigen::Vector2d& reference_offset);
 

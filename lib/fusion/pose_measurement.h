@@ -1,4 +1,4 @@
-// Time-stamped planar pose measurements fed to the vehicle EKF (map frame ENU, m, rad; DESIGN.md §3).
+// Time-stamped planar pose measurements fed to the vehicle EKF (map frame ENU, m, rad; docs/design.md §3).
 #pragma once
 
 #include <Eigen/Core>
@@ -13,7 +13,7 @@ enum class MeasurementSource : std::uint8_t {
   // The vehicle's own NDT scan-matching pose of its reference point; yaw is a full heading.
   kNdt,
   // An RSU correction: the footprint box centre (not the reference point), and a box yaw that is only
-  // known modulo pi (a rectangle looks the same turned by 180 degrees; DESIGN.md §1).
+  // known modulo pi (a rectangle looks the same turned by 180 degrees; docs/design.md §1).
   kRsu,
 };
 

@@ -21,7 +21,7 @@ struct VehicleEkfConfig {
   // cluster) is not let in.
   double gate_chi2 = 16.27;
   // An RSU box yaw differing from the estimate by more than this (after choosing the nearest branch
-  // modulo pi) is the off-by-90 deg failure of L-shape fitting (DESIGN.md §1); it is rejected whatever
+  // modulo pi) is the off-by-90 deg failure of L-shape fitting (docs/design.md §1); it is rejected whatever
   // covariance the RSU claims, so such a fix never moves the pose.
   double max_rsu_yaw_innovation_rad = kPi / 4.0;
 

@@ -1,4 +1,4 @@
-// Cuts a stream of decoded points into rotations (DESIGN.md §4, "frame or sector assembly").
+// Cuts a stream of decoded points into rotations (docs/architecture.md).
 //
 // A frame holds the points whose beam azimuth lies in [cut, cut + 360 deg) of one rotation. Points
 // arrive packet by packet in firing order. Beam azimuths are not monotonic within a packet (the

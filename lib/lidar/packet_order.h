@@ -1,6 +1,6 @@
 // Puts a Velodyne packet stream back in time order and counts what the network did to it (issue 7:
 // LiDAR packet loss and reordering). Velodyne data packets carry no sequence number, only the time of
-// their first firing (DESIGN.md §2); consecutive packets are one packet period apart (12 blocks:
+// their first firing (docs/design.md §2); consecutive packets are one packet period apart (12 blocks:
 // VLP-16 1327.104 us, VLP-32C 663.552 us), so that time is the sequence:
 //   - a packet earlier than the newest one is REORDERED: held packets (up to `depth`) are released in
 //     time order, so a packet at most `depth` places late is put back; one later than that arrives

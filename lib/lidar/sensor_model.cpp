@@ -1,4 +1,4 @@
-// Sensor tables from DESIGN.md §2 (the manufacturers' manuals and the public Velodyne driver's
+// Sensor tables from docs/design.md §2 (the manufacturers' manuals and the public Velodyne driver's
 // calibration files).
 #include "lidar/sensor_model.h"
 
@@ -11,7 +11,7 @@
 namespace rsu {
 namespace {
 
-// Both sensors fire one laser (VLP-16) or one pair (VLP-32C) every 2.304 us (DESIGN.md §2).
+// Both sensors fire one laser (VLP-16) or one pair (VLP-32C) every 2.304 us (docs/design.md §2).
 constexpr double kFiringIntervalUs = 2.304;
 constexpr double kVelodyneSequenceUs = 55.296;
 

@@ -1,4 +1,4 @@
-// Spinning-LiDAR sensor models (DESIGN.md §2): beam geometry, firing timing and packet constants.
+// Spinning-LiDAR sensor models (docs/design.md §2): beam geometry, firing timing and packet constants.
 //
 // Sensor frame: x forward, y left, z up. A beam with elevation w and rotation angle a (clockwise seen
 // from above, 0 at +x, the Velodyne azimuth convention) points along

@@ -1,4 +1,4 @@
-// Velodyne data packet codec (see velodyne_packet.h; byte layout from DESIGN.md §2 and the VLP-16 /
+// Velodyne data packet codec (see velodyne_packet.h; byte layout from docs/design.md §2 and the VLP-16 /
 // VLP-32C user manuals, "Data Packet Structure").
 #include "lidar/velodyne_packet.h"
 

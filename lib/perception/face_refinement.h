@@ -9,7 +9,7 @@
 //   sum_A (n . (p - mean_A))^2 + sum_B (n_perp . (p - mean_B))^2 = n^T (S_A - S_B) n + trace(S_B),
 // S the faces' scatter matrices, so n is the eigenvector of S_A - S_B with the smaller eigenvalue
 // (one face: S_B = 0, the total-least-squares line). Points near a face's ends are left out: real
-// vehicles round their corners (DESIGN.md §2 vehicle: 0.35 m radius in the simulator).
+// vehicles round their corners (docs/design.md §2 vehicle: 0.35 m radius in the simulator).
 #pragma once
 
 #include <span>

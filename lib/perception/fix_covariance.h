@@ -1,4 +1,4 @@
-// The covariance of a size-corrected fix (x, y, yaw), from what the LiDAR saw (DESIGN.md §3: every
+// The covariance of a size-corrected fix (x, y, yaw), from what the LiDAR saw (docs/design.md §3: every
 // estimate carries its uncertainty).
 //
 // Model. Per-point noise across a face: sigma_n^2 = sigma_range^2 + (R sigma_angle)^2 at range R; the
@@ -44,10 +44,10 @@
 namespace rsu::perception {
 
 struct CovarianceModelConfig {
-  double range_sigma_m = 0.02;                      // DESIGN.md §2 (simulator default)
-  double angle_sigma_rad = 0.001;                   // DESIGN.md §2
+  double range_sigma_m = 0.02;                      // docs/design.md §2 (simulator default)
+  double angle_sigma_rad = 0.001;                   // docs/design.md §2
   double shape_sigma_m = 0.03;                      // vehicle vs box
-  double azimuth_resolution_rad = deg_to_rad(0.2);  // VLP at 600 rpm (DESIGN.md §2)
+  double azimuth_resolution_rad = deg_to_rad(0.2);  // VLP at 600 rpm (docs/design.md §2)
   double search_resolution_rad = deg_to_rad(0.02);  // the orientation search's final step
   double max_yaw_sigma_rad = 0.5;
   // The body's departure from a plane that tilts a face's fitted direction, seen head-on (smaller than

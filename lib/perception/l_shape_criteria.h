@@ -11,7 +11,7 @@
 //    d0 = 0.01 m (Zhang). A point counts for the edge it is nearer to.
 //  - variance (Alg. 5): with the same D1, D2, minus the variances of the distances of the points
 //    assigned to each edge (E1 = {D1(i) : D1(i) < D2(i)}, E2 likewise).
-//  - autoware_closeness (Autoware shape_estimation, DESIGN.md §2): the element-wise nearer edge per
+//  - autoware_closeness (Autoware shape_estimation, docs/design.md §2): the element-wise nearer edge per
 //    point, squared distances floored at 0.01 m^2 (= (0.1 m)^2), and points farther than 0.4 m from
 //    both edges ignored.
 #pragma once

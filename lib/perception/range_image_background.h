@@ -33,7 +33,7 @@
 namespace rsu::perception {
 
 struct RangeImageBackgroundConfig {
-  int azimuth_bins = 1800;       // 0.2 deg, the VLP azimuth step at 600 rpm (DESIGN.md §2)
+  int azimuth_bins = 1800;       // 0.2 deg, the VLP azimuth step at 600 rpm (docs/design.md §2)
   int neighbour_bins = 1;        // background = min over bin +- this many
   double near_percentile = 0.1;  // of a cell's training ranges
   double margin_m = 0.3;

@@ -6,7 +6,7 @@
 // Radius choice (default 0.3 m, the paper does not state one): a background point must find a reference
 // point although the two frames sample the surface at different azimuths and with independent noise.
 // On a surface facing the LiDAR at range R the reference samples are R * 0.2 deg apart (VLP azimuth
-// step, DESIGN.md §2), so the worst offset is half that, 0.09 m at 50 m; the noise difference of two
+// step, docs/design.md §2), so the worst offset is half that, 0.09 m at 50 m; the noise difference of two
 // returns has sigma sqrt(2) * sqrt(0.02^2 + (R * 0.001)^2) = 0.08 m at 50 m. 0.09 + 2.5 * 0.08 ~ 0.3 m.
 // A vehicle loses only the points within 0.3 m of a reference surface (tyre bottoms next to the road),
 // which the ground prefilter removes anyway. Several reference frames may be concatenated: the denser

@@ -6,7 +6,7 @@
 //
 // Release rule (exact, geometric, laser-aware). Points arrive in firing order. Laser i's beam azimuth
 // is the encoder azimuth at its firing plus its fixed offset o_i (sensor_model.h; VLP-32C: four
-// groups at -4.2, -1.4, +1.4, +4.2 deg, DESIGN.md §2), and the encoder azimuth only grows (unwrapped).
+// groups at -4.2, -1.4, +1.4, +4.2 deg, docs/design.md §2), and the encoder azimuth only grows (unwrapped).
 // Every return therefore tells the encoder azimuth it was fired at, u - o_ring, and with E the newest
 // such encoder azimuth seen, every point laser i still sends has a beam azimuth of at least E + o_i:
 // its future points lie in the wedge W_i of azimuths >= E + o_i, at any range.

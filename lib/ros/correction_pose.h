@@ -3,7 +3,7 @@
 // about X, about Y, about Z), as ROS defines it. The RSU measures neither z, roll nor pitch: they are
 // reported as 0 with kUnknownVariance on the diagonal and no correlation, the convention ROS
 // consumers (robot_localization, Autoware's EKF localizer) read as "do not use". Yaw is about +z,
-// counter-clockwise from east (DESIGN.md §3), so the quaternion is a pure rotation about z.
+// counter-clockwise from east (docs/design.md §3), so the quaternion is a pure rotation about z.
 #pragma once
 
 #include <array>

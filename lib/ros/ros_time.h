@@ -1,4 +1,4 @@
-// builtin_interfaces/Time <-> the common clock (TimeNs, DESIGN.md §3). ROS time is {int32 sec,
+// builtin_interfaces/Time <-> the common clock (TimeNs, docs/design.md §3). ROS time is {int32 sec,
 // uint32 nanosec in [0, 1e9)}: nanosec always adds, so times before the epoch have a negative sec.
 #pragma once
 

@@ -24,7 +24,7 @@
 namespace rsu::core {
 
 // How the fix settled the yaw, in the wire's terms. The wire's PRIOR / GEOMETRY say which way the
-// length axis lies (the off-by-90 deg question, docs/conventions.md); Algorithm 1's "longest edge is
+// length axis lies (the off-by-90 deg question, docs/design.md §1); Algorithm 1's "longest edge is
 // the length" and an unresolved fix are reported as UNRESOLVED.
 v2i::YawResolution to_wire(perception::AmbiguityResolution resolution);
 

@@ -25,7 +25,7 @@
 
 namespace rsu::core {
 
-// How background learning ends (DESIGN.md §1: the static scene is removed before clustering).
+// How background learning ends (docs/design.md §1: the static scene is removed before clustering).
 struct BackgroundLearningConfig {
   // Whole rotations recorded at start-up, while no vehicle is expected in view, that train the model.
   // Ignored when the caller loads a background (e.g. PCD files) with RsuCore::load_background().

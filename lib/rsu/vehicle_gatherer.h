@@ -3,7 +3,7 @@
 //
 // Why gather. A vehicle far away and seen head-on breaks into fragments more than the clustering
 // tolerance apart (bumper and front face low, cabin high, the hood between two rings), and the
-// VLP-32C's per-laser azimuth offsets (+-4.2 deg, docs/sensors.md) close them in different batches. A
+// VLP-32C's per-laser azimuth offsets (+-4.2 deg, docs/design.md §2) close them in different batches. A
 // fragment fitted as the whole vehicle is metres off, so a far vehicle's fix waits until the sweep has
 // passed its whole predicted footprint (grown by its uncertainty) and the clusters that closed there.
 // Near the LiDAR that footprint is passed about when its cluster closes: the wait is a few degrees.

@@ -1,6 +1,6 @@
 // Where the RSU expects an announced vehicle's footprint box at a LiDAR sweep time: its announced pose
 // carried forward with its announced motion (CTRV, as the vehicle EKF) and moved from the reference
-// point to the box centre (DESIGN.md §3), with the covariance grown for the unknowns.
+// point to the box centre (docs/design.md §3), with the covariance grown for the unknowns.
 #pragma once
 
 #include <Eigen/Core>

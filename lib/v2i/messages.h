@@ -1,6 +1,6 @@
 // V2I messages as plain C++ data (decoded from / encoded to proto/v2i.proto by wire_codec.h).
 // Map frame ENU, metres, radians CCW from east; vehicle frame x forward, y left; time in ns of the
-// common clock (DESIGN.md §3).
+// common clock (docs/design.md §3).
 #pragma once
 
 #include <Eigen/Core>

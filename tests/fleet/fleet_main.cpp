@@ -37,6 +37,7 @@
 
 #include "common/angles.h"
 #include "common/random.h"
+#include "edge/host_clock.h"
 #include "sim/scenario.h"
 #include "sim/trajectory.h"
 #include "tests/fleet/fleet_options.h"
@@ -46,12 +47,6 @@
 
 namespace rsu::fleet {
 namespace {
-
-TimeNs wall_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string ipv4_text(std::uint32_t host_order) {
   in_addr a{};
@@ -240,7 +235,7 @@ void receive(FleetVehicle& v, const Truth& truth, const FleetOptions& o, std::FI
     const ssize_t n = recv(v.fd, buffer.data(), buffer.size(), 0);
     if (n <= 0)
       return;  // drained (EAGAIN), or an ICMP error for an earlier datagram
-    const TimeNs received = wall_ns();
+    const TimeNs received = rsu::edge::host_now_ns();
     const auto decoded = v2i::decode_v2i_message(std::span(buffer.data(), static_cast<std::size_t>(n)));
     const auto* c = std::get_if<v2i::Correction>(&decoded.body);
     if (c == nullptr) {
@@ -277,7 +272,7 @@ int run(const FleetOptions& o) {
   std::vector<FleetVehicle> fleet = make_fleet(scenario, o);
   // Sequences continue from the millisecond clock (at most 100 announcements a second), so a fleet
   // started again for the same vehicles is not refused as replaying old sequence numbers.
-  const auto first_sequence = static_cast<std::uint32_t>(wall_ns() / kNsPerMs);
+  const auto first_sequence = static_cast<std::uint32_t>(rsu::edge::host_now_ns() / kNsPerMs);
   for (FleetVehicle& v : fleet)
     v.sequence = first_sequence;
   if (!o.trust_list_path.empty()) {
@@ -300,13 +295,13 @@ int run(const FleetOptions& o) {
   const sockaddr_in rsu = endpoint(ntohl(inet_addr(o.rsu_address.c_str())), o.rsu_port);
 
   // Round-robin slots, slot j at start + j / (rate * N): every vehicle at `rate`, spread evenly.
-  const TimeNs start = wall_ns();
+  const TimeNs start = rsu::edge::host_now_ns();
   const TimeNs end = start + from_seconds(o.seconds);
   const double slots_per_ns = o.rate_hz * static_cast<double>(fleet.size()) * 1e-9;
   std::uint64_t next_slot = 0;
   Counts counts;
   std::array<epoll_event, 64> events{};
-  for (TimeNs now = wall_ns(); now < end; now = wall_ns()) {
+  for (TimeNs now = rsu::edge::host_now_ns(); now < end; now = rsu::edge::host_now_ns()) {
     const auto due = static_cast<std::uint64_t>(static_cast<double>(now - start) * slots_per_ns) + 1;
     for (; next_slot < due; ++next_slot) {
       FleetVehicle& v = fleet[next_slot % fleet.size()];

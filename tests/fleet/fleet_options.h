@@ -29,7 +29,7 @@ struct FleetOptions {
   double rate_hz = 10.0;
   double seconds = 10.0;
   std::uint32_t address_base = 0x7f010001;  // 127.1.0.1: vehicle k sends from base + k
-  // Added to every generation time: the vehicle's clock error against the RSU's (DESIGN.md §3).
+  // Added to every generation time: the vehicle's clock error against the RSU's (docs/design.md §3).
   TimeNs clock_offset_ns = 0;
   // The announced pose is the truth moved by this much along +x and -y of the map (the vehicle's own
   // estimate is off), with the announced covariance below.

@@ -22,6 +22,7 @@
 #include <variant>
 #include <vector>
 
+#include "edge/host_clock.h"
 #include "helper_io.h"
 #include "v2i/message_authenticator.h"
 #include "v2i/message_signer.h"
@@ -31,12 +32,6 @@
 #include "v2i/wire_codec.h"
 
 namespace {
-
-rsu::TimeNs wall_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
@@ -124,17 +119,17 @@ int main(int argc, char** argv) {
 
   rsu::v2i::VehicleAnnouncement a;
   a.vehicle_id = id;
-  a.size = {4.89, 1.92, 1.70};  // DESIGN.md §2: the Lexus RX450h the scenarios drive
+  a.size = {4.89, 1.92, 1.70};  // docs/design.md §2: the Lexus RX450h the scenarios drive
   a.pose = {x, y, yaw};
   a.pose_covariance = Eigen::Vector3d(0.25, 0.25, 0.01).asDiagonal();
   a.speed_mps = 0.0;
   a.yaw_rate_rps = 0.0;
   a.reply_to = {bind_ip, ntohs(local.sin_port)};
 
-  const rsu::TimeNs end = wall_ns() + static_cast<rsu::TimeNs>(seconds * 1e9);
-  rsu::TimeNs next_announce = wall_ns();
+  const rsu::TimeNs end = rsu::edge::host_now_ns() + static_cast<rsu::TimeNs>(seconds * 1e9);
+  rsu::TimeNs next_announce = rsu::edge::host_now_ns();
   std::vector<std::uint8_t> buffer(65536);
-  for (rsu::TimeNs now = wall_ns(); now < end; now = wall_ns()) {
+  for (rsu::TimeNs now = rsu::edge::host_now_ns(); now < end; now = rsu::edge::host_now_ns()) {
     if (now >= next_announce) {
       a.sequence += 1;
       a.generation_time = now;
@@ -154,7 +149,8 @@ int main(int argc, char** argv) {
     if (n <= 0)
       continue;
     const std::span<const std::uint8_t> datagram(buffer.data(), static_cast<std::size_t>(n));
-    const rsu::v2i::AuthenticatedMessage heard = authenticator.authenticate(datagram, wall_ns());
+    const rsu::v2i::AuthenticatedMessage heard =
+        authenticator.authenticate(datagram, rsu::edge::host_now_ns());
     const auto* c = std::get_if<rsu::v2i::Correction>(&heard.message.body);
     if (!heard.accepted() || c == nullptr || c->vehicle_id != id) {
       std::printf("refused %s\n", heard.accepted() ? "not_mine" : rsu::v2i::to_string(heard.verdict));
@@ -163,7 +159,8 @@ int main(int argc, char** argv) {
     }
     if (dump)
       std::printf("received %s\n", rsu::v2i::security::to_hex(datagram).c_str());
-    std::printf("correction %lld %llu %u %lld %.4f %.4f %.5f %u %u %llu\n", static_cast<long long>(wall_ns()),
+    std::printf("correction %lld %llu %u %lld %.4f %.4f %.5f %u %u %llu\n",
+                static_cast<long long>(rsu::edge::host_now_ns()),
                 static_cast<unsigned long long>(c->vehicle_id), c->sequence,
                 static_cast<long long>(c->sweep_time), c->pose.x, c->pose.y, c->pose.yaw,
                 c->quality.points_used, c->quality.faces_seen, static_cast<unsigned long long>(c->rsu_id));

@@ -27,7 +27,7 @@ import yaml
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "python"))
 from rsu_processes import ChildExited, Children, free_udp_port, read_text, wait_for  # noqa: E402
 
-ROTATION_S = 0.1  # 600 rpm (DESIGN.md §2)
+ROTATION_S = 0.1  # 600 rpm (docs/design.md §2)
 
 
 class LiveRsu:
@@ -48,7 +48,7 @@ class LiveRsu:
         self.log_path = None
         self.background = []
         self.trust_list = None  # signed mode: the fleet's trust list (make_keys)
-        # Scenario time 0 on the host clock, shared by the stream and the fleet (DESIGN.md §3).
+        # Scenario time 0 on the host clock, shared by the stream and the fleet (docs/design.md §3).
         self.epoch_ns = time.time_ns() + int(lead_s * 1e9)
 
     def path(self, name):

@@ -17,6 +17,7 @@
 
 #include "dds/participant.h"
 #include "dds/typed_entities.h"
+#include "edge/host_clock.h"
 #include "rsu_msgs.h"
 #include "v2i/messages.h"
 #include "v2i/wire_codec.h"
@@ -24,12 +25,6 @@
 namespace {
 
 using Sample = rsu_msgs_msg_dds__PeerAnnouncement_;
-
-rsu::TimeNs wall_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
@@ -44,7 +39,7 @@ std::vector<std::uint8_t> announcement(std::uint64_t vehicle, std::uint32_t sequ
   rsu::v2i::VehicleAnnouncement a;
   a.vehicle_id = vehicle;
   a.sequence = sequence;
-  a.generation_time = wall_ns();
+  a.generation_time = rsu::edge::host_now_ns();
   a.size = {4.89, 1.92, 1.70};
   a.pose = {10.0, 2.0, 0.0};
   a.pose_covariance = Eigen::Vector3d(0.25, 0.25, 0.01).asDiagonal();

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 
+#include "edge/host_clock.h"
 #include "helper_io.h"
 #include "v2i/security/key_text.h"
 #include "v2i/wire_codec.h"
@@ -87,10 +88,7 @@ int main(int argc, char** argv) {
       usage(e.what());
     }
   }
-  const rsu::TimeNs now = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                              std::chrono::system_clock::now().time_since_epoch())
-                              .count() -
-                          age_ms * rsu::kNsPerMs;
+  const rsu::TimeNs now = rsu::edge::host_now_ns() - age_ms * rsu::kNsPerMs;
   const rsu::v2i::MessageHeader header{now, seq};
   const rsu::v2i::security::SigningKey* signer = key ? &*key : nullptr;
   std::vector<std::uint8_t> bytes;

@@ -1,4 +1,4 @@
-// The tests' own copy of the published sensor tables (DESIGN.md §2), independent of the library's.
+// The tests' own copy of the published sensor tables (docs/design.md §2), independent of the library's.
 #pragma once
 
 #include <array>

@@ -36,7 +36,7 @@ TEST(RsuCoreFragments, HeadOnVehicleAtLongRangeIsFixedWholeOrNotAtAll) {
   RsuCore core(config);
 
   // The vehicle announces its true pose and motion at 10 Hz (this test is about the RSU's own error),
-  // with the covariance of a vehicle's NDT (Autoware's fixed output, DESIGN.md §2).
+  // with the covariance of a vehicle's NDT (Autoware's fixed output, docs/design.md §2).
   const TimeNs rotation = stream.rotation_ns();
   const TimeNs start = 7 * rotation;  // x = -52 m: |x| from 52 m down to 30 m below
   const TimeNs end = 27 * rotation;

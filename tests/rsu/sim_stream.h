@@ -103,7 +103,7 @@ class SimStream {
   std::vector<Received> corrections_;
 };
 
-// An announcement of a Lexus-sized vehicle (DESIGN.md §2) that reports its box centre.
+// An announcement of a Lexus-sized vehicle (docs/design.md §2) that reports its box centre.
 inline v2i::VehicleAnnouncement announce(std::uint64_t id, std::uint32_t sequence, TimeNs now,
                                          const Pose2& pose, const std::string& address) {
   v2i::VehicleAnnouncement a;

@@ -1,4 +1,4 @@
-// A plausible announcement for tests: a Lexus RX450h (DESIGN.md §2) reporting its rear axle.
+// A plausible announcement for tests: a Lexus RX450h (docs/design.md §2) reporting its rear axle.
 #pragma once
 
 #include <cstdint>

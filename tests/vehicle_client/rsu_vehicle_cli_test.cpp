@@ -140,7 +140,7 @@ TEST(RsuVehicleCli, FusesTheFakeRsusCorrectionsAndBeatsNdt) {
     if (!bytes) {
       continue;
     }
-    const v2i::AuthenticatedMessage heard = authenticator.authenticate(*bytes, system_clock_now());
+    const v2i::AuthenticatedMessage heard = authenticator.authenticate(*bytes, edge::host_now_ns());
     ASSERT_EQ(heard.verdict, v2i::AuthVerdict::kAccepted);
     const auto* a = std::get_if<v2i::VehicleAnnouncement>(&heard.message.body);
     ASSERT_NE(a, nullptr);
@@ -157,7 +157,7 @@ TEST(RsuVehicleCli, FusesTheFakeRsusCorrectionsAndBeatsNdt) {
     c.pose_covariance = Eigen::Vector3d(0.03 * 0.03, 0.03 * 0.03, 0.02 * 0.02).asDiagonal();
     c.quality.points_used = 200;
     c.announcement_sequence = a->sequence;
-    rsu.send_to(signer.encode(c, system_clock_now()), a->reply_to.address, a->reply_to.port);
+    rsu.send_to(signer.encode(c, edge::host_now_ns()), a->reply_to.address, a->reply_to.port);
   }
   run.thread.join();
   ASSERT_EQ(run.exit_code, 0) << slurp(dir.path / "stderr.txt");

@@ -14,11 +14,11 @@
 #include <iostream>
 #include <sstream>
 
+#include "edge/address_text.h"
 #include "io/text_file.h"
 #include "tools/cli/version.h"
 #include "tools/rsu_relay/relay.h"
 #include "v2i/security/key_text.h"
-#include "vehicle_client/udp_endpoint_text.h"
 
 namespace rsu::tools {
 namespace {
@@ -152,21 +152,17 @@ std::optional<Options> parse_options(int argc, char** argv) {
   }
   po::notify(vm);
   RelayConfig& r = o.relay;
-  r.vehicle = vehicle_client::parse_udp_endpoint(vehicle);
+  r.vehicle = edge::parse_udp_endpoint(vehicle);
   for (const std::string& text : listen) {
-    r.listen.push_back(vehicle_client::parse_udp_endpoint(text));
+    r.listen.push_back(edge::parse_udp_endpoint(text));
   }
   for (const std::string& text : rsus) {
-    r.rsus.push_back(vehicle_client::parse_udp_endpoint(text));
+    r.rsus.push_back(edge::parse_udp_endpoint(text));
   }
   if (r.listen.size() != r.rsus.size()) {
     throw po::error("give one --listen per --rsu");
   }
-  boost::system::error_code ec;
-  r.rsu_side_address = boost::asio::ip::make_address(rsu_side, ec);
-  if (ec) {
-    throw po::error("--rsu-side: \"" + rsu_side + "\" is not an IP address");
-  }
+  r.rsu_side_address = edge::parse_ip_address(rsu_side, "--rsu-side");
   r.link = {link_of(vm, "uplink"), link_of(vm, "downlink")};
   TamperConfig& t = r.tamper;
   t.bias_m = {vm["bias-x-m"].as<double>(), vm["bias-y-m"].as<double>()};

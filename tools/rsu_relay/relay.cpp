@@ -3,8 +3,8 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "edge/address_text.h"
 #include "io/text_file.h"
-#include "vehicle_client/udp_endpoint_text.h"
 
 namespace rsu::tools {
 
@@ -83,11 +83,10 @@ RelayStats Relay::stats() const {
 std::string Relay::describe() const {
   std::string text;
   for (std::size_t i = 0; i < config_.listen.size(); ++i) {
-    text += (i ? ", " : "") + vehicle_client::to_text(config_.listen[i]) + " -> " +
-            vehicle_client::to_text(config_.rsus[i]);
+    text += (i ? ", " : "") + edge::to_text(config_.listen[i]) + " -> " + edge::to_text(config_.rsus[i]);
   }
-  return text + "; corrections at " + vehicle_client::to_text(sockets_.back()->local_endpoint()) + " -> " +
-         vehicle_client::to_text(config_.vehicle);
+  return text + "; corrections at " + edge::to_text(sockets_.back()->local_endpoint()) + " -> " +
+         edge::to_text(config_.vehicle);
 }
 
 void Relay::receive(std::size_t i) {

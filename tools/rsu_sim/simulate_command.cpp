@@ -30,7 +30,7 @@ void write_file(const std::filesystem::path& path, const std::vector<std::uint8_
     throw std::runtime_error("cannot write " + path.string());
 }
 
-// When the LiDAR swept vehicle `id` (DESIGN.md §3): the median firing time of its points, or the
+// When the LiDAR swept vehicle `id` (docs/design.md §3): the median firing time of its points, or the
 // frame's middle when it was not seen. A car at 40 km/h moves 0.55 m in half a rotation, so truth taken
 // at any other time would misplace the box.
 TimeNs sweep_time(const sim::SimulatedFrame& frame, std::uint32_t id) {

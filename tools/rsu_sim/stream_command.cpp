@@ -15,6 +15,8 @@
 #include <thread>
 
 #include "common/random.h"
+#include "edge/address_text.h"
+#include "edge/host_clock.h"
 #include "lidar/velodyne_packet.h"
 #include "sim/lidar_simulator.h"
 #include "sim/scenario.h"
@@ -27,20 +29,6 @@ namespace asio = boost::asio;
 
 namespace {
 
-asio::ip::udp::endpoint parse_endpoint(const std::string& text) {
-  const auto colon = text.rfind(':');
-  if (colon == std::string::npos)
-    throw std::runtime_error("--to must be HOST:PORT, got \"" + text + "\"");
-  boost::system::error_code ec;
-  const auto address = asio::ip::make_address(text.substr(0, colon), ec);
-  if (ec)
-    throw std::runtime_error("--to: \"" + text.substr(0, colon) + "\" is not an IP address");
-  const int port = std::stoi(text.substr(colon + 1));
-  if (port < 1 || port > 65535)
-    throw std::runtime_error("--to: port out of range");
-  return {address, static_cast<unsigned short>(port)};
-}
-
 // Uniform in (0, 1) for packet k of the impairment stream `stream` (1 loss, 2 reordering).
 double impairment_draw(std::uint64_t seed, std::uint64_t stream, std::int64_t k) {
   return uniform_open01(mix64(seed ^ mix64(stream ^ mix64(static_cast<std::uint64_t>(k)))));
@@ -51,12 +39,6 @@ double fraction_option(const po::variables_map& vm, const char* name) {
   if (!(v >= 0.0 && v < 1.0))
     throw std::runtime_error(std::string("stream: --") + name + " must be within [0, 1)");
   return v;
-}
-
-TimeNs wall_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 }  // namespace
@@ -110,7 +92,7 @@ int run_stream(const std::vector<std::string>& args) {
 
   asio::io_context io;
   asio::ip::udp::socket socket(io);
-  const auto destination = parse_endpoint(vm["to"].as<std::string>());
+  const auto destination = edge::parse_udp_endpoint(vm["to"].as<std::string>());
   socket.open(destination.protocol());
 
   const std::int64_t first = simulator.packet_index_at(sim_start);
@@ -119,7 +101,7 @@ int run_stream(const std::vector<std::string>& args) {
   // Shifts only the packets' timestamps: the scene keeps moving on the scenario's clock.
   const bool has_epoch = vm.count("epoch-ns") > 0;
   const TimeNs clock_offset = has_epoch         ? static_cast<TimeNs>(vm["epoch-ns"].as<long long>())
-                              : clock == "wall" ? wall_now_ns() - sim_start
+                              : clock == "wall" ? edge::host_now_ns() - sim_start
                                                 : 0;
   std::array<std::uint8_t, kPacketBytes> payload{};
   std::optional<std::array<std::uint8_t, kPacketBytes>> held_back;  // sent after the next packet

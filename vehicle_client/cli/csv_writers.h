@@ -1,5 +1,5 @@
 // The rsu-vehicle CLI's outputs, as CSV with a header line (map frame ENU, m, rad CCW from east,
-// ns of the common clock; DESIGN.md §3).
+// ns of the common clock; docs/design.md §3).
 #pragma once
 
 #include <cstdio>

@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "edge/address_text.h"
 #include "io/text_file.h"
 #include "tools/cli/renamed_options.h"
 #include "tools/cli/version.h"
@@ -26,7 +27,6 @@
 #include "vehicle_client/cli/csv_writers.h"
 #include "vehicle_client/cli/stats_report.h"
 #include "vehicle_client/ndt_csv.h"
-#include "vehicle_client/udp_endpoint_text.h"
 #include "vehicle_client/vehicle_client.h"
 
 namespace rsu::vehicle_client::cli {
@@ -183,10 +183,10 @@ std::optional<Options> parse_options(int argc, char** argv) {
     throw std::invalid_argument("--vehicle-id must be non-zero");
   }
   for (const std::string& rsu : o.client.rsu_endpoints) {
-    parse_udp_endpoint(rsu);  // throws naming the bad one
+    edge::parse_udp_endpoint(rsu);  // throws naming the bad one
   }
   o.client.reference_offset = {vm["ref-offset-x-m"].as<double>(), vm["ref-offset-y-m"].as<double>()};
-  const auto bind_endpoint = parse_udp_endpoint(bind, true);
+  const auto bind_endpoint = edge::parse_udp_endpoint(bind, true);
   o.client.bind_address = bind_endpoint.address().is_unspecified() ? "" : bind_endpoint.address().to_string();
   o.client.bind_port = bind_endpoint.port();
   o.announce_only = vm.count("announce-only") > 0;

@@ -6,9 +6,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "edge/address_text.h"
 #include "v2i/security/key_text.h"
 #include "vehicle_client/library_version.h"
-#include "vehicle_client/udp_endpoint_text.h"
 #include "vehicle_client/vehicle_client.h"
 
 int main(int argc, char** argv) {
@@ -20,10 +20,10 @@ int main(int argc, char** argv) {
   std::stringstream text;
   text << in.rdbuf();
   const auto key = rsu::v2i::security::parse_secret_key_text(text.str(), argv[1]);
-  const auto rsu = rsu::vehicle_client::parse_udp_endpoint(argv[2]);
+  const auto rsu = rsu::edge::parse_udp_endpoint(argv[2]);
   std::printf("rsu-vehicle-client %s: key id ", rsu::vehicle_client::library_version());
   for (const auto byte : key.key_id())
     std::printf("%02x", static_cast<unsigned>(byte));
-  std::printf(", rsu %s\n", rsu::vehicle_client::to_text(rsu).c_str());
+  std::printf(", rsu %s\n", rsu::edge::to_text(rsu).c_str());
   return 0;
 }
