@@ -124,11 +124,11 @@ PcapInput read_pcap_input(const YamlField& p, const std::filesystem::path& base)
 }
 
 LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
-  f.expect_map({"udp", "velodyne_udp", "pcap", "pcd", "simulator", "dds_pointcloud2"});
+  f.expect_map({"udp", "velodyne_udp", "pcap", "pcd", "dds_pointcloud2"});
   const int kinds = int{f.has("udp")} + int{f.has("velodyne_udp")} + int{f.has("pcap")} + int{f.has("pcd")} +
-                    int{f.has("simulator")} + int{f.has("dds_pointcloud2")};
+                    int{f.has("dds_pointcloud2")};
   if (kinds != 1)
-    f.fail("exactly one of udp (velodyne_udp), pcap, pcd, simulator, dds_pointcloud2 is required");
+    f.fail("exactly one of udp (velodyne_udp), pcap, pcd, dds_pointcloud2 is required");
   if (f.has("dds_pointcloud2"))
     return read_dds_pointcloud2_input(f.child("dds_pointcloud2"));
   if (f.has("udp"))
@@ -137,7 +137,7 @@ LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
     return read_udp_input(f.child("velodyne_udp"));
   if (f.has("pcap"))
     return read_pcap_input(f.child("pcap"), base);
-  if (f.has("pcd")) {
+  {
     const YamlField p = f.child("pcd");
     p.expect_map({"files", "rate_hz"});
     PcdInput in;
@@ -150,9 +150,6 @@ LidarInput read_input(const YamlField& f, const std::filesystem::path& base) {
       p.child("rate_hz").fail("must be <= 100 Hz");
     return in;
   }
-  const YamlField s = f.child("simulator");
-  s.expect_map({"scenario"});
-  return SimulatorInput{path_of(s.required("scenario"), base)};
 }
 
 void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
@@ -540,8 +537,6 @@ std::string summarize(const DaemonConfig& c) {
         << (c2->loop ? ", looped" : "") << "\n";
   } else if (const auto* p = std::get_if<PcdInput>(&c.input)) {
     out << "input pcd " << p->files.size() << " file(s) at " << p->rate_hz << " Hz\n";
-  } else if (const auto* s = std::get_if<SimulatorInput>(&c.input)) {
-    out << "input simulator " << s->scenario << "\n";
   } else if (const auto* d = std::get_if<DdsPointCloud2Input>(&c.input)) {
     out << "input dds_pointcloud2 " << d->topic << (d->whole_rotation ? " (whole rotations)" : " (parts)")
         << "\n";

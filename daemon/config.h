@@ -54,11 +54,6 @@ struct PcdInput {
   double rate_hz = 10.0;
 };
 
-// The scenario's simulated LiDAR (sim/), packet by packet at real time, on the host clock.
-struct SimulatorInput {
-  std::string scenario;
-};
-
 // sensor_msgs/PointCloud2 from a ROS 2 LiDAR driver over DDS (needs dds.enabled). Points in the
 // LiDAR's own frame: lidar.mount places them, whatever header.frame_id says.
 struct DdsPointCloud2Input {
@@ -73,7 +68,7 @@ struct DdsPointCloud2Input {
   std::string frame_id;
 };
 
-using LidarInput = std::variant<UdpInput, PcdInput, SimulatorInput, DdsPointCloud2Input, PcapInput>;
+using LidarInput = std::variant<UdpInput, PcdInput, DdsPointCloud2Input, PcapInput>;
 
 // The Velodyne calibration file (lidar.calibration), read by load_lidar_files() into
 // core.sensor_options.calibrated_model (an Ouster's metadata path is core.sensor_options.metadata_source).
@@ -158,7 +153,7 @@ class ConfigError : public std::runtime_error {
 };
 
 // Throws ConfigError "<source>:<line>: <field>: <what is wrong>" (or the core's complaint about an
-// unusable combination, e.g. an unknown LiDAR model). Relative paths in the file (PCD files, scenario,
+// unusable combination, e.g. an unknown LiDAR model). Relative paths in the file (PCD files,
 // key files) are taken relative to the file's folder. parse_config reads no other file: the key files
 // are read by load_security().
 DaemonConfig parse_config(const std::string& yaml_text, const std::string& source_name);

@@ -18,7 +18,6 @@
 #include "edge/address_text.h"
 #include "io/capture_file.h"
 #include "rsu/rsu_core.h"
-#include "sim/scenario.h"
 
 #ifndef RSUD_VERSION
 #define RSUD_VERSION "unknown"
@@ -56,9 +55,6 @@ void check_config(const rsu::daemon::DaemonConfig& config) {
   } else if (const auto* p = std::get_if<rsu::daemon::PcdInput>(&config.input)) {
     for (const auto& f : p->files)
       check_file(f, "lidar.input.pcd.files");
-  } else if (const auto* s = std::get_if<rsu::daemon::SimulatorInput>(&config.input)) {
-    check_file(s->scenario, "lidar.input.simulator.scenario");
-    rsu::sim::load_scenario_file(s->scenario);  // throws a located error
   }
 }
 

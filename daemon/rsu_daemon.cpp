@@ -15,9 +15,6 @@
 #include "edge/address_text.h"
 #include "edge/host_clock.h"
 #include "io/pcd_io.h"
-#include "lidar/velodyne_packet.h"
-#include "sim/lidar_simulator.h"
-#include "sim/scenario.h"
 
 namespace rsu::daemon {
 
@@ -156,8 +153,6 @@ void RsuDaemon::start_input() {
           handle_lidar_result(whole ? core_.on_lidar_frame(points, clock_now())
                                     : core_.on_lidar_points(points, clock_now()));
         });
-  } else {
-    start_simulator();
   }
 }
 
@@ -350,56 +345,6 @@ void RsuDaemon::on_pcd_frame() {
   for (LidarPoint& p : frame)
     p.time_ns += shift;
   handle_lidar_result(core_.on_lidar_frame(frame, clock_now()));
-}
-
-void RsuDaemon::start_simulator() {
-  const auto& input = std::get<SimulatorInput>(config_.input);
-  try {
-    scenario_ = std::make_unique<sim::Scenario>(sim::load_scenario_file(input.scenario));
-  } catch (const std::exception& e) {
-    throw std::runtime_error(std::string("lidar.input.simulator: ") + e.what());
-  }
-  const auto& lidar = scenario_->lidar;
-  if (lidar.model_name != config_.core.sensor_model) {
-    throw std::runtime_error("lidar.input.simulator: the scenario's LiDAR is " + lidar.model_name +
-                             " but lidar.model is " + config_.core.sensor_model);
-  }
-  simulator_ = std::make_unique<sim::LidarSimulator>(lidar.model, lidar.mount, lidar.noise, scenario_->scene,
-                                                     0, lidar.start_azimuth_deg);
-  if (!core_.background_ready()) {
-    // The simulator knows the scene without its vehicles: that is the background, exactly.
-    sim::Scene empty = scenario_->scene;
-    empty.vehicles.clear();
-    const sim::LidarSimulator background(lidar.model, lidar.mount, lidar.noise, empty, 0,
-                                         lidar.start_azimuth_deg);
-    std::vector<std::vector<LidarPoint>> frames;
-    const int n = std::max(1, config_.core.background.learning_frames);
-    for (int i = 0; i < n; ++i) {
-      frames.push_back(
-          background.simulate_frame(scenario_->start_ns + i * background.rotation_period_ns()).frame.points);
-    }
-    core_.load_background(frames);
-    spdlog::info("background: {} simulated rotations of the scenario's scene without vehicles", n);
-  }
-  next_sim_packet_ = simulator_->packet_index_at(scenario_->start_ns);
-  sim_clock_offset_ = clock_now() - scenario_->start_ns;
-  spdlog::info("simulating {} from {}", lidar.model_name, input.scenario);
-  every(input_timer_, std::chrono::milliseconds(2), &RsuDaemon::on_simulator_tick);
-}
-
-void RsuDaemon::on_simulator_tick() {
-  std::array<std::uint8_t, kPacketBytes> payload{};
-  const TimeNs now = clock_now();
-  // Packets whose firings are over by now; at most 100 per tick so a slow host degrades, not stalls.
-  for (int i = 0; i < 100; ++i) {
-    PacketReturns returns = simulator_->simulate_packet(next_sim_packet_);
-    if (returns.blocks.first_firing_ns + sim_clock_offset_ + 1'400'000 > now)
-      break;
-    returns.blocks.first_firing_ns += sim_clock_offset_;
-    encode_packet(scenario_->lidar.model, returns, payload);
-    ++next_sim_packet_;
-    handle_lidar_result(core_.on_lidar_packet(payload, now));
-  }
 }
 
 void RsuDaemon::load_background_pcd() {

@@ -1,6 +1,6 @@
 // rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/rsu). One thread, one
 // io_context: sockets (V2I announcements in / corrections out, Velodyne packets in), timers (registry
-// expiry, watchdog, advertisement, log summaries, PCD replay / simulator pacing) and signals (SIGHUP
+// expiry, watchdog, advertisement, log summaries, PCD replay pacing) and signals (SIGHUP
 // reload, SIGTERM / SIGINT drain). Everything it decides is RsuCore's; this file only moves bytes,
 // reads the clock and logs.
 #pragma once
@@ -23,11 +23,6 @@
 #include "io/capture_file.h"
 #include "lidar/sensor_model.h"
 #include "rsu/rsu_core.h"
-
-namespace rsu::sim {
-class LidarSimulator;
-struct Scenario;
-}  // namespace rsu::sim
 
 namespace rsu::daemon {
 
@@ -66,7 +61,6 @@ class RsuDaemon {
   void on_advertise();
   void on_stats();
   void on_pcd_frame();
-  void on_simulator_tick();
   void on_object_list();
   void start_dds();
 
@@ -81,7 +75,6 @@ class RsuDaemon {
   // on the host's timer, or on the capture's clock during a replay so that a replay stays the same.
   void housekeep(TimeNs now);
   void load_background_pcd();
-  void start_simulator();
   void on_signal(int signal_number);
   void reload();
   void drain_and_stop();
@@ -127,11 +120,6 @@ class RsuDaemon {
   // PCD replay
   std::vector<std::vector<LidarPoint>> pcd_frames_;
   std::size_t next_pcd_frame_ = 0;
-  // Simulator input
-  std::unique_ptr<sim::Scenario> scenario_;
-  std::unique_ptr<sim::LidarSimulator> simulator_;
-  std::int64_t next_sim_packet_ = 0;
-  TimeNs sim_clock_offset_ = 0;
   // Capture replay
   struct CaptureCounts {
     std::uint64_t lidar_datagrams = 0;  // to the sensor's ports: given to the decoder

@@ -1,6 +1,7 @@
-// PCD files of LiDAR points through PCL. Fields: x y z intensity (float), ring (uint16), azimuth (float,
-// rad), time (float64, seconds on the common clock). Reading accepts any PCD that has x, y, z; intensity,
-// ring, azimuth and time are used when present (as the daemon's PCD replay input).
+// PCD files of LiDAR points (PCL's format, read and written here: pcd_header.h). write_pcd's fields: x y z
+// intensity (float), ring (uint16), azimuth (float, rad), time (float64, seconds on the common clock).
+// Reading accepts any PCD that has x, y, z; intensity, ring, azimuth and time are used when present (as
+// the daemon's PCD replay input).
 #pragma once
 
 #include <stdexcept>
@@ -23,7 +24,9 @@ void write_pcd(const std::string& path, const std::vector<LidarPoint>& points);
 // more than 4.29 s after it.
 void write_rotation_pcd(const std::string& path, const std::vector<LidarPoint>& points,
                         TimeNs rotation_start_ns);
-// Throws PcdError naming the file and what is wrong (missing file, no x/y/z, unsupported field type).
+// Any PCD v0.7 file: ascii, binary or binary_compressed data, fields of any numeric type and count (the
+// first value is used). Throws PcdError naming the file and what is wrong (missing file, malformed
+// header, no x/y/z, too little data, a ring or time that does not fit).
 std::vector<LidarPoint> read_pcd(const std::string& path);
 
 }  // namespace rsu::io

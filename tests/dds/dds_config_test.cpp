@@ -93,7 +93,7 @@ TEST(DdsConfig, ErrorsNameFileLineAndField) {
   expect_refused("  input:\n    dds_pointcloud2: {topic: \"\"}\ndds: {enabled: true}\n",
                  "lidar.input.dds_pointcloud2.topic: expected a topic name");
   expect_refused("  input: {velodyne_udp: {}, dds_pointcloud2: {}}\ndds: {enabled: true}\n",
-                 "exactly one of udp (velodyne_udp), pcap, pcd, simulator, dds_pointcloud2 is required");
+                 "exactly one of udp (velodyne_udp), pcap, pcd, dds_pointcloud2 is required");
 }
 
 TEST(DdsConfig, VehiclePoseTopicReplacesEveryPlaceholder) {

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include <unistd.h>
 
@@ -15,6 +16,18 @@ namespace {
 std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / ("rsu_io_test_" + std::to_string(::getpid()) + "_" + name))
       .string();
+}
+
+// The points of a PCD file with `text` (written to a temporary file, removed afterwards).
+std::vector<LidarPoint> read_text(const std::string& name, const std::string& text) {
+  const std::string path = temp_path(name);
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << text;
+  }
+  std::vector<LidarPoint> points = read_pcd(path);
+  std::filesystem::remove(path);
+  return points;
 }
 
 TEST(PcdIo, RoundTripKeepsEveryField) {
@@ -48,14 +61,10 @@ TEST(PcdIo, RoundTripKeepsEveryField) {
 }
 
 TEST(PcdIo, ReadsForeignFileWithOnlyXyz) {
-  const std::string path = temp_path("xyz.pcd");
-  {
-    std::ofstream out(path);
-    out << "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
-           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n";
-  }
-  const auto points = read_pcd(path);
-  std::filesystem::remove(path);
+  const auto points =
+      read_text("xyz.pcd",
+                "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n");
   ASSERT_EQ(points.size(), 2u);
   EXPECT_EQ(points[1].x, 4.0F);
   EXPECT_EQ(points[1].z, 6.0F);
@@ -82,8 +91,8 @@ TEST(PcdIo, MissingFileNamesThePath) {
   }
 }
 
-// Inputs found by fuzz/pcd_fuzzer that crashed PCL's reader or escaped it as another exception: each
-// must now be a PcdError naming the file.
+// Inputs found by fuzz/pcd_fuzzer that crashed PCL's reader (the one used before io/pcd_header.h) or
+// escaped it as another exception: each must be a PcdError naming the file.
 struct MalformedPcd {
   const char* label;
   const char* text;
@@ -170,6 +179,55 @@ TEST(PcdIo, CompressedSizeDisagreeingWithTheHeaderIsAPcdError) {
   }
   EXPECT_THROW(read_pcd(path), PcdError);
   std::filesystem::remove(path);
+}
+
+// binary_compressed data: the fields one after the other (all x, then all y, then all z), LZF-packed.
+// Here x is a literal run, y a back reference to x (the same bytes), z another literal run.
+TEST(PcdIo, ReadsCompressedData) {
+  const float x[2] = {1.5F, -2.0F}, z[2] = {0.25F, 3.0F};
+  std::vector<std::uint8_t> packed;
+  auto literal = [&packed](const float* values) {
+    packed.push_back(7);  // 8 literal bytes follow
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(values);
+    packed.insert(packed.end(), bytes, bytes + 8);
+  };
+  literal(x);
+  packed.push_back((8 - 2) << 5);  // a back reference of 8 bytes ...
+  packed.push_back(8 - 1);         // ... 8 bytes back: x again
+  literal(z);
+  const std::string path = temp_path("compressed_ok.pcd");
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
+           "DATA binary_compressed\n";
+    const std::uint32_t sizes[2] = {static_cast<std::uint32_t>(packed.size()), 24};
+    out.write(reinterpret_cast<const char*>(sizes), sizeof(sizes));
+    out.write(reinterpret_cast<const char*>(packed.data()), static_cast<std::streamsize>(packed.size()));
+  }
+  const auto points = read_pcd(path);
+  std::filesystem::remove(path);
+  ASSERT_EQ(points.size(), 2U);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(points[static_cast<std::size_t>(i)].x, x[i]);
+    EXPECT_EQ(points[static_cast<std::size_t>(i)].y, x[i]);
+    EXPECT_EQ(points[static_cast<std::size_t>(i)].z, z[i]);
+  }
+}
+
+// ASCII with a field of several values before the ones read, integer types and an organised cloud's
+// hole (NaN coordinates: skipped).
+TEST(PcdIo, ReadsAsciiWithArraysAndHoles) {
+  const auto points =
+      read_text("ascii_arrays.pcd",
+                "# written by hand\nVERSION 0.7\nFIELDS normal x y z ring\nSIZE 4 4 4 4 2\nTYPE F F F F U\n"
+                "COUNT 3 1 1 1 1\nWIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n"
+                "0 0 1 1.5 2.5 3.5 7\n0 0 1 nan nan nan 8\n0 0 1 -1 -2 -3 9\n");
+  ASSERT_EQ(points.size(), 2U);
+  EXPECT_EQ(points[0].x, 1.5F);
+  EXPECT_EQ(points[0].z, 3.5F);
+  EXPECT_EQ(points[0].ring, 7U);
+  EXPECT_EQ(points[1].y, -2.0F);
+  EXPECT_EQ(points[1].ring, 9U);
 }
 
 }  // namespace
