@@ -186,7 +186,8 @@ def run(args, work, lines, children):
     sandbox = []
     if args.sandbox_exec == "none" or shutil.which("systemd-analyze") is None:
         print("NOTE: the unit's SystemCallFilter= is not applied: %s" % (
-            "libseccomp was not found at build time" if args.sandbox_exec == "none" else "no systemd-analyze"))
+            "a sanitizer build, or libseccomp not found at build time" if args.sandbox_exec == "none"
+            else "no systemd-analyze"))
     else:
         allowed = allowed_syscalls(lines)
         allow_file = os.path.join(work, "syscalls.allowed")
