@@ -1,6 +1,7 @@
 // rsu-corridor: the paper's realistic experiment (Sec. 4) in the corridor street.
 //   rsu-corridor ndt EXPERIMENT --out DIR      the vehicle's own NDT self-localization -> DIR/ndt.csv
 //   rsu-corridor report EXPERIMENT --out DIR   score NDT, RSU and fused estimates -> table, summary.json
+//   rsu-corridor map EXPERIMENT --out DIR      the street's map the vehicles localize in -> DIR/map.pcd
 // eval/corridor/run_experiment.sh runs the whole experiment (the live part through the real processes).
 #include <boost/program_options.hpp>
 
@@ -10,8 +11,11 @@
 #include <iostream>
 
 #include "eval/corridor/experiment_config.h"
+#include "eval/corridor/map_sampling.h"
 #include "eval/corridor/report.h"
 #include "eval/corridor/vehicle_ndt_run.h"
+#include "io/pcd_io.h"
+#include "sim/raycaster.h"
 #include "tools/cli/version.h"
 
 namespace po = boost::program_options;
@@ -61,18 +65,29 @@ int run_report(const eval::CorridorExperimentConfig& config, const std::filesyst
   return 0;
 }
 
+// The map the vehicles' NDT uses (and rsu-calibrate registers the RSU's background against).
+int run_map(const eval::CorridorExperimentConfig& config, const std::filesystem::path& out) {
+  const sim::Raycaster raycaster(config.scenario.scene);
+  std::vector<LidarPoint> points;
+  for (const Eigen::Vector3f& p : eval::sample_static_map(raycaster, config.map_spacing_m, config.seed))
+    points.push_back(LidarPoint{.x = p.x(), .y = p.y(), .z = p.z()});
+  io::write_pcd((out / "map.pcd").string(), points);
+  std::fprintf(stderr, "map: %zu points -> %s\n", points.size(), (out / "map.pcd").c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (rsu::cli::print_version_if_asked(argc, argv, "rsu-corridor"))
     return 0;
   po::options_description options(
-      "rsu-corridor {ndt|report} EXPERIMENT [--out DIR]: the paper's realistic experiment (Sec. 4)");
+      "rsu-corridor {ndt|report|map} EXPERIMENT [--out DIR]: the paper's realistic experiment (Sec. 4)");
   options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
       "out,o", po::value<std::string>()->default_value("out/corridor"), "output folder");
   // The positional arguments, named in the usage line above rather than listed as options.
   po::options_description all;
-  all.add(options).add_options()("command", po::value<std::string>(), "ndt or report")(
+  all.add(options).add_options()("command", po::value<std::string>(), "ndt, report or map")(
       "experiment", po::value<std::string>(), "experiment file, e.g. scenarios/corridor_experiment.yaml");
   po::positional_options_description positional;
   positional.add("command", 1).add("experiment", 1);
@@ -92,7 +107,9 @@ int main(int argc, char** argv) {
       return run_ndt(config, out);
     if (command == "report")
       return run_report(config, out);
-    std::fprintf(stderr, "rsu-corridor: unknown command \"%s\" (ndt or report)\n", command.c_str());
+    if (command == "map")
+      return run_map(config, out);
+    std::fprintf(stderr, "rsu-corridor: unknown command \"%s\" (ndt, report or map)\n", command.c_str());
     return 2;
   } catch (const po::error& e) {  // unknown option, missing value: a usage error
     std::fprintf(stderr, "rsu-corridor: %s (see --help)\n", e.what());

@@ -36,4 +36,17 @@ std::vector<Eigen::Vector3f> sample_surface(const sim::TriangleMesh& mesh, doubl
   return out;
 }
 
+std::vector<Eigen::Vector3f> sample_static_map(const sim::Raycaster& raycaster, double spacing_m,
+                                               std::uint64_t seed) {
+  std::vector<Eigen::Vector3f> map;
+  for (auto surface : {sim::SurfaceClass::kGround, sim::SurfaceClass::kBuilding, sim::SurfaceClass::kPole,
+                       sim::SurfaceClass::kVegetation}) {
+    const auto part = sample_surface(raycaster.static_mesh(surface),
+                                     surface == sim::SurfaceClass::kGround ? 2 * spacing_m : spacing_m,
+                                     seed + static_cast<std::uint64_t>(surface));
+    map.insert(map.end(), part.begin(), part.end());
+  }
+  return map;
+}
+
 }  // namespace rsu::eval

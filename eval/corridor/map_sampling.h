@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include "sim/mesh.h"
+#include "sim/raycaster.h"
 
 namespace rsu::eval {
 
@@ -15,5 +16,10 @@ namespace rsu::eval {
 // half a cell.
 std::vector<Eigen::Vector3f> sample_surface(const sim::TriangleMesh& mesh, double spacing_m,
                                             std::uint64_t seed);
+
+// The street's map: every static surface (ground, buildings, poles, vegetation; not the vehicles), the
+// ground at twice the spacing (it is most of the area and carries the least).
+std::vector<Eigen::Vector3f> sample_static_map(const sim::Raycaster& raycaster, double spacing_m,
+                                               std::uint64_t seed);
 
 }  // namespace rsu::eval

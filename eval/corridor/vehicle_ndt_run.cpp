@@ -48,16 +48,7 @@ std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
   const sim::Vehicle& vehicle = find_vehicle(scene, config.vehicle_id);
   const sim::Raycaster raycaster(scene);
 
-  // The map: every static surface (not the vehicles), sampled uniformly.
-  std::vector<Eigen::Vector3f> map;
-  for (auto surface : {sim::SurfaceClass::kGround, sim::SurfaceClass::kBuilding, sim::SurfaceClass::kPole,
-                       sim::SurfaceClass::kVegetation}) {
-    const auto part = sample_surface(
-        raycaster.static_mesh(surface),
-        surface == sim::SurfaceClass::kGround ? 2 * config.map_spacing_m : config.map_spacing_m,
-        config.seed + static_cast<std::uint64_t>(surface));
-    map.insert(map.end(), part.begin(), part.end());
-  }
+  const std::vector<Eigen::Vector3f> map = sample_static_map(raycaster, config.map_spacing_m, config.seed);
   NdtLocalizer ndt(config.ndt, map, config.seed);
 
   const auto model = *sensor_model_by_name(config.vehicle_lidar_model);

@@ -9,7 +9,7 @@ rm -rf "$work" && mkdir -p "$work"
 prefix=$work/prefix
 cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log"; echo "FAIL: install"; exit 1; }
 for f in sbin/rsud bin/rsu-keygen bin/rsu-vehicle bin/rsu-sim bin/rsu-decode bin/rsu-relay bin/rsu-vehicle-replay \
-         bin/rsu-pilot bin/rsu-corridor lib/systemd/system/rsud.service etc/rsud/rsud.yaml \
+         bin/rsu-pilot bin/rsu-corridor bin/rsu-calibrate lib/systemd/system/rsud.service etc/rsud/rsud.yaml \
          lib/sysctl.d/60-rsud.conf include/rsu/vehicle_client/vehicle_client.h include/rsu/v2i/security/key_text.h \
          lib/cmake/RsuVehicleClient/RsuVehicleClientConfig.cmake lib/pkgconfig/rsu-vehicle-client.pc; do
   [ -e "$prefix/$f" ] || { echo "FAIL: $f not installed"; ls -R "$prefix"; exit 1; }

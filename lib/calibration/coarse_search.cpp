@@ -1,0 +1,71 @@
+#include "calibration/coarse_search.h"
+
+#include <cmath>
+
+namespace rsu::calibration {
+
+namespace {
+constexpr std::int64_t kAxisBits = 21;
+constexpr std::int64_t kAxisOffset = std::int64_t{1} << (kAxisBits - 1);
+constexpr std::int64_t kAxisMask = (std::int64_t{1} << kAxisBits) - 1;
+}  // namespace
+
+VoxelOccupancy::VoxelOccupancy(const std::vector<Eigen::Vector3f>& map_points, double resolution_m)
+    : resolution_m_(resolution_m) {
+  voxels_.reserve(map_points.size());
+  for (const Eigen::Vector3f& p : map_points)
+    voxels_.insert(voxel_key(p.cast<double>(), resolution_m_));
+}
+
+std::int64_t voxel_key(const Eigen::Vector3d& p, double resolution_m) {
+  std::int64_t k = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const auto cell = static_cast<std::int64_t>(std::floor(p[axis] / resolution_m)) + kAxisOffset;
+    k = (k << kAxisBits) | (cell & kAxisMask);
+  }
+  return k;
+}
+
+bool VoxelOccupancy::occupied(const Eigen::Vector3d& p) const {
+  return voxels_.contains(voxel_key(p, resolution_m_));
+}
+
+CoarseMatch search_pose(const std::vector<Eigen::Vector3d>& sensor_points, const VoxelOccupancy& map,
+                        const Pose3& centre, const SearchGrid& grid) {
+  CoarseMatch best;
+  best.pose = centre;
+  best.points = sensor_points.size();
+  double best_offset = 0.0;
+  bool first = true;
+  const int xy_steps = static_cast<int>(std::floor(grid.half_extent_m / grid.step_m + 1e-9));
+  const int yaw_steps = static_cast<int>(std::floor(grid.half_yaw_rad / grid.yaw_step_rad + 1e-9));
+  std::vector<Eigen::Vector3d> rotated(sensor_points.size());
+  for (int k = -yaw_steps; k <= yaw_steps; ++k) {
+    Pose3 candidate = centre;
+    candidate.yaw = centre.yaw + k * grid.yaw_step_rad;
+    const Eigen::Matrix3d rotation = candidate.to_isometry().linear();
+    for (std::size_t i = 0; i < sensor_points.size(); ++i)
+      rotated[i] = rotation * sensor_points[i];
+    for (int ix = -xy_steps; ix <= xy_steps; ++ix) {
+      for (int iy = -xy_steps; iy <= xy_steps; ++iy) {
+        const Eigen::Vector3d shift(centre.x + ix * grid.step_m, centre.y + iy * grid.step_m, centre.z);
+        std::size_t hits = 0;
+        for (const Eigen::Vector3d& p : rotated)
+          hits += map.occupied(p + shift) ? 1 : 0;
+        // Distance from the centre in grid steps, so that a tie keeps the candidate nearest the guess.
+        const double offset = std::hypot(ix, iy) + std::abs(k);
+        if (first || hits > best.hits || (hits == best.hits && offset < best_offset)) {
+          first = false;
+          best.hits = hits;
+          best_offset = offset;
+          best.pose = candidate;
+          best.pose.x = shift.x();
+          best.pose.y = shift.y();
+        }
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace rsu::calibration
