@@ -1,9 +1,10 @@
 // The RSU's perception of one whole frame, as the paper runs it (Sec. 3-4): remove the static
 // background, cluster what is left, fit a rectangle to each cluster (L-shape fitting). It is a thin
 // composition of the parts rsud runs batch by batch (rsu::core::RsuCore::process, docs/architecture.md):
-// BackgroundModel::classify, the SweepClusterer (a whole frame released whole, as rsud does with a PCD
-// frame), perception::detect and, per matched vehicle, fix_vehicle (vehicle_fix.h). Association with the
-// vehicles that announced their size is tracking's job; the caller calls correct() per matched vehicle.
+// BackgroundModel, the grid clustering the SweepClusterer runs (a whole frame clustered at once gives
+// the clusters rsud's SweepClusterer releases for it, as for a PCD frame), perception::detect and, per
+// matched vehicle, fix_vehicle (vehicle_fix.h). Association with the vehicles that announced their
+// size is tracking's job; the caller calls correct() per matched vehicle.
 // Used by the per-frame benchmark and the perception tests; rsud itself runs the parts through RsuCore.
 //
 // Points come in the map frame (the caller applies the LiDAR mount pose) and keep their ring, azimuth and
@@ -24,7 +25,6 @@
 #include "perception/ground_height_filter.h"
 #include "perception/range_image_background.h"
 #include "perception/reference_frame_background.h"
-#include "perception/sweep_clusterer.h"
 #include "perception/vehicle_fix.h"
 
 namespace rsu::perception {

@@ -11,6 +11,7 @@
 
 #include "common/angles.h"
 #include "perception/pipeline.h"
+#include "perception/sweep_clusterer.h"
 #include "synthetic_scene.h"
 
 namespace rsu::perception {
@@ -117,9 +118,30 @@ TEST(PerceptionPipeline, GroundHeightInAnEmptySceneLikeThePilot) {
                                      test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
 }
 
-// The sweep clusterer, released whole, clusters a frame exactly as the obviously right reference
-// clustering (breadth-first, brute force) does on the same foreground.
-TEST(PerceptionPipeline, ObjectsAreTheReferenceClustersOfTheForeground) {
+// The points of each cluster, as sorted coordinates (to compare clusters made by different parts).
+using PointSet = std::vector<std::array<double, 3>>;
+PointSet sorted(PointSet points) {
+  std::sort(points.begin(), points.end());
+  return points;
+}
+PointSet coordinates(const Detection& d) {
+  PointSet out;
+  for (const Eigen::Vector3d& q : d.points)
+    out.push_back({q.x(), q.y(), q.z()});
+  return sorted(out);
+}
+template <typename Points>
+PointSet coordinates(const Points& points) {
+  PointSet out;
+  for (const LidarPoint& p : points)
+    out.push_back({static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
+  return sorted(out);
+}
+
+// The pipeline's objects are what rsud's SweepClusterer releases for the same frame released whole (a
+// PCD frame), and the clusters of the obviously right reference clustering (breadth-first, brute
+// force) of the same foreground.
+TEST(PerceptionPipeline, ObjectsAreTheClustersRsudAndTheReferenceFind) {
   Street s;
   std::mt19937_64 rng(4);
   PerceptionConfig config;
@@ -130,21 +152,25 @@ TEST(PerceptionPipeline, ObjectsAreTheReferenceClustersOfTheForeground) {
   pipeline.add_background_frame(empty);
   background.add_background_frame(empty);
   const auto frame = test::points_of(test::scan_3d(s.busy, s.lidar, 0.1, rng));
+  const PerceptionResult result = pipeline.process(frame);
+
+  SweepClusterer swept(SweepConfig{}, config.clustering, s.lidar.position.head<2>(), 10.0, 0.0);
+  for (const LidarPoint& p : frame)
+    swept.add(p, background.classify(p) == PointClass::foreground);
+  const std::vector<SweptCluster> released = swept.release_all();
   const Clustering reference =
       cluster_reference(frame, background.select_foreground(frame).indices, config.clustering);
-  const PerceptionResult result = pipeline.process(frame);
-  ASSERT_EQ(result.objects.size(), reference.clusters.size());
-  ASSERT_FALSE(reference.clusters.empty());
-  for (std::size_t i = 0; i < reference.clusters.size(); ++i) {
-    std::vector<std::array<double, 3>> want, got;
+
+  ASSERT_FALSE(result.objects.empty());
+  ASSERT_EQ(released.size(), result.objects.size());
+  ASSERT_EQ(reference.clusters.size(), result.objects.size());
+  for (std::size_t i = 0; i < result.objects.size(); ++i) {
+    EXPECT_EQ(coordinates(result.objects[i]), coordinates(released[i].points));
+    PointSet want;
     for (const std::uint32_t k : reference.clusters[i])
       want.push_back({static_cast<double>(frame[k].x), static_cast<double>(frame[k].y),
                       static_cast<double>(frame[k].z)});
-    for (const Eigen::Vector3d& q : result.objects[i].points)
-      got.push_back({q.x(), q.y(), q.z()});
-    std::sort(want.begin(), want.end());
-    std::sort(got.begin(), got.end());
-    EXPECT_EQ(got, want);
+    EXPECT_EQ(coordinates(result.objects[i]), sorted(want));
   }
 }
 
