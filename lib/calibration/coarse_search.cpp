@@ -14,7 +14,18 @@ VoxelOccupancy::VoxelOccupancy(const std::vector<Eigen::Vector3f>& map_points, d
     : resolution_m_(resolution_m) {
   voxels_.reserve(map_points.size());
   for (const Eigen::Vector3f& p : map_points)
-    voxels_.insert(voxel_key(p.cast<double>(), resolution_m_));
+    if (has_voxel_key(p.cast<double>(), resolution_m_))
+      voxels_.insert(voxel_key(p.cast<double>(), resolution_m_));
+}
+
+bool has_voxel_key(const Eigen::Vector3d& p, double resolution_m) {
+  const double limit = static_cast<double>(kAxisOffset - 1);
+  for (int axis = 0; axis < 3; ++axis) {
+    const double cell = p[axis] / resolution_m;
+    if (!(std::abs(cell) < limit))  // also false for NaN
+      return false;
+  }
+  return true;
 }
 
 std::int64_t voxel_key(const Eigen::Vector3d& p, double resolution_m) {

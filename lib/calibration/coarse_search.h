@@ -14,10 +14,13 @@
 
 namespace rsu::calibration {
 
-// The voxel of side resolution_m holding p, as one key (21 bits per axis: +-1M voxels).
+// Whether p has a voxel key: finite and within +-1M voxels of the origin on each axis.
+bool has_voxel_key(const Eigen::Vector3d& p, double resolution_m);
+// The voxel of side resolution_m holding p, as one key (21 bits per axis); p must have one (above).
 std::int64_t voxel_key(const Eigen::Vector3d& p, double resolution_m);
 
-// Which voxels of side `resolution_m` hold at least one map point.
+// Which voxels of side `resolution_m` hold at least one map point (points without a key, e.g. the NaN
+// of an organized cloud, are left out; such a query is never occupied).
 class VoxelOccupancy {
  public:
   VoxelOccupancy(const std::vector<Eigen::Vector3f>& map_points, double resolution_m);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "common/angles.h"
 #include "eval/corridor/map_sampling.h"
@@ -109,6 +110,20 @@ TEST(MountCalibration, EmptyFieldFailsForTooFewStructures) {
       calibrate_in(s.scene, s.lidar, s.lidar.mount, Pose3{1.0, 1.0, 0.0, 0.0, 0.0, deg_to_rad(10.0)});
   EXPECT_EQ(c.result.verdict.verdict, calibration::Verdict::kFailed) << c.result.verdict.reason;
   EXPECT_NE(c.result.verdict.reason.find("too few structures"), std::string::npos) << c.result.verdict.reason;
+}
+
+TEST(MountCalibration, PointsWithoutAVoxelAreLeftOut) {
+  // An organized cloud's NaN and absurd coordinates in the map or the background: left out, no crash.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<Eigen::Vector3f> map = {{nan, 0, 0}, {1e30F, 0, 0}, {1.0F, 2.0F, 3.0F}};
+  const calibration::VoxelOccupancy occupancy(map, 0.5);
+  EXPECT_TRUE(occupancy.occupied(Eigen::Vector3d(1.1, 2.1, 3.1)));
+  EXPECT_FALSE(occupancy.occupied(Eigen::Vector3d(std::nan(""), 0, 0)));
+  EXPECT_FALSE(occupancy.occupied(Eigen::Vector3d(1e300, 0, 0)));
+  const std::vector<Eigen::Vector3d> background = {{std::nan(""), 1, 1}, {1e300, 0, 0}, {5, 0, 0}};
+  const calibrate::CalibrationResult r = calibrate::calibrate_mount(background, map, Pose3{});
+  EXPECT_EQ(r.background_points, 1U);
+  EXPECT_EQ(r.verdict.verdict, calibration::Verdict::kFailed);
 }
 
 }  // namespace

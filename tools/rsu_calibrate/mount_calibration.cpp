@@ -23,7 +23,7 @@ std::vector<Eigen::Vector3d> thin_out(const std::vector<Eigen::Vector3d>& points
   std::unordered_set<std::int64_t> taken;
   std::vector<Eigen::Vector3d> out;
   for (const Eigen::Vector3d& p : points) {
-    if (!p.allFinite() || p.norm() < min_range_m)
+    if (!calibration::has_voxel_key(p, cell_m) || p.norm() < min_range_m)
       continue;
     const std::int64_t key = calibration::voxel_key(p, cell_m);
     if (taken.insert(key).second)
