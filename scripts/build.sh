@@ -16,8 +16,11 @@ if command -v ccache >/dev/null 2>&1; then
 fi
 # The sanitizer builds compile at -O1 with line tables only: GCC with ASan+UBSan at -O2 -g took 5-7x a
 # Release compile (PCL's NDT: 137 s vs 19 s for one file), at -O1 -g1 2.3-2.8x (49 s): the sanitizers'
-# own recommendation, and the stack traces keep their lines.
-sanitizer_flags=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG")
+# own recommendation, and the stack traces keep their lines. GCC's -Wmaybe-uninitialized guesses from
+# what its optimiser saw, and TSan's instrumentation at -O1 makes it guess wrong inside Eigen's assignment
+# of a std::optional's payload (vehicle_client/cli); the Release build keeps the warning as an error.
+sanitizer_cflags="-O1 -g1 -DNDEBUG -Wno-maybe-uninitialized"
+sanitizer_flags=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$sanitizer_cflags" -DCMAKE_C_FLAGS_RELWITHDEBINFO="$sanitizer_cflags")
 case "$kind" in
   release)
     cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DRSU_WERROR=ON "${launcher[@]}" >/dev/null
