@@ -51,8 +51,14 @@ YawPrior vehicle_prior(const rsu::bench::CorridorFrames& f) {
   return {f.vehicle_pose.yaw + 0.05, 0.17};
 }
 
+LidarGeometry lidar_of(const rsu::bench::CorridorFrames& f) {
+  LidarGeometry lidar;
+  lidar.position = f.lidar_position;
+  return lidar;
+}
+
 PerceptionPipeline make_pipeline(const rsu::bench::CorridorFrames& f, const PerceptionConfig& config = {}) {
-  PerceptionPipeline p(config, f.lidar_position);
+  PerceptionPipeline p(config, lidar_of(f));
   for (const auto& b : f.background) {
     p.add_background_frame(b);
   }
@@ -290,10 +296,10 @@ void BM_BaselineClusterPcl(benchmark::State& state, int model) {
   state.counters["foreground"] = static_cast<double>(fg.size());
 }
 
-// The vehicle's cluster (the largest).
-std::vector<Eigen::Vector2d> vehicle_cluster(const rsu::bench::CorridorFrames& f) {
+// The vehicle's cluster (the largest), map frame.
+std::vector<Eigen::Vector3d> vehicle_points(const rsu::bench::CorridorFrames& f) {
   const Clustering c = cluster_grid(f.frame, foreground_of(f), kClustering);
-  std::vector<Eigen::Vector2d> xy;
+  std::vector<Eigen::Vector3d> points;
   const Cluster* largest = nullptr;
   for (const auto& cluster : c.clusters) {
     if (largest == nullptr || cluster.size() > largest->size()) {
@@ -302,9 +308,17 @@ std::vector<Eigen::Vector2d> vehicle_cluster(const rsu::bench::CorridorFrames& f
   }
   if (largest != nullptr) {
     for (const std::uint32_t i : *largest) {
-      xy.emplace_back(static_cast<double>(f.frame[i].x), static_cast<double>(f.frame[i].y));
+      const LidarPoint& p = f.frame[i];
+      points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
     }
   }
+  return points;
+}
+
+std::vector<Eigen::Vector2d> vehicle_cluster(const rsu::bench::CorridorFrames& f) {
+  std::vector<Eigen::Vector2d> xy;
+  for (const Eigen::Vector3d& p : vehicle_points(f))
+    xy.push_back(p.head<2>());
   return xy;
 }
 
@@ -331,14 +345,16 @@ void BM_FitExhaustive0p1deg(benchmark::State& state, int model) {
   run_fit(state, model, config);
 }
 
-void BM_CorrectImproved(benchmark::State& state, int model) {
+// One vehicle's whole fix (rectangle fit and improved correction), as rsud runs it per vehicle.
+void BM_FixVehicle(benchmark::State& state, int model) {
   const auto& f = frames(model);
-  const auto xy = vehicle_cluster(f);
-  const RectangleFit fit = fit_rectangle(xy, f.lidar_xy);
+  const auto points = vehicle_points(f);
+  const LidarGeometry lidar = lidar_of(f);
+  const AnnouncedVehicle vehicle{vehicle_size(f), vehicle_prior(f)};
   for (auto _ : state) {
-    benchmark::DoNotOptimize(correct_improved(fit, xy, vehicle_size(f), f.lidar_xy, std::nullopt));
+    benchmark::DoNotOptimize(fix_vehicle(points, vehicle, lidar));
   }
-  state.counters["cluster_points"] = static_cast<double>(xy.size());
+  state.counters["cluster_points"] = static_cast<double>(points.size());
 }
 
 }  // namespace
@@ -359,4 +375,4 @@ RSU_PER_MODEL(BM_BaselineClusterPcl);
 RSU_PER_MODEL(BM_FitCoarseToFine);
 RSU_PER_MODEL(BM_BaselineFitExhaustive1deg);
 RSU_PER_MODEL(BM_FitExhaustive0p1deg);
-RSU_PER_MODEL(BM_CorrectImproved);
+RSU_PER_MODEL(BM_FixVehicle);

@@ -11,9 +11,9 @@
 
 #include "common/angles.h"
 #include "common/random.h"
+#include "eval/consistency.h"
 #include "lidar/sensor_model.h"
 #include "perception/ground_height_filter.h"
-#include "eval/consistency.h"
 #include "sim/lidar_simulator.h"
 #include "sim/trajectory.h"
 #include "sim/vehicle_mesh.h"
@@ -133,7 +133,11 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
 
   const Pose3 mount = pilot_mount(config);
   const Eigen::Isometry3d to_map = mount.to_isometry();
-  const Eigen::Vector3d lidar(mount.x, mount.y, mount.z);
+  perception::LidarGeometry lidar;
+  lidar.position = {mount.x, mount.y, mount.z};
+  for (const double e : model.elevation_deg)
+    lidar.elevations_rad.push_back(deg_to_rad(e));
+  lidar.azimuth_step_rad = deg_to_rad(model.azimuth_step_deg());
   const sim::LidarSimulator simulator(model, mount, config.noise, scene);
   const auto sector = vehicle_sector(mount, distance, config.vehicle);
   perception::VehicleFixConfig improved_config = config.fix;
@@ -175,15 +179,14 @@ DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, in
     const perception::VehicleFix improved =
         perception::fix_vehicle(points, announced, lidar, improved_config);
     const perception::VehicleFix alg1 = perception::fix_vehicle(points, announced, lidar, alg1_config);
-    cell.fit_ok = improved.fit.ok();
+    cell.fit_ok = alg1.fit.ok();
     if (cell.fit_ok)
-      cell.area_err_m2 =
-          improved.fit.length0 * improved.fit.length1 - config.vehicle.length * config.vehicle.width;
-    cell.methods[static_cast<std::size_t>(PilotMethod::lshape)] = score_lshape(improved.fit, truth);
+      cell.area_err_m2 = alg1.fit.length0 * alg1.fit.length1 - config.vehicle.length * config.vehicle.width;
+    cell.methods[static_cast<std::size_t>(PilotMethod::lshape)] = score_lshape(alg1.fit, truth);
     cell.methods[static_cast<std::size_t>(PilotMethod::algorithm1)] = score(alg1, truth);
     cell.methods[static_cast<std::size_t>(PilotMethod::improved)] = score(improved, truth);
     cell.improved_resolution =
-        cell.fit_ok ? std::string(perception::to_string(improved.corrected.resolution)) : "no_fit";
+        improved.fit.ok() ? std::string(perception::to_string(improved.corrected.resolution)) : "no_fit";
     run.cells.push_back(std::move(cell));
   }
   return run;

@@ -10,7 +10,12 @@ namespace {
 double axis_variance(const AxisEvidence& axis, double noise_var, double spacing, double shape_var) {
   switch (axis.anchor) {
     case AxisAnchor::face:
-      return noise_var / static_cast<double>(std::max<std::size_t>(axis.face_points, 1)) + shape_var;
+      return (axis.envelope_sigma_m >= 0.0
+                  ? axis.envelope_sigma_m * axis.envelope_sigma_m
+                  : noise_var / static_cast<double>(std::max<std::size_t>(axis.face_points, 1))) +
+             shape_var;
+    case AxisAnchor::interval:
+      return axis.interval_m * axis.interval_m / 12.0 + noise_var + shape_var;
     case AxisAnchor::midpoint:
       return spacing * spacing / 24.0 + noise_var / 2.0 + shape_var;
     case AxisAnchor::one_end:
@@ -20,6 +25,12 @@ double axis_variance(const AxisEvidence& axis, double noise_var, double spacing,
 }
 
 }  // namespace
+
+double point_noise_variance(double range_m, const CovarianceModelConfig& config) {
+  const double range = std::max(0.0, std::isfinite(range_m) ? range_m : 0.0);
+  return config.range_sigma_m * config.range_sigma_m +
+         (range * config.angle_sigma_rad) * (range * config.angle_sigma_rad);
+}
 
 FaceEvidence face_evidence(const RectangleFit& fit, std::size_t edge, const Eigen::Vector2d& lidar_xy) {
   const Eigen::Vector2d& a = fit.corners[edge % 4];
@@ -32,13 +43,8 @@ FaceEvidence face_evidence(const RectangleFit& fit, std::size_t edge, const Eige
   return {fit.edges[edge % 4].support_points, edge % 2 == 0 ? fit.length0 : fit.length1, incidence_sin};
 }
 
-Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig& config) {
-  const double range = std::max(0.0, std::isfinite(e.range_m) ? e.range_m : 0.0);
-  const double noise_var = config.range_sigma_m * config.range_sigma_m +
-                           (range * config.angle_sigma_rad) * (range * config.angle_sigma_rad);
-  const double shape_var = config.shape_sigma_m * config.shape_sigma_m;
-  const double spacing = range * config.azimuth_resolution_rad;
-
+double face_yaw_information(const FixEvidence& e, const CovarianceModelConfig& config) {
+  const double noise_var = point_noise_variance(e.range_m, config);
   double yaw_information = 0.0;
   for (const auto& face : e.seen_faces) {
     if (face.points >= 2 && face.length_m > 0.0) {
@@ -50,12 +56,23 @@ Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig
       const double sin_incidence = std::clamp(face.incidence_sin, config.min_incidence_sin, 1.0);
       // The measured departure: the face points' scatter beyond what the point noise explains.
       const double departure_var = std::max(0.0, face.residual_spread_m * face.residual_spread_m - noise_var);
-      const double tilt =
-          std::sqrt(config.face_tilt_sigma_m * config.face_tilt_sigma_m + departure_var) / sin_incidence;
+      const double tilt = std::sqrt(config.face_tilt_sigma_m * config.face_tilt_sigma_m + departure_var +
+                                    face.departure_m * face.departure_m) /
+                          sin_incidence;
       const double var_shape = 4.0 * tilt * tilt / l2;
       yaw_information += 1.0 / (var_noise + var_shape);
     }
   }
+  return yaw_information;
+}
+
+Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig& config) {
+  const double range = std::max(0.0, std::isfinite(e.range_m) ? e.range_m : 0.0);
+  const double noise_var = point_noise_variance(range, config);
+  const double shape_var = config.shape_sigma_m * config.shape_sigma_m;
+  const double spacing = range * config.azimuth_resolution_rad;
+
+  const double yaw_information = face_yaw_information(e, config) + std::max(0.0, e.prior_yaw_information);
   const double max_var = config.max_yaw_sigma_rad * config.max_yaw_sigma_rad;
   double var_yaw = yaw_information > 0.0 ? 1.0 / yaw_information : max_var;
   var_yaw += config.search_resolution_rad * config.search_resolution_rad / 12.0;
@@ -66,6 +83,10 @@ Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig
   const double var_u = axis_variance(e.length_axis, noise_var, spacing, shape_var);
   const double var_v = axis_variance(e.width_axis, noise_var, spacing, shape_var);
   Eigen::Matrix2d pos = var_u * u * u.transpose() + var_v * v * v.transpose();
+  // A yaw error turns the box about where its evidence lies; when the centre itself is uncertain along
+  // one axis (the interval a partial view leaves), the turn moves it across by the yaw error times that
+  // uncertainty too: the product of two independent errors.
+  pos += var_yaw * (var_v * u * u.transpose() + var_u * v * v.transpose());
 
   const Eigen::Vector2d j(-e.lever.y(), e.lever.x());
   pos += var_yaw * j * j.transpose();

@@ -9,13 +9,13 @@
 //    limited by the body's departure from a plane, which does not average out: it tilts the face's
 //    direction by about 2 tilt / l, so a face's direction variance is 12 sigma_n^2 / (n l^2) +
 //    4 tilt^2 / l^2; faces add information. Plus the search's quantisation (step^2 / 12). No face seen:
-//    max_yaw_sigma. The tilt is face_tilt_sigma (a car's usual departure seen head-on) combined with the
-//    departure measured on this face (the points' robust spread about their line beyond what sigma_n
-//    explains: a cabin seen by one ring, a roof edge), and grows as 1 / sin(incidence) (capped at
-//    min_incidence_sin): at grazing incidence the bulges nearest the LiDAR (mirrors, wheel arches, a
-//    rounded bumper) hide the rest of the face and make its visible outline.
-//    Why: with a fixed 3 cm departure whatever the view, 1.8 % of a VLP-16's fixes over the pilot's
-//    6-36 m were beyond 3 stated sigma in yaw (the handover: 3.7 deg off at 21 m while stating
+//    max_yaw_sigma. A yaw fused with the vehicle's own estimate adds that estimate's information. The tilt is
+//    face_tilt_sigma (a car's usual departure seen head-on) combined with the departure measured on this face
+//    (the points' robust spread about their line beyond what sigma_n explains: a cabin seen by one ring, a
+//    roof edge), and grows as 1 / sin(incidence) (capped at min_incidence_sin): at grazing incidence the
+//    bulges nearest the LiDAR (mirrors, wheel arches, a rounded bumper) hide the rest of the face and make
+//    its visible outline. Why: with a fixed 3 cm departure whatever the view, 1.8 % of a VLP-16's fixes over
+//    the pilot's 6-36 m were beyond 3 stated sigma in yaw (the handover: 3.7 deg off at 21 m while stating
 //    0.78 deg); with these terms 0.5 %, at a mean stated sigma 10 % larger
 //    (tests/eval/fix_consistency_test.cpp; `rsu-pilot` prints the figures).
 //  - Position along each box axis, by how the centre coordinate on that axis was found:
@@ -23,11 +23,14 @@
 //      midpoint  (both ends of a face seen whole, no perpendicular face): each end lies inside the true
 //                end by U(0, s), so the midpoint errs by their half difference: s^2 / 24 + sigma_n^2 / 2
 //                + shape^2;
-//      one end   (only one, resolution-limited end): E[U(0,s)^2] = s^2 / 3, + sigma_n^2 + shape^2.
+//      one end   (only one, resolution-limited end): E[U(0,s)^2] = s^2 / 3, + sigma_n^2 + shape^2;
+//      interval  (the points leave the centre anywhere in an interval of width w, box_axis.h): a uniform
+//                error over it, w^2 / 12, + sigma_n^2 + shape^2 (its ends are then 1.7 sigma away).
 //    So one seen face gives the larger variance along that face (the unseen direction's position comes
 //    from face ends), fewer points and longer range give larger variances.
 //  - The centre is anchor + R(yaw) * offset, so a yaw error moves it by yaw_error x lever; this adds
-//    var_yaw * J J^T with J = d(centre)/d(yaw) = (-lever_y, lever_x), and the x-yaw covariance.
+//    var_yaw * J J^T with J = d(centre)/d(yaw) = (-lever_y, lever_x), and the x-yaw covariance; and,
+//    as the centre is itself uncertain along each axis, var_yaw times that variance across it.
 //  - A length/width assignment that is right only with probability c: the fix is the chosen hypothesis,
 //    the other is (1 - c) likely, so (1 - c) d d^T is added (d = other centre - chosen centre) and
 //    (1 - c) (pi/2)^2 to the yaw variance (the mean square error about the reported fix).
@@ -57,11 +60,15 @@ struct CovarianceModelConfig {
   double min_incidence_sin = 0.1;
 };
 
-enum class AxisAnchor { face, midpoint, one_end };
+enum class AxisAnchor { face, midpoint, one_end, interval };
 
 struct AxisEvidence {
   AxisAnchor anchor = AxisAnchor::one_end;
   std::size_t face_points = 0;  // points of the anchoring face (anchor == face)
+  // face: the standard error of the face's position when estimated from its points (face_envelope.h);
+  // negative: from the point noise and face_points.
+  double envelope_sigma_m = -1.0;
+  double interval_m = 0.0;  // interval: the width of the interval the centre lies in (box_axis.h)
 };
 
 struct FaceEvidence {
@@ -72,6 +79,9 @@ struct FaceEvidence {
   double incidence_sin = 1.0;
   // Robust spread (1.4826 MAD) of the face's points about their line, when measured (0: not measured).
   double residual_spread_m = 0.0;
+  // A known departure of the surface the face was seen on from the footprint's direction (the upper
+  // body's sloped glass and tumblehome), combined with the tilt terms (0: a lower-body face).
+  double departure_m = 0.0;
 };
 
 struct FixEvidence {
@@ -83,7 +93,15 @@ struct FixEvidence {
   std::array<FaceEvidence, 2> seen_faces{};         // unused entries have points = 0
   double assignment_confidence = 1.0;
   Eigen::Vector2d alternative_offset = Eigen::Vector2d::Zero();  // other assignment's centre - centre
+  // 1 / sigma^2 of the vehicle's own yaw estimate when the fix's yaw was fused with it (0: not used).
+  double prior_yaw_information = 0.0;
 };
+
+// Information (1 / variance, rad^-2) the seen faces give about the yaw (no prior, no quantisation).
+double face_yaw_information(const FixEvidence& evidence, const CovarianceModelConfig& config = {});
+
+// Variance of a point's position across a surface at horizontal range range_m (range and angle noise).
+double point_noise_variance(double range_m, const CovarianceModelConfig& config);
 
 // The evidence of fitted edge `edge` (0..3) of `fit` as seen from the LiDAR at lidar_xy.
 FaceEvidence face_evidence(const RectangleFit& fit, std::size_t edge, const Eigen::Vector2d& lidar_xy);

@@ -7,10 +7,8 @@ BackgroundModelConfig background_model_config(const PerceptionConfig& config) {
           config.range_image};
 }
 
-PerceptionPipeline::PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector3d& lidar_position)
-    : config_(config),
-      lidar_position_(lidar_position),
-      background_(background_model_config(config), lidar_position.head<2>()) {}
+PerceptionPipeline::PerceptionPipeline(const PerceptionConfig& config, const LidarGeometry& lidar)
+    : config_(config), lidar_(lidar), background_(background_model_config(config), lidar.xy()) {}
 
 void PerceptionPipeline::add_background_frame(std::span<const LidarPoint> points) {
   background_.add_background_frame(points);
@@ -40,7 +38,7 @@ PerceptionResult PerceptionPipeline::process(std::span<const LidarPoint> points)
 }
 
 VehicleFix PerceptionPipeline::correct(const Detection& object, const AnnouncedVehicle& vehicle) const {
-  return fix_vehicle(object.points, vehicle, lidar_position_, config_.fix);
+  return fix_vehicle(object.points, vehicle, lidar_, config_.fix);
 }
 
 }  // namespace rsu::perception

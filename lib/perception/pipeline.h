@@ -68,8 +68,8 @@ struct PerceptionResult {
 
 class PerceptionPipeline {
  public:
-  // lidar_position: the LiDAR's position in the map frame.
-  PerceptionPipeline(const PerceptionConfig& config, const Eigen::Vector3d& lidar_position);
+  // lidar: the LiDAR in the map frame, its lasers' elevations and azimuth step (lidar_geometry.h).
+  PerceptionPipeline(const PerceptionConfig& config, const LidarGeometry& lidar);
 
   // A frame recorded without vehicles (map frame): becomes part of the reference frame, or trains the
   // range image. Unused by the ground-height method. Until one is added, every non-ground point is
@@ -83,11 +83,11 @@ class PerceptionPipeline {
   VehicleFix correct(const Detection& object, const AnnouncedVehicle& vehicle) const;
 
   const PerceptionConfig& config() const { return config_; }
-  Eigen::Vector2d lidar_xy() const { return lidar_position_.head<2>(); }
+  Eigen::Vector2d lidar_xy() const { return lidar_.xy(); }
 
  private:
   PerceptionConfig config_;
-  Eigen::Vector3d lidar_position_;
+  LidarGeometry lidar_;
   BackgroundModel background_;
 };
 

@@ -1,5 +1,6 @@
 // Algorithm 1 of the paper, as written, plus the names of the correction enums.
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "perception/size_correction.h"
@@ -13,11 +14,17 @@ double fold_half_turn(double a) {
   return a <= -std::numbers::pi / 2.0 ? a + std::numbers::pi : a;
 }
 
+}  // namespace
+
 bool valid_size(const VehicleSize& size) {
   return std::isfinite(size.length) && std::isfinite(size.width) && size.length > 0.0 && size.width > 0.0;
 }
 
-}  // namespace
+double lower_body_height(const VehicleSize& size, const CorrectionConfig& config) {
+  if (!(std::isfinite(size.height) && size.height > 0.0))
+    return std::numeric_limits<double>::infinity();
+  return config.lower_body_fraction * size.height;
+}
 
 std::string_view to_string(CorrectionStatus status) {
   switch (status) {
@@ -31,8 +38,10 @@ std::string_view to_string(CorrectionStatus status) {
       return "invalid_input";
     case CorrectionStatus::inconsistent_box:
       return "inconsistent_box";
-    case CorrectionStatus::ambiguous_position:
-      return "ambiguous_position";
+    case CorrectionStatus::yaw_unobserved:
+      return "yaw_unobserved";
+    case CorrectionStatus::position_unbounded:
+      return "position_unbounded";
   }
   return "unknown";
 }

@@ -6,14 +6,24 @@
 //    fitted edge takes the vehicle's width and the longer its length (the paper's <width, height> is the
 //    footprint's width and length). Off by 90 deg when the LiDAR saw only the front or back (then the
 //    fitted box's longer edge is the vehicle's width).
-//  - correct_improved: decides which fitted edge is the length (a) by the vehicle's own yaw prior, when
-//    it is decisive, else (b) by building the known-size box for both assignments (and, where the
-//    position along an axis is not fixed by a seen face, anchored at either end) and keeping the box
-//    most consistent with the points: no points outside it, and its faces that face the LiDAR covered by
-//    points (a face the LiDAR should have seen but did not speaks against the box). Along each axis the
-//    centre comes from the seen face perpendicular to it (its median position, + half the known size),
-//    or, when the points span the whole known size without such a face, from the middle of their extent.
-//    Before that, the fit's orientation is refined by least squares on the seen faces (face_refinement.h).
+//  - correct_improved: the box of the announced size placed by what the points and the LiDAR's view
+//    decide (issue 12: from 2 m to 8 m mounts, small car to bus):
+//    * Which part of the body a point is on, from its height: below lower_body_fraction of the announced
+//      height it is on the lower body, whose outline is the footprint (doors, bumpers); above it may be
+//      the glasshouse or roof, narrower and shorter than the footprint. The rectangle is fitted to the
+//      lower body's points where there are enough.
+//    * Yaw: a seen face tells the vehicle's direction only if it is a vertical surface of the body: on
+//      the lower body, or spanning several heights. A single laser's trace across a roof or a bonnet is
+//      a line too (across the line of sight, whatever the car's heading) and tells nothing. The faces'
+//      yaw is fused with the vehicle's own (announced, predicted to the sweep) by their information;
+//      with no informative face the yaw is the vehicle's own, with its uncertainty.
+//    * Which fitted axis is the length: the yaw prior when decisive, else the box (of both assignments)
+//      most consistent with the points (box_consistency.h).
+//    * Position along each axis: a lower-body face's outer envelope (face_envelope.h: the footprint's
+//      edge is the outer envelope of the body's points, not their median), or the middle of both ends,
+//      or the interval the points and the LiDAR's view leave (box_axis.h) with its spread in the
+//      covariance. Before that, the fit's orientation is refined by least squares on the seen faces
+//      (face_refinement.h).
 //
 // Yaw is the direction of the length axis. A box has no front: without a prior, yaw is reported mod pi in
 // (-pi/2, pi/2]; with a prior, the one of yaw and yaw + pi nearer the prior (heading_from_prior = true).
@@ -29,6 +39,7 @@
 #include "perception/face_refinement.h"
 #include "perception/fix_covariance.h"
 #include "perception/l_shape_fitting.h"
+#include "perception/lidar_geometry.h"
 #include "perception/rectangle_fit.h"
 
 namespace rsu::perception {
@@ -56,9 +67,11 @@ enum class CorrectionStatus {
   // not this vehicle seen whole (a fragment beside another object, two objects, a wrong size); or
   // its yaw contradicts a confident yaw prior
   inconsistent_box,
-  // (improved correction) boxes of the chosen assignment metres apart fit the points about equally
-  // well (e.g. an occlusion edge that may or may not be the vehicle's side): no fix
-  ambiguous_position,
+  // (improved correction) no seen face tells the vehicle's direction (only a roof, one laser's trace)
+  // and the vehicle announced no heading
+  yaw_unobserved,
+  // (improved correction) the points leave the position open over more than max_position_sigma_m
+  position_unbounded,
 };
 
 enum class AmbiguityResolution {
@@ -69,6 +82,8 @@ enum class AmbiguityResolution {
 };
 
 std::string_view to_string(CorrectionStatus status);
+// Length and width finite and positive (the height is not used by every correction).
+bool valid_size(const VehicleSize& size);
 std::string_view to_string(AmbiguityResolution resolution);
 
 struct CorrectedPose {
@@ -78,6 +93,9 @@ struct CorrectedPose {
   AmbiguityResolution resolution = AmbiguityResolution::unresolved;
   double confidence = 0.0;  // probability the length/width assignment is right; 1 for Algorithm 1
   bool heading_from_prior = false;
+  // Share of the yaw's information that is the vehicle's own announced heading (0: the RSU measured it;
+  // 1: the points told nothing about it and the fix carries the vehicle's own yaw back).
+  double yaw_prior_share = 0.0;
   Eigen::Vector2d alignment_point = Eigen::Vector2d::Zero();  // the point the box was anchored at
 
   bool ok() const { return status == CorrectionStatus::ok; }
@@ -102,28 +120,66 @@ struct CorrectionConfig {
   // overconfident).
   double max_prior_disagreement_sigmas = 4.0;
   double min_prior_disagreement_rad = deg_to_rad(5.0);
-  // Where a seen face anchors an axis, boxes anchored at the ends of the points instead (the face may
-  // be an occlusion edge or the cabin) are alternatives when farther than position_ambiguity_min_m from
-  // the chosen box: one more likely than max_position_ambiguity (same log-odds scale as the
-  // assignment, geometry_scale) refuses the fix, less likely
-  // ones add their spread to the covariance.
-  // On: a far, fragmented vehicle's one-fragment "faces" gave confident fixes a metre off. (Before the
-  // pilot and rsud shared one fix function, the pilot measured without these checks.)
+  // On: a far, fragmented vehicle's one-fragment "faces" gave confident fixes a metre off.
   bool strict_consistency_checks = true;
-  double position_ambiguity_min_m = 0.2;
-  double max_position_ambiguity = 0.1;
+  // Which part of the body a point can be on (see above): below this share of the announced height the
+  // footprint's outline (every road vehicle's lower half is its full plan: bumpers, doors, sills).
+  double lower_body_fraction = 0.55;
+  // Up to this height (and the lower body) the plan is full on any road vehicle (bumpers and doors; a
+  // bus's windows start at about a third of its height, above it); a face seen only higher up, but
+  // within the lower body's share, may be set back by up to mid_height_inset_m (box_axis.h).
+  double full_plan_height_m = 0.9;
+  double mid_height_inset_m = 0.3;        // at the front and back (sloped windscreens)
+  double mid_height_inset_width_m = 0.1;  // at the sides (windows nearly flush)
+  double ground_clearance_m = 0.15;  // the lowest a vehicle's body comes (a laser below it sees the road)
+  std::size_t min_lower_body_points = 6;  // the rectangle is fitted to the lower body from this many
+  // A face of points above the lower body tells the yaw only if they span this much height (several
+  // lasers on a vertical surface); one laser's trace on a roof does not.
+  double min_vertical_spread_m = 0.15;
+  // ... or if their horizontal ranges spread this much (not one laser's arc across a level surface);
+  // such faces' direction departs from the footprint's by about upper_face_tilt_m over their length.
+  double min_range_spread_m = 0.1;
+  // The faces' yaw is fused with the vehicle's own only when they know it less well than this (rad^-2;
+  // 1 / (3 deg)^2), and the vehicle's sigma is taken as at least min_prior_sigma_rad.
+  double fuse_prior_below_information = 1.0 / (deg_to_rad(3.0) * deg_to_rad(3.0));
+  double min_prior_sigma_rad = deg_to_rad(2.0);
+  // A fix whose position sigma (larger axis) exceeds this is withheld (position_unbounded): the points
+  // leave the vehicle's place open over metres (a few returns of a roof below a mast, a vehicle cut by
+  // lost packets or a neighbour).
+  double max_position_sigma_m = 0.5;
+  double upper_face_tilt_m = 0.08;
+  // Sides of the box along an axis (box_axis.h): the lower body's extreme within end_tolerance_m of all
+  // points' is an end, the body ends within end_allowance_m (+ the azimuth step) beyond it; a higher
+  // extreme bounds nothing but containment; a side counts as observed if a laser would hit a body
+  // between lowest_body_m
+  // and the announced height observation_probe_m beyond it. Containment allows containment_sigmas of
+  // point noise; face envelopes consider points within envelope_band_m inside the face.
+  double end_tolerance_m = 0.1;
+  double end_allowance_m = 0.4;
+  double lowest_body_m = 0.5;
+  double observation_probe_m = 0.3;
+  double containment_sigmas = 3.0;
+  double envelope_band_m = 0.3;
   LShapeFitConfig fit;  // face support and 'seen' rules (the pipeline passes its own)
   FaceRefinementConfig refinement;
   CovarianceModelConfig covariance;
 };
 
+// Up to which height above the road a point lies on the lower body (the footprint's outline):
+// lower_body_fraction of the announced height; every point when the height is not a finite positive
+// number. (Up to max(that, full_plan_height_m) measured better for a small car, 0.9 m doors at 1.48 m,
+// but with more fixes beyond 3 sigma at 6-8 m mounts: `rsu-pilot matrix`, issue 12.)
+double lower_body_height(const VehicleSize& size, const CorrectionConfig& config);
+
 CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& size,
                                  const Eigen::Vector2d& lidar_xy,
                                  const CovarianceModelConfig& covariance = {});
 
-// cluster_xy: the cluster's footprint points (the ones the fit was made from); non-finite ones ignored.
-CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::Vector2d> cluster_xy,
-                               const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
-                               const std::optional<YawPrior>& prior, const CorrectionConfig& config = {});
+// outline: the xy of the points `fit` was made from; points: all of the vehicle's points (map frame).
+// Non-finite ones are ignored.
+CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::Vector2d> outline,
+                               std::span<const Eigen::Vector3d> points, const VehicleSize& size,
+                               const LidarGeometry& lidar, const std::optional<YawPrior>& prior,
+                               const CorrectionConfig& config = {});
 
 }  // namespace rsu::perception

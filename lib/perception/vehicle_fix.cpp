@@ -1,38 +1,60 @@
 #include "perception/vehicle_fix.h"
 
+#include <cmath>
 #include <vector>
 
 #include "common/angles.h"
 
 namespace rsu::perception {
+namespace {
 
-VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> points, const AnnouncedVehicle& vehicle,
-                       const Eigen::Vector3d& lidar_position, const VehicleFixConfig& config) {
-  VehicleFix out;
+// The xy of the points the rectangle is fitted to: the lower body's when it has enough points for a
+// fit (its outline is the footprint), else all of them.
+std::vector<Eigen::Vector2d> outline_points(std::span<const Eigen::Vector3d> points, const VehicleSize& size,
+                                            const LidarGeometry& lidar, const VehicleFixConfig& config,
+                                            bool lower_body_only) {
+  const double lower = lower_body_height(size, config.correction);
   std::vector<Eigen::Vector2d> xy;
   xy.reserve(points.size());
   for (const Eigen::Vector3d& p : points) {
-    if (p.allFinite()) {
+    if (p.allFinite() && (!lower_body_only || p.z() - lidar.ground_z <= lower))
       xy.emplace_back(p.x(), p.y());
-    }
   }
-  out.points_used = xy.size();
-  const Eigen::Vector2d lidar_xy = lidar_position.head<2>();
-  out.fit = fit_rectangle(xy, lidar_xy, config.fit);
+  return xy;
+}
+
+}  // namespace
+
+VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> points, const AnnouncedVehicle& vehicle,
+                       const LidarGeometry& lidar, const VehicleFixConfig& config) {
+  VehicleFix out;
+  const std::vector<Eigen::Vector2d> all = outline_points(points, vehicle.size, lidar, config, false);
+  out.points_used = all.size();
 
   // The correction judges faces with the fit's own support rules, and the fix's yaw is quantised by
   // the orientation search that produced the fit.
   CorrectionConfig correction = config.correction;
   correction.fit = config.fit;
+  correction.covariance.azimuth_resolution_rad = lidar.azimuth_step_rad;
   correction.covariance.search_resolution_rad =
       deg_to_rad(config.fit.search.method == OrientationSearchMethod::exhaustive
                      ? config.fit.search.exhaustive_step_deg
                      : config.fit.search.fine_resolution_deg);
   if (config.method == CorrectionMethod::algorithm1) {
-    out.corrected = correct_algorithm1(out.fit, vehicle.size, lidar_xy, correction.covariance);
-  } else {
-    out.corrected = correct_improved(out.fit, xy, vehicle.size, lidar_xy, vehicle.yaw_prior, correction);
+    out.fit = fit_rectangle(all, lidar.xy(), config.fit);
+    out.corrected = correct_algorithm1(out.fit, vehicle.size, lidar.xy(), correction.covariance);
+    return out;
   }
+  std::vector<Eigen::Vector2d> outline = outline_points(points, vehicle.size, lidar, config, true);
+  if (outline.size() >= config.correction.min_lower_body_points) {
+    out.fit = fit_rectangle(outline, lidar.xy(), config.fit);
+  }
+  if (!out.fit.ok()) {
+    outline = all;
+    out.fit = fit_rectangle(outline, lidar.xy(), config.fit);
+  }
+  out.corrected =
+      correct_improved(out.fit, outline, points, vehicle.size, lidar, vehicle.yaw_prior, correction);
   return out;
 }
 

@@ -7,9 +7,10 @@
 // defaults are what rsud runs unless its configuration file says otherwise (deploy/rsud.yaml,
 // perception.correction); an experiment that measures another setting says so in its output.
 //
-// Input: the vehicle's points in the map frame (x, y, z; z above the map's ground datum), what the
-// vehicle announced (its box size, its heading predicted to the sweep time), the LiDAR's position in the
-// map frame. Points that are not finite are ignored.
+// Input: the vehicle's points in the map frame (x, y, z), what the vehicle announced (its box size, its
+// heading predicted to the sweep time), the LiDAR (its position, its lasers' elevations, the road's
+// height: lidar_geometry.h). Points that are not finite are ignored. The improved correction fits the
+// rectangle to the lower body's points where there are enough (size_correction.h), Algorithm 1 to all.
 #pragma once
 
 #include <optional>
@@ -18,6 +19,7 @@
 #include <Eigen/Core>
 
 #include "perception/l_shape_fitting.h"
+#include "perception/lidar_geometry.h"
 #include "perception/rectangle_fit.h"
 #include "perception/size_correction.h"
 
@@ -47,6 +49,6 @@ struct VehicleFix {
 };
 
 VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> points, const AnnouncedVehicle& vehicle,
-                       const Eigen::Vector3d& lidar_position, const VehicleFixConfig& config = {});
+                       const LidarGeometry& lidar, const VehicleFixConfig& config = {});
 
 }  // namespace rsu::perception

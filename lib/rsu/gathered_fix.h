@@ -47,13 +47,15 @@ class GatheredVehicleFixer {
 
   // The fix of `held` with what the vehicle announced (`a`): from the whole gathered union if it is
   // one vehicle of the announced size; otherwise from the detection the assignment gave it alone.
-  GatheredFix fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a) const;
+  // lost_nearby: LiDAR packets were lost while the sweep passed it (no side of it counts as seen).
+  GatheredFix fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby = false) const;
 
  private:
   // The vehicle's fix from its points swept at `sweep_time`, with its announced size and its announced
   // heading carried to that time as the yaw prior.
   perception::VehicleFix fix_announced(std::span<const Eigen::Vector3d> points,
-                                       const v2i::VehicleAnnouncement& a, TimeNs sweep_time) const;
+                                       const v2i::VehicleAnnouncement& a, TimeNs sweep_time,
+                                       const perception::LidarGeometry& lidar) const;
   // Whether the fitted rectangle passes the vehicle's association gate at `sweep_time`.
   bool fits_vehicle(const perception::RectangleFit& fit, const v2i::VehicleAnnouncement& a,
                     TimeNs sweep_time) const;
@@ -61,7 +63,7 @@ class GatheredVehicleFixer {
   perception::VehicleFixConfig fix_config_;
   tracking::HypothesisConfig hypothesis_;
   tracking::AssociationConfig association_;
-  Eigen::Vector3d lidar_position_;
+  perception::LidarGeometry lidar_;
   double coverage_radius_m_;
 };
 

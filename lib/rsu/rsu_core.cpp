@@ -144,7 +144,10 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
   const v2i::RegisteredVehicle* vehicle = announcements_.registry().find(held.vehicle_id, now);
   if (vehicle == nullptr || held.points.empty())
     return;
-  const GatheredFix fix = fixer_.fix(held, vehicle->announcement);
+  // Packets lost while the sweep crossed the vehicle (or just before its first points: its leading part
+  // may be what was lost).
+  const bool lost_nearby = last_loss_ns_ >= held.first_time - sweep_.rotation_period_ns() / 8;
+  const GatheredFix fix = fixer_.fix(held, vehicle->announcement, lost_nearby);
   count(fix, lidar_stats_);
   if (!fix.ok())
     return;
@@ -175,8 +178,13 @@ LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, 
     ++lidar_stats_.packets_too_late;
     return result;
   }
-  while (packets_.pop(ordered_scratch_))
+  while (packets_.pop(ordered_scratch_)) {
+    if (packets_.order_stats().lost != packets_lost_ && !ordered_scratch_.empty()) {
+      packets_lost_ = packets_.order_stats().lost;
+      last_loss_ns_ = ordered_scratch_.front().time_ns;
+    }
     append(result, on_lidar_points(ordered_scratch_, now));
+  }
   return result;
 }
 

@@ -163,6 +163,10 @@ class RsuCore {
   LidarStats lidar_stats_;
 
   std::vector<LidarPoint> ordered_scratch_;  // a packet released by the reorder stage
+  // Lost packets: how many so far, and the firing time after the latest gap. A vehicle swept around a
+  // gap may miss a part, so its fix counts none of its sides as seen (GatheredVehicleFixer).
+  std::uint64_t packets_lost_ = 0;
+  TimeNs last_loss_ns_ = std::numeric_limits<TimeNs>::min();
   std::vector<LidarPoint> map_scratch_;
 };
 

@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "lidar/point.h"
+#include "perception/size_correction.h"
 
 namespace rsu::perception::test {
 
@@ -188,12 +189,35 @@ inline std::vector<LidarPoint> points_of(const std::vector<LabelledPoint>& label
   return out;
 }
 
+// What the fix needs to know of this LiDAR (lidar_geometry.h).
+inline LidarGeometry geometry_of(const Lidar3d& l) {
+  LidarGeometry g;
+  g.position = l.position;
+  for (const double e : l.elevation_deg)
+    g.elevations_rad.push_back(e * kPi / 180.0);
+  return g;
+}
+
 inline Lidar3d small_lidar(int rings = 16) {
   Lidar3d l;
   for (int i = 0; i < rings; ++i) {
     l.elevation_deg.push_back(-15.0 + 30.0 * i / (rings - 1));
   }
   return l;
+}
+
+// The improved correction on a flat scan (test::scan_box): every point on the lower body of a box of the
+// default height (0.5 m up), the LiDAR at the same height, every direction observed.
+inline CorrectedPose correct_flat(const RectangleFit& fit, const std::vector<Eigen::Vector2d>& points,
+                                  const VehicleSize& size, const Eigen::Vector2d& lidar_xy,
+                                  const std::optional<YawPrior>& prior, const CorrectionConfig& config = {}) {
+  std::vector<Eigen::Vector3d> points3;
+  points3.reserve(points.size());
+  for (const auto& p : points)
+    points3.emplace_back(p.x(), p.y(), 0.5);
+  LidarGeometry lidar;
+  lidar.position = {lidar_xy.x(), lidar_xy.y(), 0.5};
+  return correct_improved(fit, points, points3, size, lidar, prior, config);
 }
 
 }  // namespace rsu::perception::test

@@ -98,7 +98,7 @@ TEST(Correction, FrontOnlyViewFailsAlgorithm1AndNotTheImprovedCorrection) {
   EXPECT_GT(rad_to_deg(axis_error(alg1.pose.yaw, box.yaw)), 80.0);
   EXPECT_GT(centre_error(alg1, box), 1.0);
 
-  const CorrectedPose geometric = correct_improved(fit, pts, size, lidar, std::nullopt);
+  const CorrectedPose geometric = test::correct_flat(fit, pts, size, lidar, std::nullopt);
   ASSERT_TRUE(geometric.ok());
   EXPECT_EQ(geometric.resolution, AmbiguityResolution::geometry);
   EXPECT_GT(geometric.confidence, 0.9);
@@ -107,7 +107,7 @@ TEST(Correction, FrontOnlyViewFailsAlgorithm1AndNotTheImprovedCorrection) {
   EXPECT_FALSE(geometric.heading_from_prior);
 
   const CorrectedPose with_prior =
-      correct_improved(fit, pts, size, lidar, YawPrior{box.yaw + deg_to_rad(8.0), deg_to_rad(10.0)});
+      test::correct_flat(fit, pts, size, lidar, YawPrior{box.yaw + deg_to_rad(8.0), deg_to_rad(10.0)});
   EXPECT_EQ(with_prior.resolution, AmbiguityResolution::prior);
   EXPECT_LT(centre_error(with_prior, box), 0.1);
   EXPECT_TRUE(with_prior.heading_from_prior);
@@ -143,7 +143,7 @@ TEST(Correction, RandomViewsWithAPriorWithinTenDegrees) {
     ASSERT_TRUE(fit.ok());
     const VehicleSize size{v.box.length, v.box.width};
     const YawPrior prior{v.box.yaw + deg_to_rad(10.0) * u(rng), deg_to_rad(10.0)};
-    const CorrectedPose r = correct_improved(fit, v.points, size, v.lidar, prior);
+    const CorrectedPose r = test::correct_flat(fit, v.points, size, v.lidar, prior);
     ASSERT_TRUE(r.ok());
     EXPECT_LT(centre_error(r, v.box), 0.1) << "trial " << trial;
     EXPECT_LT(rad_to_deg(angle_distance(r.pose.yaw, v.box.yaw)), 5.0)
@@ -160,7 +160,7 @@ TEST(Correction, RandomViewsWithoutPriorResolvedByGeometry) {
     const RandomView v = random_view(rng);
     const RectangleFit fit = fit_rectangle(v.points, v.lidar);
     const CorrectedPose r =
-        correct_improved(fit, v.points, {v.box.length, v.box.width}, v.lidar, std::nullopt);
+        test::correct_flat(fit, v.points, {v.box.length, v.box.width}, v.lidar, std::nullopt);
     ASSERT_TRUE(r.ok());
     EXPECT_LT(rad_to_deg(axis_error(r.pose.yaw, v.box.yaw)), 5.0) << "trial " << trial;
     EXPECT_LT(centre_error(r, v.box), 0.1) << "trial " << trial;
@@ -177,7 +177,7 @@ TEST(Correction, ASquareFootprintIsUnresolvedButItsCentreIsNot) {
   std::mt19937_64 rng(5);
   const auto pts = test::scan_box(box, lidar, deg_to_rad(0.2), 0.0, rng);
   const RectangleFit fit = fit_rectangle(pts, lidar);
-  const CorrectedPose r = correct_improved(fit, pts, {2.0, 2.0}, lidar, std::nullopt);
+  const CorrectedPose r = test::correct_flat(fit, pts, {2.0, 2.0}, lidar, std::nullopt);
   EXPECT_EQ(r.resolution, AmbiguityResolution::unresolved);
   EXPECT_NEAR(r.confidence, 0.5, 1e-6);
   EXPECT_LT(centre_error(r, box), 0.02);
@@ -192,7 +192,7 @@ TEST(Correction, AnUndecisivePriorLeavesTheDecisionToGeometry) {
   // 45 deg between the axes: the prior says nothing about which is the length (and, uncertain by 30 deg,
   // does not contradict the fitted axes either: the consistency checks keep the fix).
   const CorrectedPose r =
-      correct_improved(fit, pts, {4.89, 1.92}, lidar, YawPrior{deg_to_rad(45.0), deg_to_rad(30.0)});
+      test::correct_flat(fit, pts, {4.89, 1.92}, lidar, YawPrior{deg_to_rad(45.0), deg_to_rad(30.0)});
   EXPECT_EQ(r.resolution, AmbiguityResolution::geometry);
   EXPECT_LT(rad_to_deg(axis_error(r.pose.yaw, box.yaw)), 3.0);
 }
@@ -209,25 +209,27 @@ TEST(Correction, BadInputGivesAStatusNotACrash) {
   RectangleFit failed;
   failed.status = FitStatus::degenerate;
   EXPECT_EQ(correct_algorithm1(failed, size, lidar).status, CorrectionStatus::no_fit);
-  EXPECT_EQ(correct_improved(failed, pts, size, lidar, std::nullopt).status, CorrectionStatus::no_fit);
+  EXPECT_EQ(test::correct_flat(failed, pts, size, lidar, std::nullopt).status, CorrectionStatus::no_fit);
   for (const VehicleSize bad : {VehicleSize{0.0, 1.9}, VehicleSize{4.8, -1.0}, VehicleSize{nan, 1.9}}) {
     EXPECT_EQ(correct_algorithm1(fit, bad, lidar).status, CorrectionStatus::invalid_size);
-    EXPECT_EQ(correct_improved(fit, pts, bad, lidar, std::nullopt).status, CorrectionStatus::invalid_size);
+    EXPECT_EQ(test::correct_flat(fit, pts, bad, lidar, std::nullopt).status, CorrectionStatus::invalid_size);
   }
   EXPECT_EQ(correct_algorithm1(fit, size, Eigen::Vector2d(nan, 0.0)).status, CorrectionStatus::invalid_input);
-  EXPECT_EQ(correct_improved(fit, pts, size, lidar, YawPrior{nan, 0.1}).status,
+  EXPECT_EQ(test::correct_flat(fit, pts, size, lidar, YawPrior{nan, 0.1}).status,
             CorrectionStatus::invalid_input);
-  EXPECT_EQ(correct_improved(fit, pts, size, lidar, YawPrior{0.0, 0.0}).status,
+  EXPECT_EQ(test::correct_flat(fit, pts, size, lidar, YawPrior{0.0, 0.0}).status,
             CorrectionStatus::invalid_input);
   EXPECT_EQ(to_string(CorrectionStatus::invalid_size), "invalid_size");
 
-  // No points (or only garbage) beside a valid fit: still a finite answer.
+  // No points (or only garbage) beside a valid fit: nothing tells the heading, and the vehicle gave none:
+  // no fix, and why; no crash.
   std::vector<Eigen::Vector2d> garbage(5, Eigen::Vector2d(nan, nan));
   for (const auto& cloud : {std::vector<Eigen::Vector2d>{}, garbage}) {
-    const CorrectedPose r = correct_improved(fit, cloud, size, lidar, std::nullopt);
-    ASSERT_TRUE(r.ok());
-    EXPECT_TRUE(std::isfinite(r.pose.x) && std::isfinite(r.pose.y) && std::isfinite(r.pose.yaw));
-    EXPECT_TRUE(r.covariance.allFinite());
+    EXPECT_EQ(test::correct_flat(fit, cloud, size, lidar, std::nullopt).status,
+              CorrectionStatus::yaw_unobserved);
+    // With the vehicle's heading, nothing places the box: withheld, and why.
+    EXPECT_EQ(test::correct_flat(fit, cloud, size, lidar, YawPrior{0.5, 0.1}).status,
+              CorrectionStatus::position_unbounded);
   }
 }
 

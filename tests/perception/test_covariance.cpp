@@ -128,7 +128,7 @@ CorrectedPose correct_scan(const TrueBox& box, const Eigen::Vector2d& lidar, dou
   const auto pts = test::scan_box(box, lidar, deg_to_rad(step_deg), 0.02, rng);
   const RectangleFit fit = fit_rectangle(pts, lidar);
   EXPECT_TRUE(fit.ok());
-  return correct_improved(fit, pts, {box.length, box.width}, lidar, std::nullopt, config);
+  return test::correct_flat(fit, pts, {box.length, box.width}, lidar, std::nullopt, config);
 }
 
 TEST(FixCovariance, EndToEndFewerPointsFartherAndOneFaceAreLessCertain) {

@@ -87,7 +87,7 @@ void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, cons
 TEST(PerceptionPipeline, RangeImageBackground) {
   Street s;
   std::mt19937_64 rng(1);
-  PerceptionPipeline pipeline({}, s.lidar.position);
+  PerceptionPipeline pipeline({}, test::geometry_of(s.lidar));
   for (const double phase : {0.1, 0.4, 0.7, 0.9})
     pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, phase, rng)));
   expect_finds_and_corrects_vehicles(pipeline, s.busy,
@@ -99,7 +99,7 @@ TEST(PerceptionPipeline, ReferenceFrameBackground) {
   std::mt19937_64 rng(2);
   PerceptionConfig config;
   config.background = BackgroundMethod::reference_frame;
-  PerceptionPipeline pipeline(config, s.lidar.position);
+  PerceptionPipeline pipeline(config, test::geometry_of(s.lidar));
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.2, rng)));
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.7, rng)));
   expect_finds_and_corrects_vehicles(pipeline, s.busy,
@@ -113,7 +113,7 @@ TEST(PerceptionPipeline, GroundHeightInAnEmptySceneLikeThePilot) {
   PerceptionConfig config;
   config.background = BackgroundMethod::ground_height;
   config.fix.fit.search.method = OrientationSearchMethod::exhaustive;  // the paper's 1 deg search
-  const PerceptionPipeline pipeline(config, s.lidar.position);
+  const PerceptionPipeline pipeline(config, test::geometry_of(s.lidar));
   expect_finds_and_corrects_vehicles(pipeline, s.busy,
                                      test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
 }
@@ -146,7 +146,7 @@ TEST(PerceptionPipeline, ObjectsAreTheClustersRsudAndTheReferenceFind) {
   std::mt19937_64 rng(4);
   PerceptionConfig config;
   config.background = BackgroundMethod::reference_frame;
-  PerceptionPipeline pipeline(config, s.lidar.position);
+  PerceptionPipeline pipeline(config, test::geometry_of(s.lidar));
   BackgroundModel background(background_model_config(config), s.lidar.position.head<2>());
   const auto empty = test::points_of(test::scan_3d(s.empty, s.lidar, 0.5, rng));
   pipeline.add_background_frame(empty);
@@ -182,7 +182,7 @@ TEST(PerceptionPipeline, Algorithm1IsSelectable) {
   PerceptionConfig config;
   config.background = BackgroundMethod::ground_height;
   config.fix.method = CorrectionMethod::algorithm1;
-  const PerceptionPipeline paper(config, s.lidar.position);
+  const PerceptionPipeline paper(config, test::geometry_of(s.lidar));
   const auto result = paper.process(test::points_of(test::scan_3d(s.busy, s.lidar, 0.3, rng)));
   ASSERT_GE(result.objects.size(), 1U);  // the front, and maybe the roof on its own
   const Detection* front = &result.objects[0];
@@ -200,7 +200,7 @@ TEST(PerceptionPipeline, Algorithm1IsSelectable) {
 TEST(PerceptionPipeline, BadFramesAreCountedNotCrashed) {
   Street s;
   std::mt19937_64 rng(6);
-  PerceptionPipeline pipeline({}, s.lidar.position);
+  PerceptionPipeline pipeline({}, test::geometry_of(s.lidar));
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.5, rng)));
   EXPECT_TRUE(pipeline.process({}).objects.empty());
   std::vector<LidarPoint> garbage(100);
@@ -215,7 +215,7 @@ TEST(PerceptionPipeline, BadFramesAreCountedNotCrashed) {
   // Before any background frame, every non-ground point counts as foreground.
   PerceptionConfig config;
   config.background = BackgroundMethod::reference_frame;
-  const PerceptionPipeline untrained(config, s.lidar.position);
+  const PerceptionPipeline untrained(config, test::geometry_of(s.lidar));
   const auto frame = test::points_of(test::scan_3d(s.busy, s.lidar, 0.5, rng));
   EXPECT_GT(untrained.process(frame).stats.foreground_points, 1000U);
 }

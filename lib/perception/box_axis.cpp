@@ -1,0 +1,247 @@
+#include "perception/box_axis.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <vector>
+
+#include "perception/face_envelope.h"
+#include "perception/size_correction.h"
+
+namespace rsu::perception {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct Extremes {
+  double lo = kInf, hi = -kInf;              // over every point
+  double lower_lo = kInf, lower_hi = -kInf;  // over the lower-body points
+  std::size_t lo_point = 0, hi_point = 0;    // which points are the extremes
+};
+
+Extremes extremes(std::span<const BoxPoint> points, int a) {
+  Extremes e;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double t = points[i].local[a];
+    if (t < e.lo) {
+      e.lo = t;
+      e.lo_point = i;
+    }
+    if (t > e.hi) {
+      e.hi = t;
+      e.hi_point = i;
+    }
+    if (points[i].lower_body) {
+      e.lower_lo = std::min(e.lower_lo, t);
+      e.lower_hi = std::max(e.lower_hi, t);
+    }
+  }
+  return e;
+}
+
+// The lower-body face on side `sign` (-1 low, +1 high) of axis a, if the points make one there: their
+// outward coordinates (sign * t) within the support band of the lower body's extreme, spread along the
+// other axis.
+std::vector<double> face_points(const AxisContext& ctx, int a, double sign, double extreme,
+                                const CorrectionConfig& config, double& along_mean, double& lowest) {
+  const int b = 1 - a;
+  std::vector<double> s;
+  double along_min = kInf, along_max = -kInf, along_sum = 0.0;
+  lowest = kInf;
+  for (const BoxPoint& p : ctx.points) {
+    if (!p.lower_body || sign * (extreme - p.local[a]) > config.fit.edge_support_m)
+      continue;
+    s.push_back(sign * p.local[a]);
+    along_min = std::min(along_min, p.local[b]);
+    along_max = std::max(along_max, p.local[b]);
+    along_sum += p.local[b];
+    lowest = std::min(lowest, p.height);
+  }
+  if (s.size() < config.fit.min_face_points || along_max - along_min < config.fit.min_face_length_m)
+    s.clear();
+  along_mean = s.empty() ? 0.0 : along_sum / static_cast<double>(s.size());
+  return s;
+}
+
+// Could the LiDAR have seen the body continue beyond the extreme point on side `sign`? Not if the side
+// faces away from it and the face along the other axis that would show the continuation is hidden too
+// (self-occlusion), nor where no laser reaches a body there (field of view).
+bool observable_beyond(const AxisContext& ctx, int a, double sign, const Extremes& e, const Extremes& other,
+                       const LidarGeometry& lidar, const CorrectionConfig& config) {
+  const int b = 1 - a;
+  const double extreme = sign > 0 ? e.hi : e.lo;
+  const bool side_faces_lidar = sign * (ctx.lidar_local[a] - extreme) > 0.0;
+  // The face along this axis shows its own continuation only if the LiDAR sees it at an angle the frame's
+  // direction is sure of (a face seen at grazing incidence, or maybe not at all, shows nothing).
+  const double beyond = std::max(other.lo - ctx.lidar_local[b], ctx.lidar_local[b] - other.hi);
+  const double sin_view = beyond / std::max(ctx.lidar_local.norm(), 1e-9);
+  const bool other_face_visible =
+      beyond > 0.0 &&
+      sin_view >= std::max(config.min_incidence_cos, std::sin(std::min(2.0 * ctx.yaw_sigma, 1.5)));
+  if (!side_faces_lidar && !other_face_visible)
+    return false;
+  const BoxPoint& p = ctx.points[sign > 0 ? e.hi_point : e.lo_point];
+  Eigen::Vector2d probe = p.local;
+  probe[a] += sign * config.observation_probe_m;
+  const double range = (probe - ctx.lidar_local).norm();
+  return lidar.sees_surface(range, config.lowest_body_m, ctx.vehicle_height);
+}
+
+// Beyond an extreme on the side facing away from the LiDAR the body hides what lies behind it, but not
+// for ever: a laser that passes above the extreme point descends and meets any body at least
+// lowest_body_m tall that goes on behind it, and returns from there. The nearest such laser bounds how far
+// the body can go on along the axis (the shadow), + the azimuth step. Infinite if no laser passes above.
+double shadow_allowance(const AxisContext& ctx, int a, const BoxPoint& extreme, const LidarGeometry& lidar,
+                        const CorrectionConfig& config) {
+  const double h = lidar.height_above_ground();
+  double nearest = kInf;
+  for (const double e : lidar.elevations_rad) {
+    const double down = std::tan(-e);
+    // Rising, or meeting the body at or before the extreme point (the laser that saw it among them).
+    if (!(down > 0.0) || h - extreme.range * down < extreme.height + config.end_tolerance_m)
+      continue;
+    nearest = std::min(nearest, (h - config.lowest_body_m) / down - extreme.range);
+  }
+  if (!std::isfinite(nearest))
+    return kInf;
+  const Eigen::Vector2d sight = extreme.local - ctx.lidar_local;
+  const double along_axis = std::abs(sight[a]) / std::max(sight.norm(), 1e-9);
+  return (nearest + extreme.range * lidar.azimuth_step_rad) / std::max(along_axis, config.min_incidence_cos);
+}
+
+// Horizontal range from the LiDAR to the point of a face at coordinate `face` on axis a and `along` on the
+// other axis.
+double face_range(const AxisContext& ctx, int a, double face, double along) {
+  Eigen::Vector2d p;
+  p[a] = face;
+  p[1 - a] = along;
+  return (p - ctx.lidar_local).norm();
+}
+
+// A lower-body face on the side of axis a that faces the LiDAR (at most one side of an axis can), placed
+// at its points' outer envelope; none if the points make no face there.
+std::optional<AxisEstimate> face_anchor(const AxisContext& ctx, int a, const Extremes& e,
+                                        const LidarGeometry& lidar, const CorrectionConfig& config) {
+  const double dim = ctx.dims[a];
+  const double tolerance = config.containment_sigmas * ctx.noise_sigma;
+  for (const double sign : {-1.0, 1.0}) {
+    const double lower_extreme = sign > 0 ? e.lower_hi : e.lower_lo;
+    const double extreme = sign > 0 ? e.hi : e.lo;
+    if (!std::isfinite(lower_extreme) || sign * (ctx.lidar_local[a] - extreme) <= 0.0 ||
+        sign * (extreme - lower_extreme) > config.end_tolerance_m)
+      continue;
+    double along_mean = 0.0, lowest = 0.0;
+    const std::vector<double> s = face_points(ctx, a, sign, lower_extreme, config, along_mean, lowest);
+    if (s.empty())
+      continue;
+    const FaceEnvelope env = outer_envelope(s, ctx.noise_sigma, config.envelope_band_m);
+    // A face seen only above the height to which every vehicle's body keeps its full plan may be set back
+    // (a bus's windscreen above its low front) - unless a laser passing below it, at the face, would have
+    // hit the body had it reached farther out there: up to mid_height_inset_m, the middle of that with
+    // its spread.
+    const bool seen_below =
+        lowest <= std::min(config.full_plan_height_m, config.lower_body_fraction * ctx.vehicle_height) ||
+        lidar.sees_surface(face_range(ctx, a, sign * env.position, along_mean) + 0.1,
+                           config.ground_clearance_m, lowest - 0.05);
+    const double setback =
+        seen_below ? 0.0
+                   : (a == ctx.length_axis ? config.mid_height_inset_m : config.mid_height_inset_width_m);
+    const double face = sign * (env.position + setback / 2.0);
+    const double sigma = std::sqrt(env.sigma * env.sigma + setback * setback / 12.0);
+    AxisEstimate out;
+    out.centre = face - sign * dim / 2.0;
+    out.across = along_mean;
+    out.evidence = {AxisAnchor::face, static_cast<std::size_t>(std::lround(env.face_points)), sigma, 0.0};
+    out.contained = e.lo >= out.centre - dim / 2.0 - tolerance - config.inconsistent_outside_m &&
+                    e.hi <= out.centre + dim / 2.0 + tolerance + config.inconsistent_outside_m;
+    return out;
+  }
+  return std::nullopt;
+}
+
+// How far beyond its extreme point a side of the box may lie, and whether that extreme is an end of the
+// body.
+struct Side {
+  double allowance = kInf;
+  bool end = false;
+};
+
+Side side_bound(const AxisContext& ctx, int a, double sign, const Extremes& e, const Extremes& other,
+                const LidarGeometry& lidar, const CorrectionConfig& config) {
+  const BoxPoint& p = ctx.points[sign > 0 ? e.hi_point : e.lo_point];
+  Eigen::Vector2d probe = p.local;  // just beyond the extreme point
+  probe[a] += sign * config.observation_probe_m;
+  // Packets lost near the vehicle, or something nearer in the line of sight just beyond the extreme
+  // (its shadow, not the body, ends the points there): nothing bounds that side but containment.
+  if (!lidar.complete_sweep ||
+      lidar.occluded(ctx.origin + probe[0] * ctx.e0 + probe[1] * ctx.e1, config.observation_probe_m))
+    return Side{};
+  const double extreme = sign > 0 ? e.hi : e.lo;
+  const double lower_extreme = sign > 0 ? e.lower_hi : e.lower_lo;
+  if (observable_beyond(ctx, a, sign, e, other, lidar, config) && std::isfinite(lower_extreme) &&
+      sign * (extreme - lower_extreme) <= config.end_tolerance_m) {
+    // A laser's returns along a face lie range x azimuth step apart across the line of sight, farther
+    // along a face seen at grazing incidence: the body may go on that far without a return.
+    const Eigen::Vector2d sight = p.local - ctx.lidar_local;
+    const double sin_incidence = std::abs(sight[1 - a]) / std::max(sight.norm(), 1e-9);
+    const double spacing =
+        p.range * lidar.azimuth_step_rad / std::max(sin_incidence, config.min_incidence_cos);
+    return Side{config.end_allowance_m + spacing, true};
+  }
+  // Not seen beyond, or higher up (glasshouse, roof, bonnet: a laser's trace leaves a roof through
+  // whichever edge it meets): only containment and, facing away, the shadow bound that side.
+  const bool faces_away = sign * (ctx.lidar_local[a] - extreme) < 0.0;
+  return Side{faces_away && !lidar.elevations_rad.empty() ? shadow_allowance(ctx, a, p, lidar, config) : kInf,
+              false};
+}
+
+}  // namespace
+
+AxisEstimate estimate_axis(const AxisContext& ctx, int a, const LidarGeometry& lidar,
+                           const CorrectionConfig& config) {
+  AxisEstimate out;
+  const double dim = ctx.dims[a];
+  if (ctx.points.empty()) {  // nothing bounds it: anywhere within a box's size of the frame's origin
+    out.evidence = {AxisAnchor::interval, 0, -1.0, dim};
+    return out;
+  }
+  const Extremes e = extremes(ctx.points, a);
+  const Extremes other = extremes(ctx.points, 1 - a);
+  if (const auto face = face_anchor(ctx, a, e, lidar, config))
+    return *face;
+  const Side low = side_bound(ctx, a, -1.0, e, other, lidar, config);
+  const Side high = side_bound(ctx, a, 1.0, e, other, lidar, config);
+
+  // Both ends of the lower body seen and spanning the known size: the middle (rounded corners cut both
+  // ends alike).
+  if (low.end && high.end && std::abs((e.hi - e.lo) - dim) <= config.full_face_tolerance_m) {
+    out.centre = 0.5 * (e.lo + e.hi);
+    out.across = 0.5 * (ctx.points[e.lo_point].local[1 - a] + ctx.points[e.hi_point].local[1 - a]);
+    out.evidence = {AxisAnchor::midpoint, 0, -1.0, 0.0};
+    return out;
+  }
+
+  // The interval containment and the sides leave. If the sides contradict the known size (the points
+  // span less than it although both ends look like the body's ends), one of them is not an end (a
+  // neighbour or a hedge hides the rest): containment alone bounds the box then.
+  const double tolerance = config.containment_sigmas * ctx.noise_sigma;
+  const double contain_lo = e.hi - dim / 2.0 - tolerance;
+  const double contain_hi = e.lo + dim / 2.0 + tolerance;
+  double lo = std::max(contain_lo, e.lo - low.allowance + dim / 2.0);
+  double hi = std::min(contain_hi, e.hi + high.allowance - dim / 2.0);
+  if (lo > hi) {
+    lo = contain_lo;
+    hi = contain_hi;
+  }
+  out.contained = lo <= hi + config.inconsistent_outside_m;
+  out.centre = lo <= hi ? 0.5 * (lo + hi) : 0.5 * (e.lo + e.hi);
+  double centroid = 0.0;
+  for (const BoxPoint& p : ctx.points)
+    centroid += p.local[1 - a];
+  out.across = centroid / static_cast<double>(ctx.points.size());
+  out.evidence = {AxisAnchor::interval, 0, -1.0, std::max(0.0, hi - lo)};
+  return out;
+}
+
+}  // namespace rsu::perception

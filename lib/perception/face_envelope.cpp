@@ -1,0 +1,64 @@
+#include "perception/face_envelope.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace rsu::perception {
+namespace {
+
+double normal_cdf(double x) {
+  return 0.5 * std::erfc(-x / std::numbers::sqrt2);
+}
+
+double normal_pdf(double x, double sigma) {
+  return std::exp(-0.5 * x * x / (sigma * sigma)) / (sigma * std::sqrt(2.0 * std::numbers::pi));
+}
+
+}  // namespace
+
+FaceEnvelope outer_envelope(std::span<const double> s, double noise_sigma, double band) {
+  FaceEnvelope out;
+  if (s.empty())
+    return out;
+  const double sigma = std::max(noise_sigma, 1e-4);
+  band = std::max(band, 4.0 * sigma);
+  // Start near the outside: the 90th percentile, inside the few stray returns beyond it.
+  std::vector<double> sorted(s.begin(), s.end());
+  std::sort(sorted.begin(), sorted.end());
+  double f = sorted[static_cast<std::size_t>(0.9 * static_cast<double>(sorted.size() - 1))];
+  double face_weight = 0.5;
+  constexpr double kStray = 0.02;  // share of returns outside the face (spray, a mirror's edge)
+  std::vector<double> r(s.size());
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    double sum_r = 0.0, sum_rs = 0.0;
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const double face = face_weight * normal_pdf(s[i] - f, sigma);
+      // Behind the face: uniform over [f - band, f], blurred by the same noise.
+      const double inside = (1.0 - face_weight - kStray) / band *
+                            (normal_cdf((f - s[i]) / sigma) - normal_cdf((f - band - s[i]) / sigma));
+      const double stray = kStray / (2.0 * band);
+      r[i] = face / (face + inside + stray);
+      sum_r += r[i];
+      sum_rs += r[i] * s[i];
+    }
+    if (!(sum_r > 1e-9))
+      break;
+    const double next = sum_rs / sum_r;
+    face_weight = std::clamp(sum_r / static_cast<double>(s.size()), 0.05, 1.0 - kStray - 0.01);
+    const bool converged = std::abs(next - f) < 1e-5;
+    f = next;
+    if (converged)
+      break;
+  }
+  double n_face = 0.0;
+  for (const double w : r)
+    n_face += w;
+  out.position = f;
+  out.face_points = n_face;
+  out.sigma = sigma / std::sqrt(std::max(n_face, 1.0));
+  return out;
+}
+
+}  // namespace rsu::perception

@@ -1,0 +1,44 @@
+// What a fix needs to know about the LiDAR that saw the vehicle: where it is, which elevations its lasers
+// look at, how finely it samples azimuth, and where the road is. With it the fix can tell an edge of the
+// vehicle from an edge of what the LiDAR could see: a car below a mast-mounted LiDAR is cut off where
+// its lowest laser meets the car, not where the car ends (issue 12: "what the sensor can see of a box of
+// known size from a known position").
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/angles.h"
+
+namespace rsu::perception {
+
+struct LidarGeometry {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // map frame
+  // The lasers' elevation angles (radians, up positive) for a level mount. Empty: unknown, every
+  // direction counts as observed.
+  std::vector<double> elevations_rad;
+  double azimuth_step_rad = deg_to_rad(0.2);  // horizontal spacing of a laser's returns (VLP at 600 rpm)
+  double ground_z = 0.0;                      // the road's height in the map frame
+  // False when returns were lost near the vehicle (lost packets): where its points end says nothing
+  // about where it ends, so no side counts as seen beyond them.
+  bool complete_sweep = true;
+  // The xy of other objects' returns near the vehicle (map frame; e.g. the foreground points of the
+  // sweep that are not the vehicle's). Beyond one of them the LiDAR could not see whether the vehicle
+  // goes on: its points' end there is the shadow's edge, not the vehicle's. Empty: nothing known to
+  // occlude.
+  std::vector<Eigen::Vector2d> occluders;
+
+  Eigen::Vector2d xy() const { return position.head<2>(); }
+  double height_above_ground() const { return position.z() - ground_z; }
+
+  // Whether some laser would return from a vertical surface at horizontal range `range_m` between the
+  // heights (above the road) `low` and `high`: the surface lies within the field of view and not
+  // between two lasers' cones.
+  bool sees_surface(double range_m, double low, double high) const;
+  // Whether an occluder lies nearer than xy (by more than `margin`) within the angle `margin` subtends
+  // at xy's range (at least two azimuth steps) of the line of sight to it.
+  bool occluded(const Eigen::Vector2d& xy, double margin) const;
+};
+
+}  // namespace rsu::perception

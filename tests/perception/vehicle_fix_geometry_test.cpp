@@ -1,0 +1,201 @@
+// The fix on the views a roadside LiDAR really gets (issue 12): the simulator's vehicle body (hood,
+// glasshouse narrower than the body, rounded corners, wheels) seen by a VLP-16 / VLP-32C on a mast, not
+// a box. Each case must give a fix that is right (within 0.10 m) or whose stated covariance covers its
+// error (position inside the 2-dof 3-sigma ellipse, yaw within 3 sigma), or no fix with a named reason;
+// and the case must be the view it claims (the test checks the points it got), so that it cannot pass
+// on an easier view.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Cholesky>
+
+#include "common/angles.h"
+#include "common/pose.h"
+#include "lidar/sensor_model.h"
+#include "perception/vehicle_fix.h"
+#include "sim/lidar_simulator.h"
+#include "sim/scene.h"
+
+namespace rsu::perception {
+namespace {
+
+constexpr double kChi2TwoDof3Sigma = 11.829;  // P(chi2_2 <= x) = 0.9973
+// Returns this close to the road are the ground's to the foreground filter (the pilot drops them too).
+constexpr double kGroundFilterM = 0.2;
+
+// A small hatchback and an SUV (the simulator's default body: the paper's test vehicle).
+sim::VehicleShape hatchback() {
+  sim::VehicleShape s;
+  s.length = 3.9;
+  s.width = 1.72;
+  s.height = 1.5;
+  s.belt_height = 0.92;
+  s.cabin_inset = 0.12;
+  s.hood_length = 0.8;
+  s.windscreen_run = 0.7;
+  s.rear_slope_run = 0.25;
+  s.corner_radius = 0.3;
+  s.wheelbase = 2.5;
+  s.wheel_radius = 0.3;
+  return s;
+}
+
+struct View {
+  std::vector<Eigen::Vector3d> points;  // the vehicle's own returns, map frame
+  LidarGeometry lidar;
+};
+
+// One rotation of `model` mounted `height` m above the road at the origin; the vehicle (id 1) stands at
+// `truth`; `occluders` stand in the scene too. Only the vehicle's own returns are kept (the test judges
+// the fix, not the segmentation).
+View look(const SensorModel& model, double height, const sim::VehicleShape& shape, const Pose2& truth,
+          const std::vector<sim::Building>& occluders = {}) {
+  sim::Scene scene;
+  scene.ground.half_extent_m = 60.0;
+  scene.buildings = occluders;
+  sim::Vehicle vehicle;
+  vehicle.id = 1;
+  vehicle.shape = shape;
+  vehicle.trajectory = sim::StaticPose{truth};
+  scene.vehicles.push_back(vehicle);
+  Pose3 mount;
+  mount.z = height;
+  const sim::LidarSimulator simulator(model, mount, sim::NoiseModel{}, scene);
+  const sim::SimulatedFrame frame = simulator.simulate_frame(0);
+  View view;
+  const Eigen::Isometry3d to_map = mount.to_isometry();
+  for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
+    const LidarPoint& p = frame.frame.points[i];
+    const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+    if (m.z() < kGroundFilterM)
+      continue;
+    // The vehicle's own returns are its points; any other object's are what may hide part of it (rsud
+    // knows them as the sweep's other foreground points).
+    if (frame.truth[i].surface == sim::SurfaceClass::kVehicle && frame.truth[i].vehicle_id == 1)
+      view.points.push_back(m);
+    else if (frame.truth[i].surface == sim::SurfaceClass::kBuilding)
+      view.lidar.occluders.push_back(m.head<2>());
+  }
+  view.lidar.position = {0.0, 0.0, height};
+  for (const double e : model.elevation_deg)
+    view.lidar.elevations_rad.push_back(deg_to_rad(e));
+  view.lidar.azimuth_step_rad = deg_to_rad(model.azimuth_step_deg());
+  return view;
+}
+
+enum class Verdict { right, covered, withheld };
+
+// The fix of `view` with the announced size and a yaw prior `prior_error` off (sigma 10 deg), judged.
+Verdict judge(const View& view, const sim::VehicleShape& shape, const Pose2& truth, double prior_error) {
+  AnnouncedVehicle announced;
+  announced.size = {shape.length, shape.width, shape.height};
+  announced.yaw_prior = YawPrior{truth.yaw + prior_error, deg_to_rad(10.0)};
+  const VehicleFix fix = fix_vehicle(view.points, announced, view.lidar);
+  if (!fix.ok()) {
+    // A refusal names its reason (the counters and the vehicle get it).
+    EXPECT_NE(to_string(fix.status()), "unknown");
+    return Verdict::withheld;
+  }
+  const Eigen::Vector2d error(fix.corrected.pose.x - truth.x, fix.corrected.pose.y - truth.y);
+  const Eigen::Matrix2d cov = fix.corrected.covariance.topLeftCorner<2, 2>();
+  const double nees = error.dot(cov.ldlt().solve(error));
+  const double yaw_error = angle_distance(fix.corrected.pose.yaw, truth.yaw);
+  const double yaw_sigma = std::sqrt(fix.corrected.covariance(2, 2));
+  EXPECT_TRUE(error.norm() < 0.10 || nees <= kChi2TwoDof3Sigma)
+      << "error " << error.norm() << " m, stated sigma " << std::sqrt(cov.trace()) << " m (NEES " << nees
+      << ") at yaw " << rad_to_deg(truth.yaw) << " deg, " << view.points.size() << " points";
+  EXPECT_TRUE(yaw_error < deg_to_rad(1.0) || yaw_error <= 3.0 * yaw_sigma)
+      << "yaw error " << rad_to_deg(yaw_error) << " deg, stated " << rad_to_deg(yaw_sigma) << " deg at yaw "
+      << rad_to_deg(truth.yaw) << " deg";
+  return error.norm() < 0.10 ? Verdict::right : Verdict::covered;
+}
+
+double highest(const View& v) {
+  double z = -1e9;
+  for (const auto& p : v.points)
+    z = std::max(z, p.z());
+  return z;
+}
+
+// A VLP-32C 8 m up sees a hatchback 15-17 m away, driving towards or away from it, from above: a few
+// rings across the bonnet or boot, the glasshouse and the near end.
+TEST(VehicleFixGeometry, TopDownSparseRoofAndOneEnd) {
+  const sim::VehicleShape shape = hatchback();
+  int fixed = 0, cases = 0;
+  for (const double distance : {15.0, 16.0, 17.0}) {
+    for (const double yaw_deg : {0.0, 180.0, 8.0, 188.0}) {
+      const Pose2 truth{distance, 0.0, deg_to_rad(yaw_deg)};
+      const View view = look(make_vlp32c(), 8.0, shape, truth);
+      ASSERT_GE(view.points.size(), 3U) << distance;
+      // The view claimed: sparse (a few rings), reaching above the belt line (seen from above).
+      EXPECT_LT(view.points.size(), 60U) << distance;
+      EXPECT_GT(highest(view), shape.belt_height) << distance;
+      for (const double prior_error : {deg_to_rad(7.0), deg_to_rad(-7.0)}) {
+        ++cases;
+        fixed += judge(view, shape, truth, prior_error) != Verdict::withheld;
+      }
+    }
+  }
+  // Withholding every fix would pass the checks above trivially. Most of these views leave the position
+  // open over more than max_position_sigma_m (withheld, position_unbounded: 22 of the 24 here; README,
+  // Known shortfalls: elevated mounts); 2 are fixed.
+  EXPECT_GE(fixed, 2);
+}
+
+// A VLP-16 2 m up sees an SUV 35.5 m away, most of it with its -1 deg laser only: one ring across the
+// glasshouse, which is narrower than the body and has no hood or boot (the paper's range limit).
+TEST(VehicleFixGeometry, SingleRingOnTheGlasshouse) {
+  const sim::VehicleShape shape;  // the paper's SUV
+  int fixed = 0, cases = 0;
+  for (double yaw_deg = 0.0; yaw_deg < 180.0; yaw_deg += 30.0) {
+    const Pose2 truth{35.5, 0.0, deg_to_rad(yaw_deg + 3.0)};
+    const View view = look(make_vlp16(), 2.0, shape, truth);
+    if (view.points.size() < 3)
+      continue;
+    // One ring (within a few cm of one height) above the belt line holds much of the returns; the others
+    // are the next laser's grazing the sills and tyres.
+    const auto ring = std::count_if(view.points.begin(), view.points.end(), [&](const Eigen::Vector3d& p) {
+      return p.z() > shape.belt_height && p.z() > highest(view) - 0.1;
+    });
+    EXPECT_GE(static_cast<double>(ring), 0.4 * static_cast<double>(view.points.size())) << yaw_deg;
+    for (const double prior_error : {deg_to_rad(5.0), deg_to_rad(-9.0)}) {
+      ++cases;
+      fixed += judge(view, shape, truth, prior_error) != Verdict::withheld;
+    }
+  }
+  ASSERT_GE(cases, 8);
+  EXPECT_GE(fixed, cases / 2);
+}
+
+// A VLP-32C 4 m up sees an SUV broadside 17.5 m away (its lower body by one ring); a cabinet 1.5 m wide and 3
+// m tall, 8 m from the LiDAR, hides a stretch of its near side: the visible face is cut short at the shadow,
+// not at the car's end.
+TEST(VehicleFixGeometry, TruncatedFaceBehindAnOccluder) {
+  const sim::VehicleShape shape;
+  sim::Building cabinet;
+  cabinet.x = 8.0;
+  cabinet.y = 1.0;
+  cabinet.length = 1.0;
+  cabinet.width = 1.5;
+  cabinet.height = 3.0;
+  int fixed = 0, cases = 0;
+  for (const double yaw_deg : {90.0, 80.0, 100.0, 270.0}) {
+    const Pose2 truth{17.5, 0.0, deg_to_rad(yaw_deg)};
+    const View view = look(make_vlp32c(), 4.0, shape, truth, {cabinet});
+    const View clear = look(make_vlp32c(), 4.0, shape, truth);
+    ASSERT_GE(view.points.size(), 10U);
+    // The claimed view: the cabinet hides a good part of what the LiDAR would see of the car.
+    EXPECT_LT(static_cast<double>(view.points.size()), 0.8 * static_cast<double>(clear.points.size()));
+    for (const double prior_error : {deg_to_rad(6.0), deg_to_rad(-6.0)}) {
+      ++cases;
+      fixed += judge(view, shape, truth, prior_error) != Verdict::withheld;
+    }
+  }
+  EXPECT_GE(fixed, cases / 2);
+}
+
+}  // namespace
+}  // namespace rsu::perception
