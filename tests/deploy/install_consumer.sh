@@ -2,9 +2,11 @@
 # cmake --install into a fresh prefix installs every program, the unit, the example configuration, the
 # sysctl snippet and the vehicle client package; a program outside the project is then built against the
 # package twice, with find_package(RsuVehicleClient) and with pkg-config, and run.
-# Usage: install_consumer.sh BUILD_DIR CONSUMER_SOURCE_DIR WORK_DIR
+# Usage: install_consumer.sh BUILD_DIR CONSUMER_SOURCE_DIR WORK_DIR [CONSUMER_FLAGS]
+# CONSUMER_FLAGS: compiler and linker flags the consumer needs to load the installed library (a sanitizer
+# build's -fsanitize=...); empty for a Release build.
 set -eu
-build=$1 consumer=$2 work=$3
+build=$1 consumer=$2 work=$3 flags=${4:-}
 rm -rf "$work" && mkdir -p "$work"
 prefix=$work/prefix
 cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log"; echo "FAIL: install"; exit 1; }
@@ -27,14 +29,14 @@ id=$(sed -n 's/^key id \([0-9a-f]*\):.*/\1/p' "$work/keygen.out")
 [ -n "$id" ] || { cat "$work/keygen.out"; echo "FAIL: no key id from rsu-keygen"; exit 1; }
 expected="key id $id, rsu 127.0.0.1:4500"
 
-cmake -S "$consumer" -B "$work/with_cmake" -DCMAKE_PREFIX_PATH="$prefix" >"$work/cmake.log" 2>&1 &&
+cmake -S "$consumer" -B "$work/with_cmake" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_FLAGS="$flags" >"$work/cmake.log" 2>&1 &&
   cmake --build "$work/with_cmake" >>"$work/cmake.log" 2>&1 || { cat "$work/cmake.log"; echo "FAIL: find_package build"; exit 1; }
 out=$(LD_LIBRARY_PATH="$prefix/lib" "$work/with_cmake/consumer" "$work/car.key" 127.0.0.1:4500)
 case "$out" in *"$expected"*) echo "ok: find_package(RsuVehicleClient): $out" ;; *) echo "FAIL: $out"; exit 1 ;; esac
 
 export PKG_CONFIG_PATH="$prefix/lib/pkgconfig"
-# shellcheck disable=SC2046
-c++ -std=c++20 -o "$work/with_pkg_config" "$consumer/consumer.cpp" $(pkg-config --cflags --libs rsu-vehicle-client) ||
+# shellcheck disable=SC2046,SC2086
+c++ -std=c++20 $flags -o "$work/with_pkg_config" "$consumer/consumer.cpp" $(pkg-config --cflags --libs rsu-vehicle-client) ||
   { echo "FAIL: pkg-config build"; exit 1; }
 out=$(LD_LIBRARY_PATH="$prefix/lib" "$work/with_pkg_config" "$work/car.key" 127.0.0.1:4500)
 case "$out" in *"$expected"*) echo "ok: pkg-config rsu-vehicle-client: $out" ;; *) echo "FAIL: $out"; exit 1 ;; esac
