@@ -397,6 +397,18 @@ void read_logging(const YamlField& f, DaemonConfig& c) {
     c.stats_file = f.child("stats_file").text();
 }
 
+void read_metrics(const YamlField& f, DaemonConfig& c) {
+  f.expect_map({"textfile", "interval_s"});
+  if (f.has("textfile")) {
+    const YamlField t = f.child("textfile");
+    c.metrics.textfile = t.text();
+    // node_exporter's textfile collector reads only *.prom files.
+    if (!c.metrics.textfile.empty() && !c.metrics.textfile.ends_with(".prom"))
+      t.fail("must end in .prom (node_exporter's textfile collector reads only those)");
+  }
+  c.metrics.interval_s = f.positive_or("interval_s", c.metrics.interval_s);
+}
+
 }  // namespace
 
 DaemonConfig parse_config(const std::string& yaml_text, const std::string& source_name) {
@@ -407,7 +419,7 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
     const YAML::Node root = io::parse_yaml(yaml_text, source_name);
     const YamlField f(root, "", c.source, 1);
     f.expect_map({"rsu_id", "lidar", "background", "perception", "v2i", "security", "registry", "flood_limit",
-                  "association", "dds", "logging"});
+                  "association", "dds", "logging", "metrics"});
     c.core.rsu_id = unsigned_of(f.required("rsu_id"), 9.007e15);
     if (c.core.rsu_id == 0)
       f.child("rsu_id").fail("must be non-zero");
@@ -439,6 +451,8 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
     }
     if (f.has("logging"))
       read_logging(f.child("logging"), c);
+    if (f.has("metrics"))
+      read_metrics(f.child("metrics"), c);
   } catch (const io::YamlError& e) {
     throw ConfigError(e.what());
   } catch (const YAML::Exception& e) {

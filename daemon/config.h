@@ -119,6 +119,13 @@ struct LoggingConfig {
   double stats_interval_s = 60.0;  // all counters at info level; 0 disables
 };
 
+// Prometheus metrics (daemon/metrics_text.h) as a node_exporter textfile: written atomically (a
+// temporary file renamed over it), mode 0644 so that node_exporter's user can read it.
+struct MetricsConfig {
+  std::string textfile;      // empty: no metrics; must end in .prom for node_exporter to read it
+  double interval_s = 10.0;  // how often it is rewritten (and on exit)
+};
+
 // Where the RSU's keys come from (security: section). The mode and replay limits go to
 // core.security; load_security() reads the files into core.signing_key and core.trust_list.
 // Signed is the default, also when the file has no security: section; the files then are these.
@@ -145,6 +152,7 @@ struct DaemonConfig {
   LoggingConfig logging;
   // Where --stats-file style snapshots go: empty disables. Written on every stats interval and on exit.
   std::string stats_file;
+  MetricsConfig metrics;
 };
 
 class ConfigError : public std::runtime_error {

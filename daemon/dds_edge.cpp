@@ -233,26 +233,27 @@ void DdsEdge::forget_quiet_vehicles(TimeNs now) {
                 [now](const auto& kv) { return now - kv.second->last_fix > 60 * kNsPerSecond; });
 }
 
-void DdsEdge::write_stats(std::ostream& out) const {
-  out << "dds.clouds_received " << clouds_received_ << "\n";
-  out << "dds.clouds_accepted " << clouds_accepted_ << "\n";
-  out << "dds.clouds_empty " << clouds_empty_ << "\n";
-  out << "dds.clouds_rejected.bad_stamp " << clouds_bad_stamp_ << "\n";
-  out << "dds.clouds_rejected.frame_id " << clouds_wrong_frame_ << "\n";
+void DdsEdge::report(CounterList& out) const {
+  out.add("dds", "clouds_received", clouds_received_);
+  out.add("dds", "clouds_accepted", clouds_accepted_);
+  out.add("dds", "clouds_empty", clouds_empty_);
+  out.add("dds", "clouds_rejected.bad_stamp", clouds_bad_stamp_);
+  out.add("dds", "clouds_rejected.frame_id", clouds_wrong_frame_);
   for (std::size_t i = 1; i < clouds_rejected_.size(); ++i)
-    out << "dds.clouds_rejected." << ros::to_string(static_cast<ros::CloudReject>(i)) << " "
-        << clouds_rejected_[i] << "\n";
-  out << "dds.points_accepted " << points_accepted_ << "\n";
-  out << "dds.points_skipped.non_finite " << points_non_finite_ << "\n";
-  out << "dds.points_skipped.bad_ring " << points_bad_ring_ << "\n";
-  out << "dds.points_skipped.bad_time " << points_bad_time_ << "\n";
-  out << "dds.poses_published " << poses_published_ << "\n";
-  out << "dds.pose_writes_failed " << pose_writes_failed_ << "\n";
-  out << "dds.object_lists_published " << object_lists_published_ << "\n";
-  out << "dds.object_list_writes_failed " << object_list_writes_failed_ << "\n";
-  out << "dds.take_latency_us.p50 " << percentile(take_latency_ns_, 0.5) / 1000 << "\n";
-  out << "dds.take_latency_us.p99 " << percentile(take_latency_ns_, 0.99) / 1000 << "\n";
-  out << "dds.take_latency_us.max " << percentile(take_latency_ns_, 1.0) / 1000 << "\n";
+    out.add("dds", "clouds_rejected." + std::string(ros::to_string(static_cast<ros::CloudReject>(i))),
+            clouds_rejected_[i]);
+  out.add("dds", "points_accepted", points_accepted_);
+  out.add("dds", "points_skipped.non_finite", points_non_finite_);
+  out.add("dds", "points_skipped.bad_ring", points_bad_ring_);
+  out.add("dds", "points_skipped.bad_time", points_bad_time_);
+  out.add("dds", "poses_published", poses_published_);
+  out.add("dds", "pose_writes_failed", pose_writes_failed_);
+  out.add("dds", "object_lists_published", object_lists_published_);
+  out.add("dds", "object_list_writes_failed", object_list_writes_failed_);
+  // Over the recent clouds kept for it (not since start).
+  for (const auto& [name, q] :
+       {std::pair{"take_latency_us.p50", 0.5}, {"take_latency_us.p99", 0.99}, {"take_latency_us.max", 1.0}})
+    out.add_measured("dds", name, static_cast<double>(percentile(take_latency_ns_, q) / 1000));
 }
 
 std::string DdsEdge::stats_line() const {

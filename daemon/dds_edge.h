@@ -21,6 +21,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "common/counter_list.h"
 #include "daemon/bad_input_log.h"
 #include "daemon/config.h"
 #include "dds/participant.h"
@@ -59,8 +60,8 @@ class DdsEdge {
   // For the other users of the bus in rsud (daemon/peer_bus.h): one participant per process.
   const dds::Participant& participant() const { return participant_; }
 
-  // Counters as "name value" lines (stats file) and as one log line.
-  void write_stats(std::ostream& out) const;
+  // Its counters (the stats file and the metrics) and one log line.
+  void report(CounterList& out) const;
   std::string stats_line() const;
 
  private:

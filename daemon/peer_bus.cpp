@@ -99,13 +99,13 @@ void PeerBus::on_sample(const Sample& s) {
   on_shared_(std::span<const std::uint8_t>(s.datagram._buffer, s.datagram._length), from);
 }
 
-void PeerBus::write_stats(std::ostream& out) const {
-  out << "peer_bus.shared " << shared_ << "\n";
-  out << "peer_bus.share_failed " << share_failed_ << "\n";
-  out << "peer_bus.own_echoes " << own_echoes_ << "\n";
-  out << "peer_bus.received " << received_ << "\n";
-  out << "peer_bus.received_malformed " << received_malformed_ << "\n";
-  out << "peer_bus.peers " << peers() << "\n";
+void PeerBus::report(CounterList& out) const {
+  out.add("peer_bus", "shared", shared_);
+  out.add("peer_bus", "share_failed", share_failed_);
+  out.add("peer_bus", "own_echoes", own_echoes_);
+  out.add("peer_bus", "received", received_);
+  out.add("peer_bus", "received_malformed", received_malformed_);
+  out.add_level("peer_bus", "peers", peers());
 }
 
 std::string PeerBus::stats_line() const {

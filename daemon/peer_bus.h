@@ -22,6 +22,7 @@
 #include <span>
 #include <string>
 
+#include "common/counter_list.h"
 #include "common/time.h"
 #include "daemon/bad_input_log.h"
 #include "daemon/config.h"
@@ -52,8 +53,8 @@ class PeerBus {
   // Other RSUs' announcement writers currently matched (our own writer is matched too, not counted).
   std::uint32_t peers() const;
 
-  // Counters as "name value" lines (stats file) and as one log line.
-  void write_stats(std::ostream& out) const;
+  // Its counters (the stats file and the metrics) and one log line.
+  void report(CounterList& out) const;
   std::string stats_line() const;
 
  private:

@@ -5,16 +5,18 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "daemon/dds_edge.h"
+#include "daemon/metrics_text.h"
 #include "daemon/peer_bus.h"
 #include "daemon/systemd_notify.h"
 #include "daemon/udp_socket.h"
 #include "edge/address_text.h"
 #include "edge/host_clock.h"
 #include "io/pcd_io.h"
+#include "io/text_file.h"
 
 namespace rsu::daemon {
 
@@ -44,11 +46,20 @@ RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, ConfigSource sou
       stats_timer_(io),
       input_timer_(io),
       object_list_timer_(io),
+      metrics_timer_(io),
       sensor_model_(config_.core.sensor_options.calibrated_model
                         ? config_.core.sensor_options.calibrated_model
                         : sensor_model_by_name(config_.core.sensor_model)) {}
 
 RsuDaemon::~RsuDaemon() = default;
+
+template <typename Step>
+core::LidarStepResult RsuDaemon::timed(Step step) {
+  const auto began = steady::now();
+  core::LidarStepResult result = step();
+  lidar_step_seconds_.observe(std::chrono::duration<double>(steady::now() - began).count());
+  return result;
+}
 
 TimeNs RsuDaemon::clock_now() const {
   return replaying_ ? replay_now_ : edge::host_now_ns();
@@ -85,6 +96,10 @@ void RsuDaemon::start() {
   }
   if (config_.logging.stats_interval_s > 0) {
     every(stats_timer_, seconds(config_.logging.stats_interval_s), &RsuDaemon::on_stats);
+  }
+  if (!config_.metrics.textfile.empty()) {
+    spdlog::info("Prometheus metrics in {} every {} s", config_.metrics.textfile, config_.metrics.interval_s);
+    every(metrics_timer_, seconds(config_.metrics.interval_s), &RsuDaemon::on_metrics);
   }
   receive_v2i();
   become_ready_if_possible();
@@ -150,8 +165,10 @@ void RsuDaemon::start_input() {
         [this](std::span<const LidarPoint> points, bool whole) {
           if (stopping_)
             return;
-          handle_lidar_result(whole ? core_.on_lidar_frame(points, clock_now())
-                                    : core_.on_lidar_points(points, clock_now()));
+          handle_lidar_result(timed([&] {
+            return whole ? core_.on_lidar_frame(points, clock_now())
+                         : core_.on_lidar_points(points, clock_now());
+          }));
         });
   }
 }
@@ -199,7 +216,11 @@ void RsuDaemon::receive_lidar(udp::socket& socket, std::array<std::uint8_t, 6553
 
 void RsuDaemon::on_lidar_payload(std::span<const std::uint8_t> payload, TimeNs arrival,
                                  const std::string& from) {
-  const auto result = core_.on_lidar_packet(payload, arrival);
+  const auto result = timed([&] { return core_.on_lidar_packet(payload, arrival); });
+  if (result.packet.kind == PacketKind::data) {
+    if (const core::SensorClockReport clock = core_.sensor_clock(); clock.known)
+      sensor_clock_offset_seconds_.observe(to_seconds(clock.offset_ns));
+  }
   if (result.packet.kind == PacketKind::refused) {
     ++lidar_packets_rejected_;
     bad_input_.report("lidar_packet:" + std::string(result.packet.reason),
@@ -344,7 +365,7 @@ void RsuDaemon::on_pcd_frame() {
   const TimeNs shift = clock_now() - last;
   for (LidarPoint& p : frame)
     p.time_ns += shift;
-  handle_lidar_result(core_.on_lidar_frame(frame, clock_now()));
+  handle_lidar_result(timed([&] { return core_.on_lidar_frame(frame, clock_now()); }));
 }
 
 void RsuDaemon::load_background_pcd() {
@@ -389,6 +410,7 @@ void RsuDaemon::send_corrections(const std::vector<core::OutgoingCorrection>& co
       continue;
     }
     ++corrections_sent_;
+    correction_latency_seconds_.observe(to_seconds(clock_now() - c.correction.sweep_time));
     spdlog::debug(
         "correction #{} to vehicle {} at {}:{}: ({:.3f}, {:.3f}) m, yaw {:.4f} rad, {} points, {} faces",
         c.correction.sequence, c.correction.vehicle_id, c.destination.address, c.destination.port,
@@ -559,14 +581,15 @@ void RsuDaemon::warn_of_kernel_drops(const char* what, udp::socket& socket, std:
 
 void RsuDaemon::log_counters(bool only_nonzero) const {
   std::string line;
-  for (const auto& [name, value] : core_.counters()) {
-    if (only_nonzero && value == 0)
-      continue;
-    line += (line.empty() ? "" : " ") + name + "=" + std::to_string(value);
+  CounterList list;
+  core_.report(list);
+  for (const Stat& stat : list.stats()) {
+    if (stat.kind == StatKind::kMeasured)
+      line += fmt::format(" {}={}", stat.name, stat.measured);
+    else if (!only_nonzero || stat.count != 0)
+      line += fmt::format(" {}={}", stat.name, stat.count);
   }
-  for (const auto& [name, value] : core_.gauges())
-    line += " " + name + "=" + std::to_string(value);
-  spdlog::info("stats: corrections_sent={} correction_sends_failed={} {}", corrections_sent_,
+  spdlog::info("stats: corrections_sent={} correction_sends_failed={}{}", corrections_sent_,
                correction_sends_failed_, line);
   if (dds_)
     spdlog::info("stats: {}", dds_->stats_line());
@@ -574,59 +597,93 @@ void RsuDaemon::log_counters(bool only_nonzero) const {
     spdlog::info("stats: {}", peers_->stats_line());
 }
 
+CounterList RsuDaemon::stats() {
+  CounterList out;
+  // A replay's uptime is on the capture's clock, as everything else it writes.
+  out.add_measured("", "uptime_s",
+                   replaying_ ? to_seconds(clock_now() - clock_started_)
+                              : std::chrono::duration<double>(steady::now() - started_).count());
+  out.add_level("", "ready", ready_ ? 1 : 0);
+  out.add("", "corrections_sent", corrections_sent_);
+  out.add("", "correction_sends_failed", correction_sends_failed_);
+  out.add("", "lidar_packets_rejected", lidar_packets_rejected_);
+  core_.report(out);
+  // Datagrams the kernel dropped before rsud could read them (its socket buffer was full): what was
+  // sent is what rsud counted plus these.
+  report_kernel_drops(out, "v2i", v2i_socket_);
+  report_kernel_drops(out, "lidar", lidar_socket_);
+  if (capture_) {
+    const PcapSkipped skipped = capture_->skipped();
+    out.add("capture", "records", capture_->records());
+    out.add("capture", "lidar_datagrams", capture_counts_.lidar_datagrams);
+    out.add("capture", "other_datagrams", capture_counts_.other_datagrams);
+    out.add("capture", "not_ipv4", skipped.not_ipv4);
+    out.add("capture", "not_udp", skipped.not_udp);
+    out.add("capture", "fragmented", skipped.fragmented);
+    out.add("capture", "malformed", skipped.malformed);
+    out.add("capture", "reassembled", capture_->reassembled());
+    out.add("capture", "ip_lengths_repaired", capture_->ip_lengths_repaired());
+    out.add("capture", "loops", capture_counts_.loops);
+    out.add_level("capture", "cut_off", capture_->error() != PcapError::none ? 1 : 0);
+  }
+  if (dds_)
+    dds_->report(out);
+  if (peers_)
+    peers_->report(out);
+  return out;
+}
+
 void RsuDaemon::write_stats_file() {
   if (config_.stats_file.empty())
     return;
-  const std::string tmp = config_.stats_file + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    if (!out)
-      return;
-    // A replay's uptime is on the capture's clock, as everything else it writes.
-    out << "uptime_s "
-        << (replaying_ ? to_seconds(clock_now() - clock_started_)
-                       : std::chrono::duration<double>(steady::now() - started_).count())
-        << "\n";
-    out << "ready " << (ready_ ? 1 : 0) << "\n";
-    out << "corrections_sent " << corrections_sent_ << "\n";
-    out << "correction_sends_failed " << correction_sends_failed_ << "\n";
-    out << "lidar_packets_rejected " << lidar_packets_rejected_ << "\n";
-    for (const auto& [name, value] : core_.counters())
-      out << name << " " << value << "\n";
-    for (const auto& [name, value] : core_.gauges())
-      out << name << " " << value << "\n";
-    // Datagrams the kernel dropped before rsud could read them (its socket buffer was full): what was
-    // sent is what rsud counted plus these.
-    write_kernel_drops(out, "v2i", v2i_socket_);
-    write_kernel_drops(out, "lidar", lidar_socket_);
-    if (capture_) {
-      const PcapSkipped skipped = capture_->skipped();
-      out << "capture.records " << capture_->records() << "\n";
-      out << "capture.lidar_datagrams " << capture_counts_.lidar_datagrams << "\n";
-      out << "capture.other_datagrams " << capture_counts_.other_datagrams << "\n";
-      out << "capture.not_ipv4 " << skipped.not_ipv4 << "\n";
-      out << "capture.not_udp " << skipped.not_udp << "\n";
-      out << "capture.fragmented " << skipped.fragmented << "\n";
-      out << "capture.malformed " << skipped.malformed << "\n";
-      out << "capture.reassembled " << capture_->reassembled() << "\n";
-      out << "capture.ip_lengths_repaired " << capture_->ip_lengths_repaired() << "\n";
-      out << "capture.loops " << capture_counts_.loops << "\n";
-      out << "capture.cut_off " << (capture_->error() != PcapError::none ? 1 : 0) << "\n";
-    }
-    if (dds_)
-      dds_->write_stats(out);
-    if (peers_)
-      peers_->write_stats(out);
+  std::ostringstream text;
+  const CounterList list = stats();
+  for (const Stat& stat : list.stats()) {
+    text << stat.name << " ";
+    if (stat.kind == StatKind::kMeasured)
+      text << stat.measured << "\n";
+    else
+      text << stat.count << "\n";
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, config_.stats_file, ec);
+  try {
+    io::write_file_atomically(config_.stats_file, text.str(), 0644);
+  } catch (const io::FileError& e) {
+    bad_input_.report("stats_file_write", e.what());
+  }
 }
 
-void RsuDaemon::write_kernel_drops(std::ostream& out, const char* prefix, udp::socket& socket) {
+void RsuDaemon::on_metrics() {
+  write_metrics();
+}
+
+void RsuDaemon::write_metrics() {
+  if (config_.metrics.textfile.empty())
+    return;
+  const NamedHistogram histograms[] = {
+      {"lidar_step_seconds",
+       "Host time rsud's core took for one LiDAR input: a packet, a DDS batch or a whole frame, its "
+       "clustering, fits and corrections included",
+       &lidar_step_seconds_},
+      {"correction_latency_seconds",
+       "From the time the LiDAR swept the vehicle to the correction's send, on the run's clock",
+       &correction_latency_seconds_},
+      {"sensor_clock_offset_seconds",
+       "The LiDAR's clock behind the host's (host - sensor, transit included), as estimated at each data "
+       "packet",
+       &sensor_clock_offset_seconds_},
+  };
+  try {
+    io::write_file_atomically(config_.metrics.textfile, prometheus_text(stats(), histograms), 0644);
+  } catch (const io::FileError& e) {
+    bad_input_.report("metrics_write", e.what());
+  }
+}
+
+void RsuDaemon::report_kernel_drops(CounterList& out, const char* area, udp::socket& socket) {
   if (!socket.is_open())
     return;
   if (const auto drops = kernel_drops(socket.native_handle()))
-    out << prefix << ".kernel_drops " << *drops << "\n";
+    out.add(area, "kernel_drops", *drops);
 }
 
 // ---- signals --------------------------------------------------------------------------------------
@@ -698,6 +755,7 @@ void RsuDaemon::drain_and_stop() {
   send_corrections(last.corrections);
   log_counters(true);
   write_stats_file();
+  write_metrics();
   spdlog::info("stopped: {} corrections sent ({} drained at shutdown)", corrections_sent_,
                last.corrections.size());
   boost::system::error_code ignored;
@@ -706,7 +764,7 @@ void RsuDaemon::drain_and_stop() {
   lidar_socket_.close(ignored);
   auxiliary_socket_.close(ignored);
   for (auto* t : {&housekeeping_timer_, &watchdog_timer_, &advertise_timer_, &stats_timer_, &input_timer_,
-                  &object_list_timer_})
+                  &object_list_timer_, &metrics_timer_})
     t->cancel();
   exit_code_ = 0;
   io_.stop();

@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "common/counter_list.h"
+#include "common/histogram.h"
 #include "daemon/bad_input_log.h"
 #include "daemon/config.h"
 #include "io/capture_file.h"
@@ -78,10 +80,17 @@ class RsuDaemon {
   void on_signal(int signal_number);
   void reload();
   void drain_and_stop();
+  // Everything rsud counts and measures, in one list (the stats file and the metrics print it).
+  CounterList stats();
   void write_stats_file();
+  void write_metrics();
+  void on_metrics();
+  // A LiDAR input step through the core, its processing time observed.
+  template <typename Step>
+  core::LidarStepResult timed(Step step);
   static void warn_of_kernel_drops(const char* what, boost::asio::ip::udp::socket& socket,
                                    std::uint64_t& reported);
-  static void write_kernel_drops(std::ostream& out, const char* prefix, boost::asio::ip::udp::socket& socket);
+  static void report_kernel_drops(CounterList& out, const char* area, boost::asio::ip::udp::socket& socket);
   // The run's clock: the host's, or during a capture replay the capture's.
   TimeNs clock_now() const;
   void log_counters(bool only_nonzero) const;
@@ -111,6 +120,7 @@ class RsuDaemon {
   boost::asio::steady_timer stats_timer_;
   boost::asio::steady_timer input_timer_;
   boost::asio::steady_timer object_list_timer_;
+  boost::asio::steady_timer metrics_timer_;
 
   std::optional<SensorModel> sensor_model_;  // the Velodyne tables in use (none for other sensors)
   std::unique_ptr<DdsEdge> dds_;             // when dds.enabled (after bad_input_: it reports there)
@@ -146,6 +156,15 @@ class RsuDaemon {
   std::uint64_t corrections_sent_ = 0;
   std::uint64_t correction_sends_failed_ = 0;
   std::uint64_t lidar_packets_rejected_ = 0;
+  // The metrics' histograms (seconds). Bounds: a packet takes microseconds, a batch that fits vehicles
+  // milliseconds; a correction leaves well within a rotation (0.1 s) of its sweep; a sensor on the
+  // host's clock is behind by its transit (sub-millisecond), one that is not by anything.
+  Histogram lidar_step_seconds_{
+      {1e-5, 2.5e-5, 5e-5, 1e-4, 2.5e-4, 5e-4, 1e-3, 2.5e-3, 5e-3, 0.01, 0.025, 0.05, 0.1, 0.25, 1.0}};
+  Histogram correction_latency_seconds_{
+      {0.005, 0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.5, 1.0}};
+  Histogram sensor_clock_offset_seconds_{{-1.0, -0.1, -0.01, -0.005, -0.002, -0.001, -5e-4, -1e-4, 0.0, 1e-4,
+                                          5e-4, 1e-3, 2e-3, 5e-3, 0.01, 0.1, 1.0}};
   std::uint64_t v2i_kernel_drops_ = 0;  // as last warned about
   std::uint64_t lidar_kernel_drops_ = 0;
   steady::time_point started_ = steady::now();

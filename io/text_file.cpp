@@ -1,5 +1,9 @@
 #include "io/text_file.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -26,6 +30,35 @@ std::string read_whole_file(const std::string& path) {
   if (std::ferror(file.get()))
     throw FileError(path, "cannot read: " + errno_text());
   return text;
+}
+
+void write_file_atomically(const std::string& path, std::string_view text, unsigned mode) {
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0)
+    throw FileError(tmp, "cannot open: " + errno_text());
+  bool ok = ::fchmod(fd, static_cast<mode_t>(mode)) == 0;
+  std::string problem = ok ? "" : "cannot set its mode: " + errno_text();
+  for (std::size_t done = 0; ok && done < text.size();) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n <= 0) {
+      ok = false;
+      problem = "cannot write: " + errno_text();
+      break;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  if (ok && ::rename(tmp.c_str(), path.c_str()) != 0) {
+    ok = false;
+    problem = "cannot rename to " + path + ": " + errno_text();
+  }
+  if (!ok) {
+    ::unlink(tmp.c_str());
+    throw FileError(tmp, problem);
+  }
 }
 
 }  // namespace rsu::io

@@ -5,6 +5,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace rsu::io {
 
@@ -25,5 +26,10 @@ std::string errno_text();
 
 // The whole file. Throws FileError "<path>: cannot open: <reason>" (or "cannot read: <reason>").
 std::string read_whole_file(const std::string& path);
+
+// Replaces `path` with `text` atomically: written to "<path>.tmp" with permissions `mode` (whatever the
+// umask), then renamed over it, so that a reader sees the old file or the new one, never a part.
+// Throws FileError "<path>.tmp: cannot open: <reason>" (or write, rename).
+void write_file_atomically(const std::string& path, std::string_view text, unsigned mode);
 
 }  // namespace rsu::io

@@ -143,17 +143,17 @@ void AnnouncementIntake::report(CounterList& out) const {
   for (const auto verdict : {v2i::AuthVerdict::kAccepted, v2i::AuthVerdict::kAcceptedUnverified})
     out.add("auth", to_string(verdict), auth.count(verdict));
   out.add_all("auth", auth, v2i::AuthVerdict::kUnsigned);
-  out.add("auth", "signers_tracked", authenticator_.replay().tracked());
+  out.add_level("auth", "signers_tracked", authenticator_.replay().tracked());
   out.add("auth", "sequence_restarts", authenticator_.replay().stats().restarts);
   out.add("auth", "signers_evicted", authenticator_.replay().stats().evictions);
-  out.add("auth", "trusted_keys", authenticator_.trust_list().size());
+  out.add_level("auth", "trusted_keys", authenticator_.trust_list().size());
   // 1 while running without signatures: local development only (the daemon also warns).
-  out.add("security", "insecure_mode", authenticator_.mode() == v2i::SecurityMode::kInsecure ? 1 : 0);
+  out.add_level("security", "insecure_mode", authenticator_.mode() == v2i::SecurityMode::kInsecure ? 1 : 0);
   out.add_all("validation", validator_.counts(),
               v2i::AnnouncementReason::kUnsupportedVersion);  // after kValid
   out.add_all("registry", registry_.stats().outcomes);
   out.add("registry", "expired", registry_.stats().expired);
-  out.add("registry", "vehicles", registry_.size());
+  out.add_level("registry", "vehicles", registry_.size());
 }
 
 }  // namespace rsu::core

@@ -115,13 +115,6 @@ SensorClockReport PacketIntake::sensor_clock() const {
   return r;
 }
 
-std::vector<std::pair<std::string, double>> PacketIntake::gauges() const {
-  const auto offset = sensor_clock_.offset_ns();
-  return {{"clock.offset_ms", offset ? static_cast<double>(*offset) * 1e-6 : std::nan("")},
-          {"clock.steps", static_cast<double>(sensor_clock_.steps())},
-          {"lidar.rotation_hz", decoder_->geometry().rotation_hz}};
-}
-
 PacketIntake PacketIntake::reloaded(const RsuCoreConfig& next) && {
   PacketIntake fresh(next);
   if (model_ == next.sensor_model && options_ == next.sensor_options)
@@ -137,6 +130,14 @@ void PacketIntake::report(CounterList& out) const {
     else
       out.add("packet", name, value);
   }
+}
+
+void PacketIntake::report_clock(CounterList& out) const {
+  // host - sensor, transit included (NaN before any packet); steps: jumps of the sensor's clock.
+  const auto offset = sensor_clock_.offset_ns();
+  out.add_measured("clock", "offset_ms", offset ? static_cast<double>(*offset) * 1e-6 : std::nan(""));
+  out.add("clock", "steps", sensor_clock_.steps());
+  out.add_measured("lidar", "rotation_hz", decoder_->geometry().rotation_hz);
 }
 
 }  // namespace rsu::core

@@ -56,8 +56,6 @@ class PacketIntake {
   // crossing the tolerance (and what is then done).
   std::vector<std::string> take_notices();
   SensorClockReport sensor_clock() const;
-  // clock.offset_ms (NaN before any packet), clock.steps, lidar.rotation_hz.
-  std::vector<std::pair<std::string, double>> gauges() const;
   const PacketOrderStats& order_stats() const { return order_.stats(); }
 
   // This intake under `next` (SIGHUP): the decoder (its counters and measured rate) is kept when the
@@ -67,6 +65,8 @@ class PacketIntake {
   // The decoder's counters: packet.<outcome> and decoder.<note> (the reorder stage's are in
   // lidar_stats.h).
   void report(CounterList& out) const;
+  // The sensor clock (clock.offset_ms, clock.steps) and lidar.rotation_hz.
+  void report_clock(CounterList& out) const;
 
  private:
   // Measures the clock on a data packet and says whether its points may be used (time_source sensor,

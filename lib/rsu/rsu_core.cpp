@@ -276,12 +276,17 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
   return summary;
 }
 
-std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
-  CounterList out;
+void RsuCore::report(CounterList& out) const {
   announcements_.report(out);
   packets_.report(out);
-  report(packets_.order_stats(), clusterer_.stats(), lidar_stats_, out);
-  return out.take();
+  core::report(packets_.order_stats(), clusterer_.stats(), lidar_stats_, out);
+  packets_.report_clock(out);
+}
+
+std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
+  CounterList out;
+  report(out);
+  return out.entries();
 }
 
 }  // namespace rsu::core

@@ -107,7 +107,10 @@ class RsuCore {
   // The encoded RsuAdvertisement, signed in signed mode, generated at `now` (empty if encoding failed).
   std::vector<std::uint8_t> advertisement(TimeNs now) { return corrections_.advertisement(now); }
 
-  // Every counter as ("area.reason", value), zeros included, in a stable order: for logs and stats.
+  // Everything counted and measured, zeros included, in a stable order, each with its kind: for the
+  // stats file, the metrics and logs.
+  void report(CounterList& out) const;
+  // The counts and levels of report() as ("area.reason", value).
   std::vector<std::pair<std::string, std::uint64_t>> counters() const;
 
   const RsuCoreConfig& config() const { return config_; }
@@ -125,9 +128,6 @@ class RsuCore {
   // crossing the tolerance (and what RsuCore then does).
   std::vector<std::string> take_lidar_notices() { return packets_.take_notices(); }
   SensorClockReport sensor_clock() const { return packets_.sensor_clock(); }
-  // Measured values (not counts) as ("area.name", value), in a stable order: the sensor clock's offset
-  // in ms (NaN before any packet) and the measured rotation rate.
-  std::vector<std::pair<std::string, double>> gauges() const { return packets_.gauges(); }
   const PacketOrderStats& packet_order_stats() const { return packets_.order_stats(); }
   const perception::SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
   const LidarStats& lidar_stats() const { return lidar_stats_; }
