@@ -157,11 +157,11 @@ void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path
                 "clock_tolerance_ms", "mount", "input", "max_packet_age_ms"});
   const YamlField model = f.required("model");
   c.core.sensor_model = model.text();
-  if (!is_decodable_model(c.core.sensor_model))
+  if (!lidar::is_decodable_model(c.core.sensor_model))
     model.fail("unknown LiDAR model \"" + c.core.sensor_model + "\" (expected " +
-               std::string(kDecodableModels) + ")");
+               std::string(lidar::kDecodableModels) + ")");
   // An Ouster's metadata JSON (its beams and packet format); read by load_lidar_files().
-  const bool ouster = ouster::is_ouster_model(c.core.sensor_model);
+  const bool ouster = lidar::ouster::is_ouster_model(c.core.sensor_model);
   if (f.has("metadata")) {
     if (!ouster)
       f.child("metadata")
@@ -173,14 +173,14 @@ void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path
   }
   // A Velodyne unit's calibration file; read (and applied) by load_lidar_files().
   if (f.has("calibration")) {
-    if (!sensor_model_by_name(c.core.sensor_model))
+    if (!lidar::sensor_model_by_name(c.core.sensor_model))
       f.child("calibration").fail("a Velodyne calibration file; the " + c.core.sensor_model + " takes none");
     c.sensor_files.calibration = path_of(f.child("calibration"), base);
   }
-  LidarDecoderOptions& sensor = c.core.sensor_options;
+  lidar::LidarDecoderOptions& sensor = c.core.sensor_options;
   if (f.has("returns")) {
     const YamlField r = f.child("returns");
-    const auto selection = return_selection_by_name(r.text());
+    const auto selection = lidar::return_selection_by_name(r.text());
     if (!selection)
       r.fail("expected both, strongest or last, got \"" + r.text() + "\"");
     sensor.returns = *selection;
@@ -209,7 +209,7 @@ void read_lidar(const YamlField& f, DaemonConfig& c, const std::filesystem::path
   if (auto* u = std::get_if<UdpInput>(&c.input)) {
     c.core.packet_order.depth = u->reorder_packets;
     if (u->port == 0 && !ouster)
-      u->port = kVelodyneDataPort;  // an Ouster's comes from its metadata (rsud resolves it)
+      u->port = lidar::kVelodyneDataPort;  // an Ouster's comes from its metadata (rsud resolves it)
   }
   if (f.has("max_packet_age_ms")) {
     const double ms = f.non_negative_or("max_packet_age_ms", 0.0);
@@ -487,7 +487,7 @@ void load_security(DaemonConfig& c) {
 }
 
 void load_lidar_files(DaemonConfig& c) {
-  LidarDecoderOptions& o = c.core.sensor_options;
+  lidar::LidarDecoderOptions& o = c.core.sensor_options;
   if (!o.metadata_source.empty()) {
     try {
       o.metadata_text = io::read_text_file(o.metadata_source);
@@ -497,7 +497,7 @@ void load_lidar_files(DaemonConfig& c) {
   }
   if (!c.sensor_files.calibration.empty()) {
     try {
-      o.calibrated_model = io::apply_velodyne_calibration(*sensor_model_by_name(c.core.sensor_model),
+      o.calibrated_model = io::apply_velodyne_calibration(*lidar::sensor_model_by_name(c.core.sensor_model),
                                                           io::read_text_file(c.sensor_files.calibration),
                                                           c.sensor_files.calibration);
     } catch (const io::YamlError& e) {

@@ -11,10 +11,10 @@
 #include <variant>
 #include <vector>
 
+#include "core/rsu_core_config.h"
 #include "dds/participant.h"
 #include "dds/qos_config.h"
 #include "ros/pointcloud2_layout.h"
-#include "rsu/rsu_core_config.h"
 
 namespace rsu::daemon {
 

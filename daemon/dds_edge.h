@@ -22,13 +22,13 @@
 #include <vector>
 
 #include "common/counter_list.h"
+#include "core/rsu_core.h"
 #include "daemon/bad_input_log.h"
 #include "daemon/config.h"
 #include "dds/participant.h"
 #include "dds/typed_entities.h"
 #include "geometry_msgs.h"
 #include "lidar/point.h"
-#include "rsu/rsu_core.h"
 #include "rsu_msgs.h"
 #include "sensor_msgs.h"
 
@@ -37,7 +37,7 @@ namespace rsu::daemon {
 class DdsEdge {
  public:
   // Points of one PointCloud2, sensor frame; `whole_rotation` as configured for the input.
-  using CloudHandler = std::function<void(std::span<const LidarPoint> points, bool whole_rotation)>;
+  using CloudHandler = std::function<void(std::span<const lidar::LidarPoint> points, bool whole_rotation)>;
 
   // Creates the participant and the object-list writer. Throws dds::DdsError / std::runtime_error.
   DdsEdge(boost::asio::io_context& io, const DdsConfig& config, std::uint64_t rsu_id, BadInputLog& bad_input);
@@ -96,7 +96,7 @@ class DdsEdge {
   std::unique_ptr<dds::Topic> cloud_topic_;
   std::atomic<bool> take_posted_{false};
   std::unique_ptr<dds::Reader<PointCloud2>> cloud_reader_;  // last: deleted first (its listener posts)
-  std::vector<LidarPoint> points_;                          // reused cloud after cloud
+  std::vector<lidar::LidarPoint> points_;                   // reused cloud after cloud
 
   // Counters (stats file); every rejection also goes to the rate-limited bad-input log.
   std::uint64_t clouds_received_ = 0;

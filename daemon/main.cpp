@@ -12,12 +12,12 @@
 #include <iostream>
 #include <variant>
 
+#include "core/rsu_core.h"
 #include "daemon/config.h"
 #include "daemon/logging.h"
 #include "daemon/rsu_daemon.h"
 #include "edge/address_text.h"
 #include "io/capture_file.h"
-#include "rsu/rsu_core.h"
 
 #ifndef RSUD_VERSION
 #define RSUD_VERSION "unknown"

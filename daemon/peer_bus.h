@@ -24,11 +24,11 @@
 
 #include "common/counter_list.h"
 #include "common/time.h"
+#include "core/rsu_core.h"
 #include "daemon/bad_input_log.h"
 #include "daemon/config.h"
 #include "dds/participant.h"
 #include "dds/typed_entities.h"
-#include "rsu/rsu_core.h"
 #include "rsu_msgs.h"
 
 namespace rsu::daemon {

@@ -49,7 +49,7 @@ RsuDaemon::RsuDaemon(asio::io_context& io, DaemonConfig config, ConfigSource sou
       metrics_timer_(io),
       sensor_model_(config_.core.sensor_options.calibrated_model
                         ? config_.core.sensor_options.calibrated_model
-                        : sensor_model_by_name(config_.core.sensor_model)) {}
+                        : lidar::sensor_model_by_name(config_.core.sensor_model)) {}
 
 RsuDaemon::~RsuDaemon() = default;
 
@@ -133,7 +133,7 @@ void RsuDaemon::every(asio::steady_timer& timer, steady::duration period, void (
 
 void RsuDaemon::start_input() {
   if (const auto* u = std::get_if<UdpInput>(&config_.input)) {
-    const SensorPorts ports = core_.lidar_decoder().default_ports();
+    const lidar::SensorPorts ports = core_.lidar_decoder().default_ports();
     const auto address = edge::parse_ip_address(u->bind_address, "lidar.input.udp.bind_address");
     const udp::endpoint endpoint(address, u->port != 0 ? u->port : ports.data);
     bind_udp(lidar_socket_, endpoint, "LiDAR");
@@ -162,7 +162,7 @@ void RsuDaemon::start_input() {
   } else if (const auto* d = std::get_if<DdsPointCloud2Input>(&config_.input)) {
     dds_->start_input(
         *d, sensor_model_ ? std::span<const double>(sensor_model_->elevation_deg) : std::span<const double>(),
-        [this](std::span<const LidarPoint> points, bool whole) {
+        [this](std::span<const lidar::LidarPoint> points, bool whole) {
           if (stopping_)
             return;
           handle_lidar_result(timed([&] {
@@ -217,11 +217,11 @@ void RsuDaemon::receive_lidar(udp::socket& socket, std::array<std::uint8_t, 6553
 void RsuDaemon::on_lidar_payload(std::span<const std::uint8_t> payload, TimeNs arrival,
                                  const std::string& from) {
   const auto result = timed([&] { return core_.on_lidar_packet(payload, arrival); });
-  if (result.packet.kind == PacketKind::data) {
+  if (result.packet.kind == lidar::PacketKind::data) {
     if (const core::SensorClockReport clock = core_.sensor_clock(); clock.known)
       sensor_clock_offset_seconds_.observe(to_seconds(clock.offset_ns));
   }
-  if (result.packet.kind == PacketKind::refused) {
+  if (result.packet.kind == lidar::PacketKind::refused) {
     ++lidar_packets_rejected_;
     bad_input_.report("lidar_packet:" + std::string(result.packet.reason),
                       std::to_string(payload.size()) + " bytes from " + from);
@@ -238,7 +238,7 @@ void RsuDaemon::start_capture() {
   } catch (const io::CaptureError& e) {
     throw std::runtime_error(std::string("lidar.input.pcap: ") + e.what());
   }
-  const SensorPorts ports = core_.lidar_decoder().default_ports();
+  const lidar::SensorPorts ports = core_.lidar_decoder().default_ports();
   capture_data_port_ = input.port != 0 ? input.port : ports.data;
   capture_auxiliary_port_ = input.auxiliary_port != 0 ? input.auxiliary_port : ports.auxiliary;
   if (!next_capture_datagram()) {
@@ -259,7 +259,7 @@ void RsuDaemon::start_capture() {
 }
 
 bool RsuDaemon::next_capture_datagram() {
-  UdpDatagram d;
+  lidar::UdpDatagram d;
   if (!capture_->next(d)) {
     capture_next_.reset();
     return false;
@@ -268,7 +268,7 @@ bool RsuDaemon::next_capture_datagram() {
   return true;
 }
 
-void RsuDaemon::replay_datagram(const UdpDatagram& datagram) {
+void RsuDaemon::replay_datagram(const lidar::UdpDatagram& datagram) {
   replay_now_ = datagram.time_ns + replay_shift_;
   capture_last_ns_ = datagram.time_ns;
   // The output-changing housekeeping on the capture's clock, every 500 ms of it.
@@ -306,10 +306,10 @@ void RsuDaemon::replay_step() {
         return;
       }
     }
-    const UdpDatagram datagram = std::move(*capture_next_);
+    const lidar::UdpDatagram datagram = std::move(*capture_next_);
     next_capture_datagram();
     replay_datagram(datagram);
-    if (!capture_next_ && input.loop && capture_->error() == PcapError::none) {
+    if (!capture_next_ && input.loop && capture_->error() == lidar::PcapError::none) {
       // Again from the start, the clock moved on by whole hours so that it never runs backwards and
       // the sensor's microseconds-past-the-hour resolve as before.
       const TimeNs span = capture_last_ns_ - capture_first_ns_ + kNsPerSecond;
@@ -331,8 +331,8 @@ void RsuDaemon::replay_step() {
 }
 
 void RsuDaemon::finish_capture() {
-  const PcapSkipped skipped = capture_->skipped();
-  if (capture_->error() != PcapError::none) {
+  const lidar::PcapSkipped skipped = capture_->skipped();
+  if (capture_->error() != lidar::PcapError::none) {
     spdlog::warn("the capture {} ends where it stops being readable ({}): a recording cut off mid-record",
                  capture_->path(), to_string(capture_->error()));
   }
@@ -355,21 +355,21 @@ void RsuDaemon::on_pcd_frame() {
   if (pcd_frames_.empty())
     return;
   // Each replayed frame is given the host clock: its last point is "now", the rest keep their spacing.
-  std::vector<LidarPoint> frame = pcd_frames_[next_pcd_frame_ % pcd_frames_.size()];
+  std::vector<lidar::LidarPoint> frame = pcd_frames_[next_pcd_frame_ % pcd_frames_.size()];
   ++next_pcd_frame_;
   if (frame.empty())
     return;
   TimeNs last = frame.front().time_ns;
-  for (const LidarPoint& p : frame)
+  for (const lidar::LidarPoint& p : frame)
     last = std::max(last, p.time_ns);
   const TimeNs shift = clock_now() - last;
-  for (LidarPoint& p : frame)
+  for (lidar::LidarPoint& p : frame)
     p.time_ns += shift;
   handle_lidar_result(timed([&] { return core_.on_lidar_frame(frame, clock_now()); }));
 }
 
 void RsuDaemon::load_background_pcd() {
-  std::vector<std::vector<LidarPoint>> frames;
+  std::vector<std::vector<lidar::LidarPoint>> frames;
   for (const std::string& file : config_.background_pcd_files) {
     try {
       frames.push_back(io::read_pcd(file));
@@ -613,7 +613,7 @@ CounterList RsuDaemon::stats() {
   report_kernel_drops(out, "v2i", v2i_socket_);
   report_kernel_drops(out, "lidar", lidar_socket_);
   if (capture_) {
-    const PcapSkipped skipped = capture_->skipped();
+    const lidar::PcapSkipped skipped = capture_->skipped();
     out.add("capture", "records", capture_->records());
     out.add("capture", "lidar_datagrams", capture_counts_.lidar_datagrams);
     out.add("capture", "other_datagrams", capture_counts_.other_datagrams);
@@ -624,7 +624,7 @@ CounterList RsuDaemon::stats() {
     out.add("capture", "reassembled", capture_->reassembled());
     out.add("capture", "ip_lengths_repaired", capture_->ip_lengths_repaired());
     out.add("capture", "loops", capture_counts_.loops);
-    out.add_level("capture", "cut_off", capture_->error() != PcapError::none ? 1 : 0);
+    out.add_level("capture", "cut_off", capture_->error() != lidar::PcapError::none ? 1 : 0);
   }
   if (dds_)
     dds_->report(out);

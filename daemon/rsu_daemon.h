@@ -1,4 +1,4 @@
-// rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/rsu). One thread, one
+// rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One thread, one
 // io_context: sockets (V2I announcements in / corrections out, Velodyne packets in), timers (registry
 // expiry, watchdog, advertisement, log summaries, PCD replay pacing) and signals (SIGHUP
 // reload, SIGTERM / SIGINT drain). Everything it decides is RsuCore's; this file only moves bytes,
@@ -20,11 +20,11 @@
 
 #include "common/counter_list.h"
 #include "common/histogram.h"
+#include "core/rsu_core.h"
 #include "daemon/bad_input_log.h"
 #include "daemon/config.h"
 #include "io/capture_file.h"
 #include "lidar/sensor_model.h"
-#include "rsu/rsu_core.h"
 
 namespace rsu::daemon {
 
@@ -70,7 +70,7 @@ class RsuDaemon {
   // Capture replay (lidar.input.pcap): the run's clock is the capture's (file comment of config.h).
   void start_capture();
   void replay_step();
-  void replay_datagram(const UdpDatagram& datagram);
+  void replay_datagram(const lidar::UdpDatagram& datagram);
   bool next_capture_datagram();
   void finish_capture();
   // What the periodic housekeeping does that changes the output (registry expiry, DDS bookkeeping):
@@ -122,13 +122,13 @@ class RsuDaemon {
   boost::asio::steady_timer object_list_timer_;
   boost::asio::steady_timer metrics_timer_;
 
-  std::optional<SensorModel> sensor_model_;  // the Velodyne tables in use (none for other sensors)
-  std::unique_ptr<DdsEdge> dds_;             // when dds.enabled (after bad_input_: it reports there)
-  std::unique_ptr<PeerBus> peers_;           // when dds.peers.enabled (after dds_: it uses its participant)
-  std::uint32_t peers_seen_ = 0;             // other RSUs on the peer bus at the last housekeeping
+  std::optional<lidar::SensorModel> sensor_model_;  // the Velodyne tables in use (none for other sensors)
+  std::unique_ptr<DdsEdge> dds_;                    // when dds.enabled (after bad_input_: it reports there)
+  std::unique_ptr<PeerBus> peers_;  // when dds.peers.enabled (after dds_: it uses its participant)
+  std::uint32_t peers_seen_ = 0;    // other RSUs on the peer bus at the last housekeeping
 
   // PCD replay
-  std::vector<std::vector<LidarPoint>> pcd_frames_;
+  std::vector<std::vector<lidar::LidarPoint>> pcd_frames_;
   std::size_t next_pcd_frame_ = 0;
   // Capture replay
   struct CaptureCounts {
@@ -137,7 +137,7 @@ class RsuDaemon {
     std::uint64_t loops = 0;
   };
   std::unique_ptr<io::CaptureFile> capture_;
-  std::optional<UdpDatagram> capture_next_;  // read, not yet replayed (recorded pace)
+  std::optional<lidar::UdpDatagram> capture_next_;  // read, not yet replayed (recorded pace)
   std::uint16_t capture_data_port_ = 0;
   std::uint16_t capture_auxiliary_port_ = 0;
   CaptureCounts capture_counts_;

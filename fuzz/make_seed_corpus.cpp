@@ -133,21 +133,23 @@ void write_rsu(const fs::path& dir) {
 }
 
 // Packets of a spinning sensor with every range a smooth function of the firing, as a scene would give.
-std::vector<Bytes> packets(const rsu::SensorModel& model, rsu::TimeNs t0, int count, std::int64_t first) {
-  const rsu::FiringSchedule schedule(model, t0);
+std::vector<Bytes> packets(const rsu::lidar::SensorModel& model, rsu::TimeNs t0, int count,
+                           std::int64_t first) {
+  const rsu::lidar::FiringSchedule schedule(model, t0);
   std::vector<Bytes> out;
   for (int k = 0; k < count; ++k) {
-    rsu::PacketReturns r;
+    rsu::lidar::PacketReturns r;
     r.blocks = schedule.packet(first + k);
-    for (const rsu::Firing& f : schedule.firings(r.blocks)) {
+    for (const rsu::lidar::Firing& f : schedule.firings(r.blocks)) {
       const auto b = static_cast<std::size_t>(f.block);
       const auto c = static_cast<std::size_t>(f.channel);
       r.distance_raw[b][c] =
-          (c % 7 == 3) ? 0 : rsu::quantize_distance(model, 5.0 + 0.5 * static_cast<double>(c));
+          (c % 7 == 3) ? 0 : rsu::lidar::quantize_distance(model, 5.0 + 0.5 * static_cast<double>(c));
       r.reflectivity[b][c] = static_cast<std::uint8_t>(10 * c);
     }
-    Bytes bytes(rsu::kPacketBytes);
-    rsu::encode_packet(model, r, std::span<std::uint8_t, rsu::kPacketBytes>(bytes.data(), rsu::kPacketBytes));
+    Bytes bytes(rsu::lidar::kPacketBytes);
+    rsu::lidar::encode_packet(
+        model, r, std::span<std::uint8_t, rsu::lidar::kPacketBytes>(bytes.data(), rsu::lidar::kPacketBytes));
     out.push_back(std::move(bytes));
   }
   return out;
@@ -156,16 +158,16 @@ std::vector<Bytes> packets(const rsu::SensorModel& model, rsu::TimeNs t0, int co
 void write_velodyne(const fs::path& dir) {
   struct Case {
     const char* name;
-    rsu::SensorModel model;
+    rsu::lidar::SensorModel model;
     std::uint8_t flags;
     std::uint32_t step_us;
     int count;
   };
   // Packet periods: VLP-16 1327 us, VLP-32C 664 us. The VLP-16 stream crosses its first frame cut.
   // Flags as velodyne_packet_fuzzer.cpp reads them (bits 0-1 model, bit 2 partial frames).
-  const Case cases[] = {{"vlp16_packets", rsu::make_vlp16(), 0, 1327, 4},
-                        {"vlp32c_packets", rsu::make_vlp32c(), 1, 664, 4},
-                        {"vlp16_partial_frames", rsu::make_vlp16(), 4, 1327, 3}};
+  const Case cases[] = {{"vlp16_packets", rsu::lidar::make_vlp16(), 0, 1327, 4},
+                        {"vlp32c_packets", rsu::lidar::make_vlp32c(), 1, 664, 4},
+                        {"vlp16_partial_frames", rsu::lidar::make_vlp16(), 4, 1327, 3}};
   for (const Case& c : cases) {
     Bytes input{c.flags};
     put_u16(input, c.step_us);
@@ -177,26 +179,27 @@ void write_velodyne(const fs::path& dir) {
 }
 
 void write_pcap(const fs::path& dir) {
-  Bytes file = rsu::pcap_global_header();
-  const rsu::UdpEndpoint sensor{rsu::ipv4_address(192, 168, 1, 201), 2368};
-  const rsu::UdpEndpoint host{rsu::ipv4_address(192, 168, 1, 100), rsu::kVelodyneDataPort};
+  Bytes file = rsu::lidar::pcap_global_header();
+  const rsu::lidar::UdpEndpoint sensor{rsu::lidar::ipv4_address(192, 168, 1, 201), 2368};
+  const rsu::lidar::UdpEndpoint host{rsu::lidar::ipv4_address(192, 168, 1, 100),
+                                     rsu::lidar::kVelodyneDataPort};
   rsu::TimeNs t = kNow;
-  for (const Bytes& p : packets(rsu::make_vlp16(), kNow, 2, 0)) {
-    rsu::append_udp_record(file, t, sensor, host, p);
+  for (const Bytes& p : packets(rsu::lidar::make_vlp16(), kNow, 2, 0)) {
+    rsu::lidar::append_udp_record(file, t, sensor, host, p);
     t += 1327 * rsu::kNsPerUs;
   }
   write_file(dir / "two_vlp16_packets.pcap", file);
   const Bytes small{1, 2, 3, 4};
-  Bytes tiny = rsu::pcap_global_header();
-  rsu::append_udp_record(tiny, kNow, sensor, host, small);
+  Bytes tiny = rsu::lidar::pcap_global_header();
+  rsu::lidar::append_udp_record(tiny, kNow, sensor, host, small);
   write_file(dir / "small_datagram.pcap", tiny);
 }
 
 void write_pcd(const fs::path& dir) {
   fs::create_directories(dir);
-  std::vector<rsu::LidarPoint> points;
+  std::vector<rsu::lidar::LidarPoint> points;
   for (int i = 0; i < 6; ++i) {
-    rsu::LidarPoint p;
+    rsu::lidar::LidarPoint p;
     p.x = 1.0F + static_cast<float>(i);
     p.y = -0.5F * static_cast<float>(i);
     p.z = 0.25F;
@@ -244,7 +247,7 @@ Bytes real_file(const std::string& name) {
 std::vector<Bytes> real_payloads(const std::string& capture, std::uint16_t port, std::size_t from,
                                  std::size_t count) {
   std::vector<Bytes> out;
-  for (const rsu::UdpDatagram& d : rsu::parse_pcap(real_file(capture)).datagrams) {
+  for (const rsu::lidar::UdpDatagram& d : rsu::lidar::parse_pcap(real_file(capture)).datagrams) {
     if (d.dst.port != port)
       continue;
     if (from > 0) {
@@ -313,7 +316,7 @@ void write_ouster(const fs::path& dir) {
   const auto datagrams = [](const char* capture) {
     std::ifstream in(fs::path(RSU_SOURCE_DIR) / "tests/data/real/ouster" / capture, std::ios::binary);
     const Bytes bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return rsu::parse_pcap(bytes).datagrams;
+    return rsu::lidar::parse_pcap(bytes).datagrams;
   };
   const auto seed = [&](const char* name, std::uint8_t format, const std::vector<Bytes>& packets) {
     Bytes out{format};
@@ -325,7 +328,7 @@ void write_ouster(const fs::path& dir) {
   };
   // The n-th datagram of a capture sent to `port` (7502 lidar, 7503 IMU).
   const auto packet = [&](const char* capture, std::uint16_t port, std::size_t n) {
-    for (const rsu::UdpDatagram& d : datagrams(capture)) {
+    for (const rsu::lidar::UdpDatagram& d : datagrams(capture)) {
       if (d.dst.port == port && n-- == 0) {
         return d.payload;
       }

@@ -13,9 +13,9 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
-  rsu::ouster::Metadata m;
+  rsu::lidar::ouster::Metadata m;
   try {
-    m = rsu::ouster::parse_metadata(text, "fuzz.json");
+    m = rsu::lidar::ouster::parse_metadata(text, "fuzz.json");
   } catch (const rsu::io::YamlError&) {
     return 0;  // the documented failure
   }
@@ -23,10 +23,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       m.beam_altitude_deg.size() != static_cast<std::size_t>(m.pixels_per_column)) {
     std::abort();
   }
-  rsu::ouster::Decoder decoder(m);
+  rsu::lidar::ouster::Decoder decoder(m);
   const std::vector<std::uint8_t> zeros(
-      rsu::ouster::packet_layout(m.profile, m.pixels_per_column, m.columns_per_packet).packet_bytes);
-  std::vector<rsu::LidarPoint> points;
+      rsu::lidar::ouster::packet_layout(m.profile, m.pixels_per_column, m.columns_per_packet).packet_bytes);
+  std::vector<rsu::lidar::LidarPoint> points;
   (void)decoder.decode(zeros, points);
   if (decoder.stats().packets() != 1) {
     std::abort();

@@ -16,8 +16,8 @@
 
 namespace {
 
-using rsu::ouster::Metadata;
-using rsu::ouster::UdpProfile;
+using rsu::lidar::ouster::Metadata;
+using rsu::lidar::ouster::UdpProfile;
 
 // 0: LEGACY, 32 beams, 1024x10 (the OS-1-32-G capture's format); 1: RNG15_RFL8_NIR8, 128 beams,
 // 1024x10, the OS-1-128 capture's serial and initialization id; 2: RNG19_RFL8_SIG16_NIR16, 16 beams,
@@ -57,18 +57,18 @@ Metadata format(std::uint8_t which) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   rsu::fuzz::FuzzInput in(data, size);
   const Metadata m = format(in.u8());
-  rsu::ouster::OusterLidarDecoder decoder(m, "fuzz.json");  // through the decoder seam
-  std::vector<rsu::LidarPoint> points;
+  rsu::lidar::ouster::OusterLidarDecoder decoder(m, "fuzz.json");  // through the decoder seam
+  std::vector<rsu::lidar::LidarPoint> points;
   std::uint64_t fed = 0;
   while (!in.empty()) {
     const std::size_t before = points.size();
-    const rsu::PacketOutcome outcome = decoder.decode(in.record(), 0, points);
+    const rsu::lidar::PacketOutcome outcome = decoder.decode(in.record(), 0, points);
     if (!outcome.is_data() && points.size() != before) {
       std::abort();  // points only from data packets
     }
     ++fed;
     for (std::size_t i = before; i < points.size(); ++i) {
-      const rsu::LidarPoint& p = points[i];
+      const rsu::lidar::LidarPoint& p = points[i];
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
           p.ring >= m.pixels_per_column ||
           !(p.azimuth_rad >= 0.0F && p.azimuth_rad < static_cast<float>(2 * std::numbers::pi)) ||

@@ -14,10 +14,10 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::span<const std::uint8_t> bytes(data, size);
-  const rsu::PcapParseResult result = rsu::parse_pcap(bytes);
-  (void)rsu::to_string(result.error);
+  const rsu::lidar::PcapParseResult result = rsu::lidar::parse_pcap(bytes);
+  (void)rsu::lidar::to_string(result.error);
   std::size_t payload_bytes = 0;
-  for (const rsu::UdpDatagram& d : result.datagrams)
+  for (const rsu::lidar::UdpDatagram& d : result.datagrams)
     payload_bytes += d.payload.size();
   // Payloads are copied out of the input: they cannot exceed it (fragments put together excepted:
   // each fragment's bytes are in the input too).
@@ -26,16 +26,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
 
   const std::size_t piece = size > 0 ? std::size_t{data[0]} + 1 : 1;
-  rsu::PcapReader reader;
-  std::vector<rsu::UdpDatagram> pieces;
-  rsu::UdpDatagram d;
+  rsu::lidar::PcapReader reader;
+  std::vector<rsu::lidar::UdpDatagram> pieces;
+  rsu::lidar::UdpDatagram d;
   for (std::size_t at = 0; at < size; at += piece) {
     reader.feed(bytes.subspan(at, std::min(piece, size - at)));
     for (;;) {
-      const rsu::PcapReader::Next next = reader.next(d);
-      if (next == rsu::PcapReader::Next::datagram)
+      const rsu::lidar::PcapReader::Next next = reader.next(d);
+      if (next == rsu::lidar::PcapReader::Next::datagram)
         pieces.push_back(d);
-      else if (next != rsu::PcapReader::Next::skipped)
+      else if (next != rsu::lidar::PcapReader::Next::skipped)
         break;
     }
   }

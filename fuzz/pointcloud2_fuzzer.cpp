@@ -46,7 +46,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const rsu::ros::LayoutResult layout = rsu::ros::parse_layout(cloud);
   if (!layout.ok())
     return 0;
-  std::vector<rsu::LidarPoint> points;
+  std::vector<rsu::lidar::LidarPoint> points;
   static constexpr std::uint16_t kRingMap[] = {3, 1, 2, 0};  // bit 2: rings in elevation order
   const std::span<const std::uint16_t> ring_map =
       (flags & 4U) != 0 ? std::span<const std::uint16_t>(kRingMap) : std::span<const std::uint16_t>();
@@ -55,7 +55,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (stats.points != points.size() ||
       stats.points + stats.non_finite_skipped + stats.bad_ring_skipped + stats.bad_time_skipped != declared)
     std::abort();
-  for (const rsu::LidarPoint& p : points) {
+  for (const rsu::lidar::LidarPoint& p : points) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !(p.azimuth_rad >= 0.0F) ||
         !(p.azimuth_rad < 6.2832F))
       std::abort();

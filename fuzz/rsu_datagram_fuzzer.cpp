@@ -1,4 +1,4 @@
-// Fuzzes the RSU core's announcement path (RsuCore::on_datagram, lib/rsu/rsu_core.h): flood limit ->
+// Fuzzes the RSU core's announcement path (RsuCore::on_datagram, lib/core/rsu_core.h): flood limit ->
 // authenticate (decode, signature, time and sequence windows) -> validate -> reply-to check ->
 // registry, with a fixed configuration and hand-stepped time, over a sequence of datagrams so that the
 // registry's and the replay window's state (updates, capacity, rate limits, expiry) is reached too.
@@ -14,9 +14,9 @@
 #include <cstdint>
 
 #include "common/time.h"
+#include "core/rsu_core.h"
 #include "fuzz_input.h"
 #include "fuzz_keys.h"
-#include "rsu/rsu_core.h"
 
 namespace {
 

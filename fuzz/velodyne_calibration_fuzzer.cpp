@@ -12,13 +12,13 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0)
     return 0;
-  const rsu::SensorModel base = data[0] % 3 == 0   ? rsu::make_vlp16()
-                                : data[0] % 3 == 1 ? rsu::make_vlp32c()
-                                                   : rsu::make_hdl32e();
+  const rsu::lidar::SensorModel base = data[0] % 3 == 0   ? rsu::lidar::make_vlp16()
+                                       : data[0] % 3 == 1 ? rsu::lidar::make_vlp32c()
+                                                          : rsu::lidar::make_hdl32e();
   const std::string text(reinterpret_cast<const char*>(data + 1), size - 1);
   try {
-    const rsu::SensorModel m = rsu::io::apply_velodyne_calibration(base, text, "calibration.yaml");
-    if (!rsu::sensor_model_error(m).empty())
+    const rsu::lidar::SensorModel m = rsu::io::apply_velodyne_calibration(base, text, "calibration.yaml");
+    if (!rsu::lidar::sensor_model_error(m).empty())
       std::abort();  // an accepted calibration is a usable model
   } catch (const rsu::io::YamlError&) {
     // the documented failure

@@ -28,24 +28,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::size_t payload_size = size_code <= 1 ? (size_code == 0 ? 1206 : 512) : (size_code % 2048) + 1;
 
   constexpr std::array<const char*, 4> kModels = {"vlp16", "vlp32c", "hdl32e", "vlp16"};
-  constexpr std::array<rsu::ReturnSelection, 4> kReturns = {
-      rsu::ReturnSelection::both, rsu::ReturnSelection::strongest, rsu::ReturnSelection::last,
-      rsu::ReturnSelection::both};
-  rsu::LidarDecoderOptions options;
+  constexpr std::array<rsu::lidar::ReturnSelection, 4> kReturns = {
+      rsu::lidar::ReturnSelection::both, rsu::lidar::ReturnSelection::strongest,
+      rsu::lidar::ReturnSelection::last, rsu::lidar::ReturnSelection::both};
+  rsu::lidar::LidarDecoderOptions options;
   options.returns = kReturns[(flags >> 3) & 3];
-  const auto decoder = rsu::make_lidar_decoder(kModels[flags & 3], options);
-  rsu::FrameAssemblerConfig assembler_config;
+  const auto decoder = rsu::lidar::make_lidar_decoder(kModels[flags & 3], options);
+  rsu::lidar::FrameAssemblerConfig assembler_config;
   assembler_config.emit_partial_frames = (flags & 4) != 0;
-  rsu::FrameAssembler assembler(assembler_config);
+  rsu::lidar::FrameAssembler assembler(assembler_config);
 
   // Receive times near a real date; the packet's own timestamp gives the hour's microseconds.
   rsu::TimeNs now = 1'718'000'000LL * rsu::kNsPerSecond;
-  std::vector<rsu::LidarPoint> points;
+  std::vector<rsu::lidar::LidarPoint> points;
   std::uint64_t fed = 0;
   while (!in.empty()) {
     points.clear();
-    const rsu::PacketOutcome outcome = decoder->decode(in.take(payload_size), now, points);
-    if (outcome.kind != rsu::PacketKind::data && !points.empty()) {
+    const rsu::lidar::PacketOutcome outcome = decoder->decode(in.take(payload_size), now, points);
+    if (outcome.kind != rsu::lidar::PacketKind::data && !points.empty()) {
       std::abort();  // only data packets yield points
     }
     ++fed;

@@ -11,20 +11,21 @@ constexpr std::size_t kChunkBytes = 1 << 20;
 CaptureFile::CaptureFile(const std::string& path) : path_(path), chunk_(kChunkBytes) {
   open();
   // Read until the header is judged, so that a file we cannot read is refused now, not mid-replay.
-  UdpDatagram first;
-  PcapReader probe;
+  lidar::UdpDatagram first;
+  lidar::PcapReader probe;
   std::ifstream head(path_, std::ios::binary);
   std::vector<std::uint8_t> bytes(24);
   head.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   bytes.resize(static_cast<std::size_t>(head.gcount()));
   probe.feed(bytes);
-  if (probe.next(first) == PcapReader::Next::error || bytes.size() < 24) {
-    const PcapError e = probe.error() != PcapError::none ? probe.error() : PcapError::truncated_file_header;
+  if (probe.next(first) == lidar::PcapReader::Next::error || bytes.size() < 24) {
+    const lidar::PcapError e =
+        probe.error() != lidar::PcapError::none ? probe.error() : lidar::PcapError::truncated_file_header;
     switch (e) {
-      case PcapError::pcapng_not_supported:
+      case lidar::PcapError::pcapng_not_supported:
         throw CaptureError(path_ + ": a pcapng file; convert it to a classic pcap first: editcap -F pcap " +
                            path_ + " capture.pcap (or: tcpdump -r " + path_ + " -w capture.pcap)");
-      case PcapError::unsupported_link_type:
+      case lidar::PcapError::unsupported_link_type:
         throw CaptureError(path_ + ": a pcap of a link type other than Ethernet or Linux cooked capture");
       default:
         throw CaptureError(path_ + ": not a pcap capture (" + std::string(to_string(e)) + ")");
@@ -39,22 +40,22 @@ void CaptureFile::open() {
   if (!in_) {
     throw CaptureError(path_ + ": cannot open: " + errno_text());
   }
-  reader_ = PcapReader();
+  reader_ = lidar::PcapReader();
   at_end_ = false;
-  error_ = PcapError::none;
+  error_ = lidar::PcapError::none;
 }
 
-bool CaptureFile::next(UdpDatagram& out) {
+bool CaptureFile::next(lidar::UdpDatagram& out) {
   for (;;) {
     switch (reader_.next(out)) {
-      case PcapReader::Next::datagram:
+      case lidar::PcapReader::Next::datagram:
         return true;
-      case PcapReader::Next::skipped:
+      case lidar::PcapReader::Next::skipped:
         continue;
-      case PcapReader::Next::error:
+      case lidar::PcapReader::Next::error:
         error_ = reader_.error();
         return false;
-      case PcapReader::Next::need_more:
+      case lidar::PcapReader::Next::need_more:
         break;
     }
     if (at_end_) {
@@ -72,7 +73,7 @@ bool CaptureFile::next(UdpDatagram& out) {
 }
 
 void CaptureFile::rewind() {
-  const PcapSkipped s = reader_.skipped();
+  const lidar::PcapSkipped s = reader_.skipped();
   skipped_before_.not_ipv4 += s.not_ipv4;
   skipped_before_.not_udp += s.not_udp;
   skipped_before_.fragmented += s.fragmented;
@@ -83,8 +84,8 @@ void CaptureFile::rewind() {
   open();
 }
 
-PcapSkipped CaptureFile::skipped() const {
-  PcapSkipped s = reader_.skipped();
+lidar::PcapSkipped CaptureFile::skipped() const {
+  lidar::PcapSkipped s = reader_.skipped();
   s.not_ipv4 += skipped_before_.not_ipv4;
   s.not_udp += skipped_before_.not_udp;
   s.fragmented += skipped_before_.fragmented;

@@ -27,12 +27,12 @@ class CaptureFile {
 
   // The next UDP datagram; false at the end of the file or where the file stops being readable
   // (error() then says why: a capture cut off mid-record).
-  bool next(UdpDatagram& out);
+  bool next(lidar::UdpDatagram& out);
   // Back to the first record (the counts go on).
   void rewind();
 
-  PcapError error() const { return error_; }
-  PcapSkipped skipped() const;  // over every pass
+  lidar::PcapError error() const { return error_; }
+  lidar::PcapSkipped skipped() const;  // over every pass
   std::uint64_t records() const;
   std::uint64_t reassembled() const;
   std::uint64_t ip_lengths_repaired() const;  // lib/lidar/pcap.h
@@ -43,12 +43,12 @@ class CaptureFile {
 
   std::string path_;
   std::ifstream in_;
-  PcapReader reader_;
+  lidar::PcapReader reader_;
   std::vector<std::uint8_t> chunk_;
-  PcapError error_ = PcapError::none;
+  lidar::PcapError error_ = lidar::PcapError::none;
   bool at_end_ = false;
   // Counts of the passes before the current one (rewind() starts a fresh reader).
-  PcapSkipped skipped_before_;
+  lidar::PcapSkipped skipped_before_;
   std::uint64_t records_before_ = 0;
   std::uint64_t reassembled_before_ = 0;
   std::uint64_t repaired_before_ = 0;

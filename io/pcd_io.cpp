@@ -59,7 +59,7 @@ double binary_value(const std::uint8_t* src, const PcdField& f) {
 
 // Points of `fields` written by `put_point`, after the header, to `path`.
 template <typename PutPoint>
-void write_fields(const std::string& path, const std::vector<LidarPoint>& points,
+void write_fields(const std::string& path, const std::vector<lidar::LidarPoint>& points,
                   const std::vector<PcdField>& fields, PutPoint put_point) {
   std::uint32_t step = 0;
   for (const PcdField& f : fields)
@@ -183,7 +183,7 @@ struct Columns {
 
 // Point `i` from `value(field)`; false for an organised cloud's hole (non-finite x, y or z).
 template <typename Value>
-bool to_point(std::size_t i, const Columns& c, Value value, LidarPoint& p) {
+bool to_point(std::size_t i, const Columns& c, Value value, lidar::LidarPoint& p) {
   p.x = static_cast<float>(value(*c.x));
   p.y = static_cast<float>(value(*c.y));
   p.z = static_cast<float>(value(*c.z));
@@ -211,12 +211,12 @@ bool to_point(std::size_t i, const Columns& c, Value value, LidarPoint& p) {
   return true;
 }
 
-std::vector<LidarPoint> read_points(const std::string& file) {
+std::vector<lidar::LidarPoint> read_points(const std::string& file) {
   const PcdHeader h = parse_pcd_header(file);
   const Columns columns(h);
   const std::string_view data = std::string_view(file).substr(h.data_offset);
-  std::vector<LidarPoint> out;
-  LidarPoint p;
+  std::vector<lidar::LidarPoint> out;
+  lidar::LidarPoint p;
   if (h.data == PcdData::ascii) {
     std::vector<std::size_t> column_of(h.fields.size());
     for (std::size_t f = 1; f < h.fields.size(); ++f)
@@ -245,8 +245,8 @@ std::vector<LidarPoint> read_points(const std::string& file) {
 
 }  // namespace
 
-void write_pcd(const std::string& path, const std::vector<LidarPoint>& points) {
-  write_fields(path, points, kFields, [](std::uint8_t* dst, const LidarPoint& p) {
+void write_pcd(const std::string& path, const std::vector<lidar::LidarPoint>& points) {
+  write_fields(path, points, kFields, [](std::uint8_t* dst, const lidar::LidarPoint& p) {
     put(dst + 0, p.x);
     put(dst + 4, p.y);
     put(dst + 8, p.z);
@@ -257,24 +257,25 @@ void write_pcd(const std::string& path, const std::vector<LidarPoint>& points) {
   });
 }
 
-void write_rotation_pcd(const std::string& path, const std::vector<LidarPoint>& points,
+void write_rotation_pcd(const std::string& path, const std::vector<lidar::LidarPoint>& points,
                         TimeNs rotation_start_ns) {
-  for (const LidarPoint& p : points) {
+  for (const lidar::LidarPoint& p : points) {
     const TimeNs since = p.time_ns - rotation_start_ns;
     if (since < 0 || since > TimeNs{0xFFFFFFFF})
       throw std::invalid_argument(path + ": a point outside [rotation start, + 4.29 s]");
   }
-  write_fields(path, points, kRotationFields, [rotation_start_ns](std::uint8_t* dst, const LidarPoint& p) {
-    put(dst + 0, p.x);
-    put(dst + 4, p.y);
-    put(dst + 8, p.z);
-    put(dst + 12, p.intensity);
-    put(dst + 16, p.ring);
-    put(dst + 18, static_cast<std::uint32_t>(p.time_ns - rotation_start_ns));
-  });
+  write_fields(path, points, kRotationFields,
+               [rotation_start_ns](std::uint8_t* dst, const lidar::LidarPoint& p) {
+                 put(dst + 0, p.x);
+                 put(dst + 4, p.y);
+                 put(dst + 8, p.z);
+                 put(dst + 12, p.intensity);
+                 put(dst + 16, p.ring);
+                 put(dst + 18, static_cast<std::uint32_t>(p.time_ns - rotation_start_ns));
+               });
 }
 
-std::vector<LidarPoint> read_pcd(const std::string& path) {
+std::vector<lidar::LidarPoint> read_pcd(const std::string& path) {
   const std::string file = read_file(path);
   try {
     return read_points(file);

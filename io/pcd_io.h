@@ -17,16 +17,16 @@ class PcdError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-void write_pcd(const std::string& path, const std::vector<LidarPoint>& points);
+void write_pcd(const std::string& path, const std::vector<lidar::LidarPoint>& points);
 // One rotation as rsu-decode writes it (README, "rsu-decode"): fields x y z intensity (float32), ring
 // (uint16) and time (uint32, ns since `rotation_start_ns`, the rotation's first point). Throws PcdError
 // naming the file when it cannot be written, or std::invalid_argument for a point before the start or
 // more than 4.29 s after it.
-void write_rotation_pcd(const std::string& path, const std::vector<LidarPoint>& points,
+void write_rotation_pcd(const std::string& path, const std::vector<lidar::LidarPoint>& points,
                         TimeNs rotation_start_ns);
 // Any PCD v0.7 file: ascii, binary or binary_compressed data, fields of any numeric type and count (the
 // first value is used). Throws PcdError naming the file and what is wrong (missing file, malformed
 // header, no x/y/z, too little data, a ring or time that does not fit).
-std::vector<LidarPoint> read_pcd(const std::string& path);
+std::vector<lidar::LidarPoint> read_pcd(const std::string& path);
 
 }  // namespace rsu::io

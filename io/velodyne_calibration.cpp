@@ -8,8 +8,8 @@
 
 namespace rsu::io {
 
-SensorModel apply_velodyne_calibration(const SensorModel& base, const std::string& yaml_text,
-                                       const std::string& source_name) {
+lidar::SensorModel apply_velodyne_calibration(const lidar::SensorModel& base, const std::string& yaml_text,
+                                              const std::string& source_name) {
   const YAML::Node root = parse_yaml(yaml_text, source_name);
   const YamlField file(root, "", source_name, 1);
   file.expect_map({"lasers", "num_lasers", "distance_resolution"});
@@ -22,7 +22,7 @@ SensorModel apply_velodyne_calibration(const SensorModel& base, const std::strin
   if (file.has("num_lasers") && file.child("num_lasers").number() != static_cast<double>(n)) {
     file.child("num_lasers").fail("must be " + std::to_string(n) + " for the " + base.name);
   }
-  SensorModel m = base;
+  lidar::SensorModel m = base;
   m.distance_unit_m = file.positive_or("distance_resolution", base.distance_unit_m);
   if (m.distance_unit_m > 0.1) {
     file.child("distance_resolution").fail("must be <= 0.1 m");
@@ -60,7 +60,7 @@ SensorModel apply_velodyne_calibration(const SensorModel& base, const std::strin
     m.elevation_deg[id] = rad_to_deg(vertical);
     m.azimuth_offset_deg[id] = -rad_to_deg(rotation);  // the drivers subtract rot_correction
   }
-  if (const std::string error = sensor_model_error(m); !error.empty()) {
+  if (const std::string error = lidar::sensor_model_error(m); !error.empty()) {
     file.fail(error);
   }
   return m;

@@ -22,7 +22,7 @@ namespace rsu::io {
 // `base` with its elevation and azimuth offset tables (and distance unit) replaced by the file's.
 // Throws YamlError "<source>:<line>: <field>: <what>" for a malformed file, a laser count other than
 // the model's, laser ids that are not 0..N-1 once each, or an unsupported non-zero correction.
-SensorModel apply_velodyne_calibration(const SensorModel& base, const std::string& yaml_text,
-                                       const std::string& source_name);
+lidar::SensorModel apply_velodyne_calibration(const lidar::SensorModel& base, const std::string& yaml_text,
+                                              const std::string& source_name);
 
 }  // namespace rsu::io

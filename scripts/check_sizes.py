@@ -122,19 +122,25 @@ def check(root):
     return problems
 
 
-def main():
+def run_check(name, check, what_fails):
+    """The command line of a structure check: ROOT from argv (default: this script's parent folder),
+    each problem `check(root)` returns printed, exit 1 if there is one with `what_fails` on stderr."""
     root = pathlib.Path(sys.argv[1]) if len(sys.argv) > 1 else pathlib.Path(__file__).resolve().parent.parent
     if not (root / "lib").is_dir():
-        print(f"check_sizes: {root}/lib: no such folder", file=sys.stderr)
+        print(f"{name}: {root}/lib: no such folder", file=sys.stderr)
         return 2
     problems = check(root)
     for p in problems:
         print(p)
     if problems:
-        print(f"check_sizes: {len(problems)} over the limits (files {MAX_FILE_LINES} lines, functions "
-              f"{MAX_FUNCTION_LINES})", file=sys.stderr)
+        print(f"{name}: {len(problems)} {what_fails}", file=sys.stderr)
         return 1
     return 0
+
+
+def main():
+    return run_check("check_sizes", check,
+                     f"over the limits (files {MAX_FILE_LINES} lines, functions {MAX_FUNCTION_LINES})")
 
 
 if __name__ == "__main__":

@@ -67,7 +67,7 @@ double normal_quantile(double p) {
 // and uniform_open01), so a firing's noise does not depend on what else is simulated or in which
 // order. Inverse-CDF sampling instead of random.h's Box-Muller pairs: the log, sqrt and sincos of
 // each pair made noise ~5 ms of a VLP-32C frame; this way it is ~1.5 ms (bench/sim).
-FiringNoise firing_noise(std::uint64_t seed, std::int64_t k, const Firing& f) {
+FiringNoise firing_noise(std::uint64_t seed, std::int64_t k, const lidar::Firing& f) {
   const auto slot = static_cast<std::uint64_t>(f.block) * 65536U + static_cast<std::uint64_t>(f.channel);
   const std::uint64_t key = mix64(seed ^ mix64(static_cast<std::uint64_t>(k) ^ mix64(slot)));
   // Three decorrelated streams from one key (arbitrary odd constants, then the SplitMix64 mixer).
@@ -103,17 +103,17 @@ bool AzimuthSector::contains(double azimuth_rad) const {
   return b <= e ? (a >= b && a <= e) : (a >= b || a <= e);
 }
 
-LidarSimulator::LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
+LidarSimulator::LidarSimulator(const lidar::SensorModel& model, const Pose3& mount, const NoiseModel& noise,
                                const Raycaster& raycaster, TimeNs schedule_t0, double start_azimuth_deg,
                                const Trajectory* carrier)
     : LidarSimulator(model, mount, noise, nullptr, &raycaster, schedule_t0, start_azimuth_deg, carrier) {}
 
-LidarSimulator::LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
+LidarSimulator::LidarSimulator(const lidar::SensorModel& model, const Pose3& mount, const NoiseModel& noise,
                                const Scene& scene, TimeNs schedule_t0, double start_azimuth_deg)
     : LidarSimulator(model, mount, noise, std::make_shared<const Raycaster>(scene), nullptr, schedule_t0,
                      start_azimuth_deg, nullptr) {}
 
-LidarSimulator::LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
+LidarSimulator::LidarSimulator(const lidar::SensorModel& model, const Pose3& mount, const NoiseModel& noise,
                                std::shared_ptr<const Raycaster> owned, const Raycaster* borrowed,
                                TimeNs schedule_t0, double start_azimuth_deg, const Trajectory* carrier)
     : owned_raycaster_(std::move(owned)),
@@ -133,7 +133,7 @@ LidarSimulator::LidarSimulator(const SensorModel& model, const Pose3& mount, con
     sin_elevation_.push_back(std::sin(w));
   }
   // The packet layout (which laser fires in which slot) is the same for every packet.
-  const std::vector<Firing> layout = schedule_.firings(schedule_.packet(0));
+  const std::vector<lidar::Firing> layout = schedule_.firings(schedule_.packet(0));
   cast_order_.resize(layout.size());
   for (std::size_t i = 0; i < layout.size(); ++i) {
     cast_order_[i] = i;
@@ -153,10 +153,11 @@ std::int64_t LidarSimulator::packet_index_at(TimeNs t) const {
 
 void LidarSimulator::run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end,
                                 const std::optional<AzimuthSector>& sector, PacketScratch& scratch) const {
-  const SensorModel& m = model();
-  const PacketBlocks blocks = schedule_.packet(k);
-  beam_firings(m, blocks, packet_timing(m, blocks, nominal_degrees_per_us(m)), scratch.firings);
-  const std::vector<Firing>& firings = scratch.firings;
+  const lidar::SensorModel& m = model();
+  const lidar::PacketBlocks blocks = schedule_.packet(k);
+  lidar::beam_firings(m, blocks, lidar::packet_timing(m, blocks, lidar::nominal_degrees_per_us(m)),
+                      scratch.firings);
+  const std::vector<lidar::Firing>& firings = scratch.firings;
   std::vector<Outcome>& outcomes = scratch.outcomes;
   outcomes.assign(firings.size(), Outcome{});
   std::vector<Ray>& rays = scratch.rays;
@@ -176,7 +177,7 @@ void LidarSimulator::run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end,
   // Rays are built in elevation order (cast_order_): 16-ray packets of neighbouring beams are
   // coherent, which doubles Embree's packet throughput (bench/sim). Outcomes stay in firing order.
   for (const std::size_t i : cast_order_) {
-    const Firing& f = firings[i];
+    const lidar::Firing& f = firings[i];
     Outcome& o = outcomes[i];
     if (f.time_ns < t_begin || f.time_ns >= t_end || (sector && !sector->contains(f.azimuth_rad))) {
       continue;
@@ -239,7 +240,7 @@ void LidarSimulator::run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end,
     o.truth.true_range_m = hit.range;
     double measured = hit.range;
     measured += noise_.range_sigma_m * o.noise.range;
-    o.raw = quantize_distance(m, measured);  // 0 outside [min, max] range
+    o.raw = lidar::quantize_distance(m, measured);  // 0 outside [min, max] range
     // Lambertian return: 255 * reflectivity * |cos(incidence)| (sim/scene.h).
     const double cos_incidence = std::abs(hit.normal.dot(rays[r].direction));
     // Rounded half up (the value is >= 0), clamped to the byte.
@@ -248,12 +249,12 @@ void LidarSimulator::run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end,
   }
 }
 
-LidarPoint LidarSimulator::to_point(const Firing& f, const Outcome& o) const {
+lidar::LidarPoint LidarSimulator::to_point(const lidar::Firing& f, const Outcome& o) const {
   // The decoder's arithmetic (lidar/velodyne_packet.cpp), in the same order, so that the simulated
   // point equals the decoded one exactly.
   const double range = o.raw * model().distance_unit_m;
   const double horizontal = range * cos_elevation_[f.laser];
-  LidarPoint p;
+  lidar::LidarPoint p;
   p.x = static_cast<float>(horizontal * o.cos_azimuth);  // std::cos(azimuth), as the decoder
   p.y = static_cast<float>(-horizontal * o.sin_azimuth);
   p.z = static_cast<float>(range * sin_elevation_[f.laser]);
@@ -265,18 +266,18 @@ LidarPoint LidarSimulator::to_point(const Firing& f, const Outcome& o) const {
   return p;
 }
 
-PacketReturns LidarSimulator::simulate_packet(std::int64_t k,
-                                              const std::optional<AzimuthSector>& sector) const {
+lidar::PacketReturns LidarSimulator::simulate_packet(std::int64_t k,
+                                                     const std::optional<AzimuthSector>& sector) const {
   if (!model().has_packet_format()) {
     throw std::invalid_argument("LidarSimulator::simulate_packet: sensor model '" + model().name +
                                 "' has no Velodyne packet format");
   }
-  PacketReturns out;
+  lidar::PacketReturns out;
   out.blocks = schedule_.packet(k);
   PacketScratch scratch;
   run_packet(k, std::numeric_limits<TimeNs>::min(), std::numeric_limits<TimeNs>::max(), sector, scratch);
   for (std::size_t i = 0; i < scratch.firings.size(); ++i) {
-    const Firing& f = scratch.firings[i];
+    const lidar::Firing& f = scratch.firings[i];
     const Outcome& o = scratch.outcomes[i];
     const auto b = static_cast<std::size_t>(f.block);
     const auto c = static_cast<std::size_t>(f.channel);
@@ -302,7 +303,7 @@ SimulatedFrame LidarSimulator::simulate_frame(TimeNs start,
   for (std::int64_t k = k_first; k <= k_last; ++k) {
     run_packet(k, start, end, sector, scratch);
     for (std::size_t i = 0; i < scratch.firings.size(); ++i) {
-      const Firing& f = scratch.firings[i];
+      const lidar::Firing& f = scratch.firings[i];
       const Outcome& o = scratch.outcomes[i];
       const TimeNs t = f.time_ns;
       if (t < start || t >= end) {

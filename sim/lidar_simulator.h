@@ -60,7 +60,7 @@ struct FiringNoise {
 };
 
 struct SimulatedFrame {
-  LidarFrame frame;               // points in the SENSOR frame, in firing order
+  lidar::LidarFrame frame;        // points in the SENSOR frame, in firing order
   std::vector<PointTruth> truth;  // parallel to frame.points
   SimulationCounts counts;
 };
@@ -74,17 +74,17 @@ class LidarSimulator {
   // LiDAR): `mount` is then in the vehicle frame, and each ray starts from where the vehicle is at the
   // ray's firing time. Points stay in the sensor frame (with the sweep's motion in them, as a real
   // moving LiDAR reports them).
-  LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
+  LidarSimulator(const lidar::SensorModel& model, const Pose3& mount, const NoiseModel& noise,
                  const Raycaster& raycaster, TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0,
                  const Trajectory* carrier = nullptr);
   // Builds (and owns) the ray caster for `scene`.
-  LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise, const Scene& scene,
-                 TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0);
+  LidarSimulator(const lidar::SensorModel& model, const Pose3& mount, const NoiseModel& noise,
+                 const Scene& scene, TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0);
 
   // Packet k of the schedule, as the Velodyne encoder packs it (strongest return). Firings outside
   // `sector` report no return. Throws std::invalid_argument if the model has no packet format.
-  PacketReturns simulate_packet(std::int64_t k,
-                                const std::optional<AzimuthSector>& sector = std::nullopt) const;
+  lidar::PacketReturns simulate_packet(std::int64_t k,
+                                       const std::optional<AzimuthSector>& sector = std::nullopt) const;
 
   // One rotation: every firing with time in [start, start + 1 / rotation rate) (0.1 s at 10 Hz),
   // from all packets that overlap that window. Points are those a decoder would rebuild from the
@@ -96,14 +96,14 @@ class LidarSimulator {
   std::int64_t packet_index_at(TimeNs t) const;
   TimeNs rotation_period_ns() const;
 
-  const SensorModel& model() const { return schedule_.model(); }
-  const FiringSchedule& schedule() const { return schedule_; }
+  const lidar::SensorModel& model() const { return schedule_.model(); }
+  const lidar::FiringSchedule& schedule() const { return schedule_; }
   const Pose3& mount() const { return mount_; }
   const NoiseModel& noise() const { return noise_; }
   const Raycaster& raycaster() const { return *raycaster_; }
 
  private:
-  LidarSimulator(const SensorModel& model, const Pose3& mount, const NoiseModel& noise,
+  LidarSimulator(const lidar::SensorModel& model, const Pose3& mount, const NoiseModel& noise,
                  std::shared_ptr<const Raycaster> owned, const Raycaster* borrowed, TimeNs schedule_t0,
                  double start_azimuth_deg, const Trajectory* carrier);
 
@@ -120,7 +120,7 @@ class LidarSimulator {
 
   // Buffers reused from packet to packet (no allocation per packet once warm).
   struct PacketScratch {
-    std::vector<Firing> firings;
+    std::vector<lidar::Firing> firings;
     std::vector<Outcome> outcomes;
     std::vector<Ray> rays;
     std::vector<RayHit> hits;
@@ -131,11 +131,11 @@ class LidarSimulator {
   // with time in [t_begin, t_end) and inside `sector` are cast, the others only listed.
   void run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end, const std::optional<AzimuthSector>& sector,
                   PacketScratch& scratch) const;
-  LidarPoint to_point(const Firing& f, const Outcome& o) const;
+  lidar::LidarPoint to_point(const lidar::Firing& f, const Outcome& o) const;
 
   std::shared_ptr<const Raycaster> owned_raycaster_;
   const Raycaster* raycaster_;
-  FiringSchedule schedule_;
+  lidar::FiringSchedule schedule_;
   TimeNs schedule_t0_;
   Pose3 mount_;
   Eigen::Isometry3d mount_to_map_;  // without a carrier; with one, mount -> carrier vehicle frame

@@ -30,7 +30,7 @@ LidarConfig read_lidar(const YamlField& f) {
   LidarConfig lidar;
   const YamlField model = f.required("model");
   lidar.model_name = model.text();
-  auto resolved = sensor_model_by_name(lidar.model_name);
+  auto resolved = lidar::sensor_model_by_name(lidar.model_name);
   if (!resolved)
     model.fail("unknown LiDAR model \"" + lidar.model_name + "\" (vlp16, vlp32c, genericN)");
   lidar.model = *resolved;

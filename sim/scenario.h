@@ -16,8 +16,8 @@ namespace rsu::sim {
 
 struct LidarConfig {
   std::string model_name = "vlp16";
-  SensorModel model;  // resolved from model_name (and rpm)
-  Pose3 mount;        // sensor pose in the map frame
+  lidar::SensorModel model;  // resolved from model_name (and rpm)
+  Pose3 mount;               // sensor pose in the map frame
   NoiseModel noise;
   double start_azimuth_deg = 0.0;
 };

@@ -44,8 +44,8 @@
 
 namespace {
 
-using rsu::LidarPoint;
 using rsu::TimeNs;
+using rsu::lidar::LidarPoint;
 using PointCloud2 = sensor_msgs_msg_dds__PointCloud2_;
 using PoseStamped = geometry_msgs_msg_dds__PoseWithCovarianceStamped_;
 

@@ -13,7 +13,7 @@
 
 namespace {
 
-using rsu::ouster::Metadata;
+using rsu::lidar::ouster::Metadata;
 
 struct Capture {
   Metadata metadata;
@@ -22,10 +22,10 @@ struct Capture {
 
 Capture load(const std::string& pcap, const std::string& json) {
   const std::string dir = std::string(RSU_SOURCE_DIR) + "/tests/data/real/ouster/";
-  Capture c{rsu::ouster::parse_metadata(rsu::io::read_text_file(dir + json), json), {}};
+  Capture c{rsu::lidar::ouster::parse_metadata(rsu::io::read_text_file(dir + json), json), {}};
   const std::string bytes = rsu::io::read_text_file(dir + pcap);
-  for (rsu::UdpDatagram& d :
-       rsu::parse_pcap(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()))
+  for (rsu::lidar::UdpDatagram& d :
+       rsu::lidar::parse_pcap(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()))
            .datagrams) {
     if (d.dst.port == c.metadata.udp_port_lidar) {
       c.lidar_packets.push_back(std::move(d.payload));
@@ -42,16 +42,17 @@ const Capture& capture(int which) {
 }
 
 void label(benchmark::State& state, const Capture& c) {
-  state.SetLabel(c.metadata.model_name() + " " + std::string(rsu::ouster::to_string(c.metadata.profile)));
+  state.SetLabel(c.metadata.model_name() + " " +
+                 std::string(rsu::lidar::ouster::to_string(c.metadata.profile)));
 }
 
 // A fresh decoder per pass over the capture (its frames repeat), points into a reused buffer.
 void BM_OusterDecode(benchmark::State& state) {
   const Capture& c = capture(static_cast<int>(state.range(0)));
-  std::vector<rsu::LidarPoint> points;
+  std::vector<rsu::lidar::LidarPoint> points;
   std::size_t decoded = 0;
   for (auto _ : state) {
-    rsu::ouster::Decoder decoder(c.metadata);
+    rsu::lidar::ouster::Decoder decoder(c.metadata);
     for (const auto& packet : c.lidar_packets) {
       points.clear();
       decoder.decode(packet, points);
@@ -68,7 +69,7 @@ BENCHMARK(BM_OusterDecode)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond
 void BM_OusterRangesOnlyBaseline(benchmark::State& state) {
   const Capture& c = capture(static_cast<int>(state.range(0)));
   const Metadata& m = c.metadata;
-  const rsu::ouster::PacketReader reader(m.profile, m.pixels_per_column, m.columns_per_packet);
+  const rsu::lidar::ouster::PacketReader reader(m.profile, m.pixels_per_column, m.columns_per_packet);
   std::vector<std::uint32_t> image(static_cast<std::size_t>(m.pixels_per_column * m.columns_per_frame));
   std::size_t pixels = 0;
   for (auto _ : state) {

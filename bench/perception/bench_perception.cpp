@@ -24,7 +24,7 @@
 
 namespace {
 
-using rsu::LidarPoint;
+using rsu::lidar::LidarPoint;
 using namespace rsu::perception;
 
 constexpr std::array<const char*, 3> kModels = {"vlp16", "vlp32c", "generic128"};

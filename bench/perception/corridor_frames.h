@@ -20,15 +20,15 @@ struct CorridorFrames {
   std::string model_name;
   Eigen::Vector2d lidar_xy = Eigen::Vector2d::Zero();
   Eigen::Vector3d lidar_position = Eigen::Vector3d::Zero();
-  std::vector<std::vector<LidarPoint>> background;  // frames without vehicles
-  std::vector<LidarPoint> frame;                    // the vehicle in view
-  Pose2 vehicle_pose;                               // at the frame's middle
+  std::vector<std::vector<lidar::LidarPoint>> background;  // frames without vehicles
+  std::vector<lidar::LidarPoint> frame;                    // the vehicle in view
+  Pose2 vehicle_pose;                                      // at the frame's middle
   sim::VehicleShape vehicle_shape;
 };
 
-inline std::vector<LidarPoint> to_map_frame(const LidarFrame& frame, const Pose3& mount) {
+inline std::vector<lidar::LidarPoint> to_map_frame(const lidar::LidarFrame& frame, const Pose3& mount) {
   const Eigen::Isometry3d t = mount.to_isometry();
-  std::vector<LidarPoint> out = frame.points;
+  std::vector<lidar::LidarPoint> out = frame.points;
   for (auto& p : out) {
     const Eigen::Vector3d q =
         t * Eigen::Vector3d(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
@@ -45,7 +45,7 @@ inline CorridorFrames make_corridor_frames(const std::string& model_name, double
   const sim::Scenario scenario = sim::load_scenario_file(RSU_SOURCE_DIR "/scenarios/corridor.yaml");
   CorridorFrames out;
   out.model_name = model_name;
-  SensorModel model = *sensor_model_by_name(model_name);
+  lidar::SensorModel model = *lidar::sensor_model_by_name(model_name);
   model.rpm = scenario.lidar.model.rpm;
   const Pose3& mount = scenario.lidar.mount;
   out.lidar_xy = Eigen::Vector2d(mount.x, mount.y);

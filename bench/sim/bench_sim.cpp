@@ -33,19 +33,20 @@ const Scenario& corridor() {
 // `by_elevation`: within each packet, rays ordered by beam elevation then time (coherent groups of 16
 // for packet tracing) instead of channel (firing) order.
 std::vector<Ray> frame_rays(const Scenario& s, bool by_elevation = false) {
-  const SensorModel model = make_vlp32c();
-  const FiringSchedule schedule(model, 0);
+  const lidar::SensorModel model = lidar::make_vlp32c();
+  const lidar::FiringSchedule schedule(model, 0);
   const Eigen::Isometry3d mount = s.lidar.mount.to_isometry();
   const std::int64_t packets = 151;  // 0.1 s / 663.552 us
   std::vector<Ray> rays;
   for (std::int64_t k = 0; k < packets; ++k) {
-    std::vector<Firing> firings = schedule.firings(schedule.packet(k));
+    std::vector<lidar::Firing> firings = schedule.firings(schedule.packet(k));
     if (by_elevation) {
-      std::stable_sort(firings.begin(), firings.end(), [&model](const Firing& a, const Firing& b) {
-        return model.elevation_deg[a.laser] < model.elevation_deg[b.laser];
-      });
+      std::stable_sort(firings.begin(), firings.end(),
+                       [&model](const lidar::Firing& a, const lidar::Firing& b) {
+                         return model.elevation_deg[a.laser] < model.elevation_deg[b.laser];
+                       });
     }
-    for (const Firing& f : firings) {
+    for (const lidar::Firing& f : firings) {
       Ray r;
       r.origin = mount.translation();
       r.direction = mount.linear() * model.beam_direction(f.laser, f.azimuth_rad);
@@ -102,7 +103,7 @@ void BM_CastBatch(benchmark::State& state) {
 BENCHMARK(BM_CastBatch)->ArgsProduct({{0, 1, 2}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 // A whole simulated frame: firing schedule, noise, casting, quantisation, points and labels.
-void simulate_frames(benchmark::State& state, const SensorModel& model, bool noise_on) {
+void simulate_frames(benchmark::State& state, const lidar::SensorModel& model, bool noise_on) {
   const Scenario& s = corridor();
   const Raycaster rc(s.scene);
   NoiseModel noise = s.lidar.noise;
@@ -126,17 +127,17 @@ void simulate_frames(benchmark::State& state, const SensorModel& model, bool noi
 }
 
 void BM_SimulateFrameVlp32c(benchmark::State& state) {
-  simulate_frames(state, make_vlp32c(), true);
+  simulate_frames(state, lidar::make_vlp32c(), true);
 }
 BENCHMARK(BM_SimulateFrameVlp32c)->Unit(benchmark::kMillisecond);
 
 void BM_SimulateFrameVlp32cNoNoise(benchmark::State& state) {
-  simulate_frames(state, make_vlp32c(), false);
+  simulate_frames(state, lidar::make_vlp32c(), false);
 }
 BENCHMARK(BM_SimulateFrameVlp32cNoNoise)->Unit(benchmark::kMillisecond);
 
 void BM_SimulateFrameVlp16(benchmark::State& state) {
-  simulate_frames(state, make_vlp16(), true);
+  simulate_frames(state, lidar::make_vlp16(), true);
 }
 BENCHMARK(BM_SimulateFrameVlp16)->Unit(benchmark::kMillisecond);
 
@@ -144,7 +145,7 @@ BENCHMARK(BM_SimulateFrameVlp16)->Unit(benchmark::kMillisecond);
 void BM_SimulateSectorVlp32c(benchmark::State& state) {
   const Scenario& s = corridor();
   const Raycaster rc(s.scene);
-  const LidarSimulator sim(make_vlp32c(), s.lidar.mount, s.lidar.noise, rc);
+  const LidarSimulator sim(lidar::make_vlp32c(), s.lidar.mount, s.lidar.noise, rc);
   const AzimuthSector sector{4.2, 5.25};
   for (auto _ : state) {
     const SimulatedFrame f = sim.simulate_frame(s.start_ns, sector);

@@ -24,7 +24,7 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
   if (!found)
     doc.child("vehicle_id").fail("no vehicle with this id in " + scenario_path.string());
   for (const YamlField& m : doc.required("rsu_models").items()) {
-    if (!sensor_model_by_name(m.text()) || !sensor_model_by_name(m.text())->has_packet_format())
+    if (!lidar::sensor_model_by_name(m.text()) || !lidar::sensor_model_by_name(m.text())->has_packet_format())
       m.fail("not a LiDAR model with a Velodyne packet format (vlp16, vlp32c)");
     c.rsu_models.push_back(m.text());
   }
@@ -34,7 +34,7 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
   const YamlField lidar = doc.required("vehicle_lidar");
   lidar.expect_map({"model", "mount", "noise"});
   c.vehicle_lidar_model = lidar.required("model").text();
-  if (!sensor_model_by_name(c.vehicle_lidar_model))
+  if (!lidar::sensor_model_by_name(c.vehicle_lidar_model))
     lidar.child("model").fail("unknown LiDAR model");
   const YamlField mount = lidar.required("mount");
   mount.expect_map({"x", "y", "z", "roll_deg", "pitch_deg", "yaw_deg"});

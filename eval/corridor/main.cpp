@@ -68,9 +68,9 @@ int run_report(const eval::CorridorExperimentConfig& config, const std::filesyst
 // The map the vehicles' NDT uses (and rsu-calibrate registers the RSU's background against).
 int run_map(const eval::CorridorExperimentConfig& config, const std::filesystem::path& out) {
   const sim::Raycaster raycaster(config.scenario.scene);
-  std::vector<LidarPoint> points;
+  std::vector<lidar::LidarPoint> points;
   for (const Eigen::Vector3f& p : eval::sample_static_map(raycaster, config.map_spacing_m, config.seed))
-    points.push_back(LidarPoint{.x = p.x(), .y = p.y(), .z = p.z()});
+    points.push_back(lidar::LidarPoint{.x = p.x(), .y = p.y(), .z = p.z()});
   io::write_pcd((out / "map.pcd").string(), points);
   std::fprintf(stderr, "map: %zu points -> %s\n", points.size(), (out / "map.pcd").c_str());
   return 0;
@@ -79,11 +79,11 @@ int run_map(const eval::CorridorExperimentConfig& config, const std::filesystem:
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-corridor"))
+  if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-corridor"))
     return 0;
   po::options_description options(
       "rsu-corridor {ndt|report|map} EXPERIMENT [--out DIR]: the paper's realistic experiment (Sec. 4)");
-  options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+  options.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
       "out,o", po::value<std::string>()->default_value("out/corridor"), "output folder");
   // The positional arguments, named in the usage line above rather than listed as options.
   po::options_description all;

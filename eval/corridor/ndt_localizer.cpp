@@ -68,13 +68,13 @@ NdtLocalizer::NdtLocalizer(const NdtConfig& config, const std::vector<Eigen::Vec
 
 NdtLocalizer::~NdtLocalizer() = default;
 
-NdtResult NdtLocalizer::align(const std::vector<LidarPoint>& scan, const Pose3& sensor_in_vehicle,
+NdtResult NdtLocalizer::align(const std::vector<lidar::LidarPoint>& scan, const Pose3& sensor_in_vehicle,
                               const Pose2& guess) {
   // Scan into the vehicle frame, cropped to the measurement range, the vehicle itself left out.
   const Eigen::Isometry3d sensor_to_vehicle = sensor_in_vehicle.to_isometry();
   auto cropped = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
   cropped->reserve(scan.size());
-  for (const LidarPoint& p : scan) {
+  for (const lidar::LidarPoint& p : scan) {
     const double px = p.x, py = p.y;
     const double r2 = px * px + py * py;
     if (r2 < config_.self_filter_radius_m * config_.self_filter_radius_m)

@@ -61,7 +61,8 @@ class NdtLocalizer {
 
   // scan: points in the sensor frame; sensor_in_vehicle: the LiDAR's mount on the vehicle (vehicle frame:
   // footprint centre on the ground, x forward); guess: the initial vehicle pose.
-  NdtResult align(const std::vector<LidarPoint>& scan, const Pose3& sensor_in_vehicle, const Pose2& guess);
+  NdtResult align(const std::vector<lidar::LidarPoint>& scan, const Pose3& sensor_in_vehicle,
+                  const Pose2& guess);
 
  private:
   struct Impl;

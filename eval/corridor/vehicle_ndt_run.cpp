@@ -22,11 +22,11 @@ const sim::Vehicle& find_vehicle(const sim::Scene& scene, std::uint32_t id) {
 
 // Moves each point from where the sensor was at its firing time to where it is at t_ref, assuming the
 // vehicle moved at constant speed and yaw rate (in its own frame) over the sweep.
-void deskew(std::vector<LidarPoint>& points, TimeNs t_ref, double speed, double yaw_rate,
+void deskew(std::vector<lidar::LidarPoint>& points, TimeNs t_ref, double speed, double yaw_rate,
             const Pose3& mount) {
   const Eigen::Isometry3d sensor_to_vehicle = mount.to_isometry();
   const Eigen::Isometry3d vehicle_to_sensor = sensor_to_vehicle.inverse();
-  for (LidarPoint& p : points) {
+  for (lidar::LidarPoint& p : points) {
     const double dt = to_seconds(p.time_ns - t_ref);  // <= 0
     const double dyaw = yaw_rate * dt;
     Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();  // vehicle at t_i seen from vehicle at t_ref
@@ -51,7 +51,7 @@ std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
   const std::vector<Eigen::Vector3f> map = sample_static_map(raycaster, config.map_spacing_m, config.seed);
   NdtLocalizer ndt(config.ndt, map, config.seed);
 
-  const auto model = *sensor_model_by_name(config.vehicle_lidar_model);
+  const auto model = *lidar::sensor_model_by_name(config.vehicle_lidar_model);
   const sim::LidarSimulator lidar(model, config.vehicle_lidar_mount, config.vehicle_lidar_noise, raycaster, 0,
                                   0.0, &vehicle.trajectory);
   const TimeNs period = lidar.rotation_period_ns();

@@ -102,7 +102,7 @@ const char* kFixConfigNote =
 int run_single(int argc, char** argv) {
   rsu::eval::PilotConfig defaults;
   po::options_description options("rsu-pilot [options]: the paper's pilot experiment (Sec. 3.1)");
-  options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+  options.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
       "out,o", po::value<std::string>()->default_value("out/pilot"), "output folder")(
       "models", po::value<std::string>()->default_value("vlp16,vlp32c"), "comma-separated LiDAR models")(
       "lidar-height-m", po::value<double>()->default_value(defaults.lidar_height_m),
@@ -157,7 +157,7 @@ int run_matrix_command(int argc, char** argv) {
   po::options_description options(
       "rsu-pilot matrix [options]: the pilot over LiDAR mounts x models x vehicles; writes one folder per "
       "cell (cells.csv, summary.json) and matrix.md / matrix.csv");
-  options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+  options.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
       "out,o", po::value<std::string>()->default_value("out/pilot_matrix"), "output folder")(
       "mounts", po::value<std::string>()->default_value("2,4,6,8"), "LiDAR heights, m")(
       "models", po::value<std::string>()->default_value("vlp16,vlp32c,generic128"), "LiDAR models")(
@@ -213,15 +213,15 @@ int run_matrix_command(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-pilot"))
+  if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-pilot"))
     return 0;
-  rsu::cli::accept_renamed_options(argc, argv,
-                                   {{"distance-min", "distance-min-m"},
-                                    {"distance-max", "distance-max-m"},
-                                    {"distance-step", "distance-step-m"},
-                                    {"spin-rate", "spin-rate-deg-per-s"},
-                                    {"lidar-height", "lidar-height-m"}},
-                                   "rsu-pilot");
+  rsu::tools::cli::accept_renamed_options(argc, argv,
+                                          {{"distance-min", "distance-min-m"},
+                                           {"distance-max", "distance-max-m"},
+                                           {"distance-step", "distance-step-m"},
+                                           {"spin-rate", "spin-rate-deg-per-s"},
+                                           {"lidar-height", "lidar-height-m"}},
+                                          "rsu-pilot");
   try {
     if (argc > 1 && std::string(argv[1]) == "matrix")
       return run_matrix_command(argc - 1, argv + 1);

@@ -96,11 +96,11 @@ std::vector<Eigen::Vector3d> vehicle_points(const sim::SimulatedFrame& frame, co
                                             std::vector<TimeNs>& times) {
   const perception::GroundHeightFilter ground({.ground_z = 0.0, .min_height = config.ground_filter_height_m});
   const double roi_radius = 0.5 * std::hypot(config.vehicle.length, config.vehicle.width) + 1.0;
-  std::vector<LidarPoint> map_points;
+  std::vector<lidar::LidarPoint> map_points;
   map_points.reserve(frame.frame.points.size());
-  for (const LidarPoint& p : frame.frame.points) {
+  for (const lidar::LidarPoint& p : frame.frame.points) {
     const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
-    LidarPoint q = p;
+    lidar::LidarPoint q = p;
     q.x = static_cast<float>(m.x());
     q.y = static_cast<float>(m.y());
     q.z = static_cast<float>(m.z());
@@ -109,7 +109,7 @@ std::vector<Eigen::Vector3d> vehicle_points(const sim::SimulatedFrame& frame, co
   std::vector<Eigen::Vector3d> out;
   times.clear();
   for (std::uint32_t i : ground.select_foreground(map_points).indices) {
-    const LidarPoint& p = map_points[i];
+    const lidar::LidarPoint& p = map_points[i];
     if (std::hypot(static_cast<double>(p.x) - distance, static_cast<double>(p.y)) > roi_radius)
       continue;
     out.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
@@ -118,7 +118,7 @@ std::vector<Eigen::Vector3d> vehicle_points(const sim::SimulatedFrame& frame, co
   return out;
 }
 
-DistanceRun run_distance(const PilotConfig& config, const SensorModel& model, int distance_index,
+DistanceRun run_distance(const PilotConfig& config, const lidar::SensorModel& model, int distance_index,
                          double distance, int frames_per_turn) {
   const TimeNs period = from_seconds(60.0 / model.rpm);
   const TimeNs t0 = static_cast<TimeNs>(distance_index) * frames_per_turn * period;
@@ -213,7 +213,7 @@ const char* to_string(PilotMethod method) {
 }
 
 PilotResult run_pilot(const PilotConfig& config) {
-  const auto model = sensor_model_by_name(config.model_name);
+  const auto model = lidar::sensor_model_by_name(config.model_name);
   if (!model)
     throw std::invalid_argument("unknown LiDAR model " + config.model_name);
   if (!(config.distance_step_m > 0) || config.distance_max_m < config.distance_min_m ||

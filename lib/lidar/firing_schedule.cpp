@@ -6,7 +6,7 @@
 
 #include "common/angles.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr int kCdegPerTurn = 36000;
@@ -191,4 +191,4 @@ void beam_firings(const SensorModel& model, const PacketBlocks& blocks, const Pa
   }
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

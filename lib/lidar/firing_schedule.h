@@ -42,7 +42,7 @@
 #include "common/time.h"
 #include "lidar/sensor_model.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 constexpr int kBlocksPerPacket = 12;
 constexpr int kChannelsPerBlock = 32;
@@ -117,4 +117,4 @@ void beam_firings(const SensorModel& model, const PacketBlocks& blocks, const Pa
 // Duration of one data block: sequences_per_block firing sequences, in microseconds.
 double block_duration_us(const SensorModel& model);
 
-}  // namespace rsu
+}  // namespace rsu::lidar

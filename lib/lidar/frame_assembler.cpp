@@ -8,7 +8,7 @@
 
 #include "common/angles.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr double kTurn = 2.0 * kPi;
@@ -147,4 +147,4 @@ std::vector<LidarFrame> FrameAssembler::flush() {
   return done;
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

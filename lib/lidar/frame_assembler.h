@@ -24,7 +24,7 @@
 #include "common/time.h"
 #include "lidar/point.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 struct FrameAssemblerConfig {
   double cut_azimuth_deg = 0.0;      // Velodyne azimuth (clockwise from +x) where one frame ends
@@ -87,4 +87,4 @@ class FrameAssembler {
   std::deque<OpenFrame> open_;         // ascending index
 };
 
-}  // namespace rsu
+}  // namespace rsu::lidar

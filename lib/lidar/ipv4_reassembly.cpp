@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr std::size_t kMaxIpPayload = 65535 - 20;  // total length field minus the smallest header
@@ -96,4 +96,4 @@ std::optional<Ipv4Datagram> Ipv4Reassembler::add(const Ipv4Fragment& fragment) {
   return d;
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -20,7 +20,7 @@
 
 #include "common/time.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 struct Ipv4Fragment {
   std::uint32_t src = 0;  // host order
@@ -82,4 +82,4 @@ class Ipv4Reassembler {
   ReassemblyStats stats_;
 };
 
-}  // namespace rsu
+}  // namespace rsu::lidar

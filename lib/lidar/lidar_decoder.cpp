@@ -6,7 +6,7 @@
 #include "lidar/ouster/ouster_lidar_decoder.h"
 #include "lidar/velodyne_decoder.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 std::string_view to_string(ReturnSelection selection) {
   switch (selection) {
@@ -61,4 +61,4 @@ std::unique_ptr<LidarDecoder> make_lidar_decoder(std::string_view model, const L
                               std::string(kDecodableModels) + ")");
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -37,7 +37,7 @@
 #include "lidar/point.h"
 #include "lidar/sensor_model.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 enum class PacketKind : std::uint8_t {
   data,       // points appended (possibly none: every firing without a return)
@@ -141,4 +141,4 @@ std::unique_ptr<LidarDecoder> make_lidar_decoder(std::string_view model, const L
 // Whether make_lidar_decoder knows `model` (for configuration checks before any file is read).
 bool is_decodable_model(std::string_view model);
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -5,7 +5,7 @@
 #include <iterator>
 #include <stdexcept>
 
-namespace rsu {
+namespace rsu::lidar {
 
 PacketOrder::PacketOrder(const PacketOrderConfig& config, TimeNs packet_period_ns, TimeNs max_gap_ns)
     : config_(config), period_ns_(packet_period_ns), max_gap_ns_(max_gap_ns) {
@@ -80,4 +80,4 @@ void PacketOrder::count_gap(TimeNs previous_next_due, TimeNs next) {
     stats_.lost += static_cast<std::uint64_t>(periods);
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -26,7 +26,7 @@
 #include "common/time.h"
 #include "lidar/point.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 struct PacketOrderConfig {
   std::size_t depth = 0;  // packets held to put late ones back in order (file comment)
@@ -85,4 +85,4 @@ class PacketOrder {
   PacketOrderStats stats_;
 };
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -7,7 +7,7 @@
 
 #include "lidar/ipv4_reassembly.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr std::uint32_t kMagicMicro = 0xa1b2c3d4;
@@ -422,4 +422,4 @@ PcapParseResult parse_pcap(std::span<const std::uint8_t> bytes) {
   return result;
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -17,7 +17,7 @@
 #include "common/time.h"
 #include "lidar/ipv4_reassembly.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 struct UdpEndpoint {
   std::uint32_t ip = 0;  // host order: 192.168.1.201 is 0xC0A801C9
@@ -126,4 +126,4 @@ class PcapReader {
 // A whole capture in memory (tests, small files): PcapReader over all of `bytes`.
 PcapParseResult parse_pcap(std::span<const std::uint8_t> bytes);
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -7,7 +7,7 @@
 
 #include "common/time.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 // Which echo of its firing a point is, as bit flags: a multi-return sensor reports the strongest and the
 // last echo (the only echo is both; a second-strongest one is neither). A single-return sensor's point
@@ -32,4 +32,4 @@ struct LidarFrame {
   std::vector<LidarPoint> points;
 };
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace rsu {
+namespace rsu::lidar {
 
 SensorClock::SensorClock(const SensorClockConfig& config) : config_(config) {
   if (!(config.max_drift >= 0.0) || !std::isfinite(config.max_drift) || !(config.max_slew > 0.0) ||
@@ -45,4 +45,4 @@ void SensorClock::observe(TimeNs sensor_end_ns, TimeNs arrival_ns) {
   stamping_ += std::clamp(estimate_ - stamping_, -slew, slew);
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

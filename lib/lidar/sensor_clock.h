@@ -20,7 +20,7 @@
 
 #include "common/time.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 struct SensorClockConfig {
   double max_drift = 1e-4;                    // s/s the estimate may rise by
@@ -54,4 +54,4 @@ class SensorClock {
   std::uint64_t steps_ = 0;
 };
 
-}  // namespace rsu
+}  // namespace rsu::lidar

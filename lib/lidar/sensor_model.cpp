@@ -8,7 +8,7 @@
 
 #include "common/angles.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 // Both sensors fire one laser (VLP-16) or one pair (VLP-32C) every 2.304 us (docs/design.md §2).
@@ -190,4 +190,4 @@ std::optional<SensorModel> sensor_model_by_name(std::string_view name) {
   return std::nullopt;
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -23,7 +23,7 @@
 
 #include <Eigen/Core>
 
-namespace rsu {
+namespace rsu::lidar {
 
 struct SensorModel {
   std::string name;                        // "vlp16", "vlp32c", "generic64", ...
@@ -74,4 +74,4 @@ SensorModel make_generic(int rings);
 // otherwise.
 std::optional<SensorModel> sensor_model_by_name(std::string_view name);
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -9,7 +9,7 @@
 
 #include "common/angles.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr std::array<DecodeResult, 7> kRefusals = {DecodeResult::wrong_size,
@@ -326,4 +326,4 @@ std::vector<std::string> VelodyneDecoder::take_notices() {
   return out;
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

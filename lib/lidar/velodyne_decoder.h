@@ -31,7 +31,7 @@
 #include "lidar/sensor_model.h"
 #include "lidar/velodyne_packet.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 struct VelodyneStats {
   // One per payload: the outcome.
@@ -108,4 +108,4 @@ class VelodyneDecoder final : public LidarDecoder {
   std::vector<Firing> firings_;    // scratch
 };
 
-}  // namespace rsu
+}  // namespace rsu::lidar

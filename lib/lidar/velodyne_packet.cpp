@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr std::uint8_t kBlockFlag0 = 0xFF;
@@ -305,4 +305,4 @@ std::optional<TimeNs> nmea_rmc_utc(std::string_view s) {
   return (days * 86400 + std::int64_t{*hh} * 3600 + std::int64_t{*mm} * 60 + *ss) * kNsPerSecond;
 }
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -27,7 +27,7 @@
 #include "lidar/point.h"
 #include "lidar/sensor_model.h"
 
-namespace rsu {
+namespace rsu::lidar {
 
 constexpr std::size_t kPacketBytes = 1206;
 constexpr std::size_t kBlockBytes = 100;
@@ -101,4 +101,4 @@ std::optional<PositionPacket> parse_position_packet(std::span<const std::uint8_t
 // intact checksum: the UTC time it states, ns since 1970; nullopt otherwise.
 std::optional<TimeNs> nmea_rmc_utc(std::string_view sentence);
 
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -5,13 +5,13 @@ namespace rsu::perception {
 BackgroundModel::BackgroundModel(const BackgroundModelConfig& config, const Eigen::Vector2d& lidar_xy)
     : config_(config), ground_(config.ground), range_image_(lidar_xy, config.range_image) {}
 
-void BackgroundModel::add_background_frame(std::span<const LidarPoint> points) {
+void BackgroundModel::add_background_frame(std::span<const lidar::LidarPoint> points) {
   ++frames_;
   switch (config_.method) {
     case BackgroundMethod::ground_height:
       return;
     case BackgroundMethod::reference_frame:
-      for (const LidarPoint& p : points) {
+      for (const lidar::LidarPoint& p : points) {
         // Reference points the prefilter would drop anyway only slow the look-ups down.
         if (!config_.ground_prefilter || ground_.classify(p) == PointClass::foreground) {
           reference_points_.push_back(p);
@@ -25,7 +25,7 @@ void BackgroundModel::add_background_frame(std::span<const LidarPoint> points) {
   }
 }
 
-PointClass BackgroundModel::classify(const LidarPoint& p) const {
+PointClass BackgroundModel::classify(const lidar::LidarPoint& p) const {
   if (config_.method == BackgroundMethod::ground_height || config_.ground_prefilter) {
     const PointClass c = ground_.classify(p);
     if (c != PointClass::foreground || config_.method == BackgroundMethod::ground_height) {

@@ -36,19 +36,19 @@ class BackgroundModel {
 
   // A frame recorded without vehicles (map frame): extends the reference frame or trains the range
   // image; the ground-height method needs none. Until one is added, every non-ground point is foreground.
-  void add_background_frame(std::span<const LidarPoint> points_in_map_frame);
+  void add_background_frame(std::span<const lidar::LidarPoint> points_in_map_frame);
   int background_frames() const { return frames_; }
 
-  PointClass classify(const LidarPoint& p) const;
-  ForegroundSelection select_foreground(std::span<const LidarPoint> points) const {
-    return perception::select_foreground(points, [this](const LidarPoint& p) { return classify(p); });
+  PointClass classify(const lidar::LidarPoint& p) const;
+  ForegroundSelection select_foreground(std::span<const lidar::LidarPoint> points) const {
+    return perception::select_foreground(points, [this](const lidar::LidarPoint& p) { return classify(p); });
   }
 
  private:
   BackgroundModelConfig config_;
   GroundHeightFilter ground_;
   RangeImageBackground range_image_;
-  std::vector<LidarPoint> reference_points_;
+  std::vector<lidar::LidarPoint> reference_points_;
   std::optional<ReferenceFrameBackground> reference_;
   int frames_ = 0;
 };

@@ -14,7 +14,7 @@ Detection detect_points(std::size_t n, PointAt point_at, const Eigen::Vector2d& 
   const TimeNs t0 = point_at(0).time_ns;
   TimeNs offset_sum = 0;  // relative to t0: a detection spans well under a second, so no overflow
   for (std::size_t k = 0; k < n; ++k) {
-    const LidarPoint& p = point_at(k);
+    const lidar::LidarPoint& p = point_at(k);
     d.points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
     footprint.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y));
     offset_sum += p.time_ns - t0;
@@ -26,16 +26,16 @@ Detection detect_points(std::size_t n, PointAt point_at, const Eigen::Vector2d& 
 
 }  // namespace
 
-Detection detect(std::span<const LidarPoint> points, const Eigen::Vector2d& lidar_xy,
+Detection detect(std::span<const lidar::LidarPoint> points, const Eigen::Vector2d& lidar_xy,
                  const LShapeFitConfig& config) {
   return detect_points(
-      points.size(), [&](std::size_t k) -> const LidarPoint& { return points[k]; }, lidar_xy, config);
+      points.size(), [&](std::size_t k) -> const lidar::LidarPoint& { return points[k]; }, lidar_xy, config);
 }
 
-Detection detect(std::span<const LidarPoint> frame, std::span<const std::uint32_t> indices,
+Detection detect(std::span<const lidar::LidarPoint> frame, std::span<const std::uint32_t> indices,
                  const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& config) {
   return detect_points(
-      indices.size(), [&](std::size_t k) -> const LidarPoint& { return frame[indices[k]]; }, lidar_xy,
+      indices.size(), [&](std::size_t k) -> const lidar::LidarPoint& { return frame[indices[k]]; }, lidar_xy,
       config);
 }
 

@@ -25,10 +25,10 @@ struct Detection {
 
 // The detection made of `points` (map frame, at least one): their mean firing time and the rectangle
 // fitted to their footprint as seen from the LiDAR at `lidar_xy`.
-Detection detect(std::span<const LidarPoint> points, const Eigen::Vector2d& lidar_xy,
+Detection detect(std::span<const lidar::LidarPoint> points, const Eigen::Vector2d& lidar_xy,
                  const LShapeFitConfig& config);
 // The same for the points `indices` of `frame`.
-Detection detect(std::span<const LidarPoint> frame, std::span<const std::uint32_t> indices,
+Detection detect(std::span<const lidar::LidarPoint> frame, std::span<const std::uint32_t> indices,
                  const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& config);
 
 }  // namespace rsu::perception

@@ -18,7 +18,7 @@ struct ValidSubset {
   std::size_t invalid = 0;
 };
 
-ValidSubset valid_subset(std::span<const LidarPoint> points, std::span<const std::uint32_t> subset,
+ValidSubset valid_subset(std::span<const lidar::LidarPoint> points, std::span<const std::uint32_t> subset,
                          const ClusteringConfig& config) {
   const bool planar = config.distance == ClusterDistance::planar;
   const float tol = static_cast<float>(config.tolerance_m);
@@ -35,7 +35,7 @@ ValidSubset valid_subset(std::span<const LidarPoint> points, std::span<const std
       ++out.invalid;
       continue;
     }
-    const LidarPoint& p = points[i];
+    const lidar::LidarPoint& p = points[i];
     const float z = planar ? 0.0F : p.z;
     const bool ok = std::abs(p.x) <= max_abs && std::abs(p.y) <= max_abs && std::abs(z) <= max_abs;
     if (!ok) {  // also rejects NaN
@@ -109,7 +109,7 @@ class UnionFind {
 
 }  // namespace
 
-Clustering cluster_reference(std::span<const LidarPoint> points, std::span<const std::uint32_t> subset,
+Clustering cluster_reference(std::span<const lidar::LidarPoint> points, std::span<const std::uint32_t> subset,
                              const ClusteringConfig& config) {
   const ValidSubset valid = valid_subset(points, subset, config);
   const float tol2 = static_cast<float>(config.tolerance_m * config.tolerance_m);
@@ -139,7 +139,7 @@ Clustering cluster_reference(std::span<const LidarPoint> points, std::span<const
   return finish(components, valid, config);
 }
 
-Clustering cluster_grid(std::span<const LidarPoint> points, std::span<const std::uint32_t> subset,
+Clustering cluster_grid(std::span<const lidar::LidarPoint> points, std::span<const std::uint32_t> subset,
                         const ClusteringConfig& config) {
   const ValidSubset valid = valid_subset(points, subset, config);
   const bool planar = config.distance == ClusterDistance::planar;

@@ -44,9 +44,9 @@ struct Clustering {
 
 // `subset`: the indices of the points to cluster (e.g. the foreground); cluster indices refer to
 // `points`. Indices outside `points` are counted as invalid.
-Clustering cluster_reference(std::span<const LidarPoint> points, std::span<const std::uint32_t> subset,
+Clustering cluster_reference(std::span<const lidar::LidarPoint> points, std::span<const std::uint32_t> subset,
                              const ClusteringConfig& config = {});
-Clustering cluster_grid(std::span<const LidarPoint> points, std::span<const std::uint32_t> subset,
+Clustering cluster_grid(std::span<const lidar::LidarPoint> points, std::span<const std::uint32_t> subset,
                         const ClusteringConfig& config = {});
 
 }  // namespace rsu::perception

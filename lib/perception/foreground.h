@@ -24,14 +24,14 @@ struct ForegroundSelection {
   std::size_t invalid = 0;             // points dropped as invalid (see PointClass::invalid)
 };
 
-inline bool is_finite_point(const LidarPoint& p) {
+inline bool is_finite_point(const lidar::LidarPoint& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
 }
 
 // Runs `classify(point) -> PointClass` over a frame. Templated so that chained classifiers (ground
 // prefilter, then a background model) inline into one pass over the points.
 template <class Classifier>
-ForegroundSelection select_foreground(std::span<const LidarPoint> points, Classifier&& classify) {
+ForegroundSelection select_foreground(std::span<const lidar::LidarPoint> points, Classifier&& classify) {
   ForegroundSelection out;
   out.indices.reserve(points.size() / 8);
   for (std::size_t i = 0; i < points.size(); ++i) {

@@ -22,15 +22,15 @@ class GroundHeightFilter {
   explicit GroundHeightFilter(const GroundHeightFilterConfig& config = {})
       : min_z_(static_cast<float>(config.ground_z + config.min_height)) {}
 
-  PointClass classify(const LidarPoint& p) const {
+  PointClass classify(const lidar::LidarPoint& p) const {
     if (!is_finite_point(p)) {
       return PointClass::invalid;
     }
     return p.z < min_z_ ? PointClass::background : PointClass::foreground;
   }
 
-  ForegroundSelection select_foreground(std::span<const LidarPoint> points) const {
-    return perception::select_foreground(points, [this](const LidarPoint& p) { return classify(p); });
+  ForegroundSelection select_foreground(std::span<const lidar::LidarPoint> points) const {
+    return perception::select_foreground(points, [this](const lidar::LidarPoint& p) { return classify(p); });
   }
 
  private:

@@ -10,7 +10,7 @@ BackgroundModelConfig background_model_config(const PerceptionConfig& config) {
 PerceptionPipeline::PerceptionPipeline(const PerceptionConfig& config, const LidarGeometry& lidar)
     : config_(config), lidar_(lidar), background_(background_model_config(config), lidar.xy()) {}
 
-void PerceptionPipeline::add_background_frame(std::span<const LidarPoint> points) {
+void PerceptionPipeline::add_background_frame(std::span<const lidar::LidarPoint> points) {
   background_.add_background_frame(points);
 }
 
@@ -18,7 +18,7 @@ void PerceptionPipeline::add_background_frame(std::span<const LidarPoint> points
 // fitted to each. A whole frame clusters with cluster_grid directly: what the SweepClusterer runs on
 // the points it releases, and released whole it releases exactly these clusters (test_pipeline checks
 // it), without its per-point sweep bookkeeping, which a whole frame does not need.
-PerceptionResult PerceptionPipeline::process(std::span<const LidarPoint> points) const {
+PerceptionResult PerceptionPipeline::process(std::span<const lidar::LidarPoint> points) const {
   const ForegroundSelection foreground = background_.select_foreground(points);
   const Clustering clusters = cluster_grid(points, foreground.indices, config_.clustering);
   PerceptionResult result;

@@ -74,10 +74,10 @@ class PerceptionPipeline {
   // A frame recorded without vehicles (map frame): becomes part of the reference frame, or trains the
   // range image. Unused by the ground-height method. Until one is added, every non-ground point is
   // foreground.
-  void add_background_frame(std::span<const LidarPoint> points_in_map_frame);
+  void add_background_frame(std::span<const lidar::LidarPoint> points_in_map_frame);
 
   // Foreground -> clusters -> fit, the frame released whole at its end.
-  PerceptionResult process(std::span<const LidarPoint> points_in_map_frame) const;
+  PerceptionResult process(std::span<const lidar::LidarPoint> points_in_map_frame) const;
 
   // The fix of one object, for the vehicle matched to it (fix_vehicle with this pipeline's settings).
   VehicleFix correct(const Detection& object, const AnnouncedVehicle& vehicle) const;

@@ -16,7 +16,7 @@ RangeImageBackground::RangeImageBackground(const Eigen::Vector2d& lidar_xy,
       bins_per_rad_(static_cast<float>(static_cast<double>(bins_) / (2.0 * std::numbers::pi))),
       max_rings_(std::clamp(config.max_rings, 0, 65536)) {}
 
-std::size_t RangeImageBackground::add_training_frame(std::span<const LidarPoint> points) {
+std::size_t RangeImageBackground::add_training_frame(std::span<const lidar::LidarPoint> points) {
   std::size_t used = 0;
   for (const auto& p : points) {
     if (!is_finite_point(p) || !std::isfinite(p.azimuth_rad) || p.ring >= max_rings_) {

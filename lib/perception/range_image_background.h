@@ -49,9 +49,9 @@ class RangeImageBackground {
 
   // Adds one frame recorded without vehicles (map frame) and recomputes the thresholds. Invalid points
   // (non-finite, ring >= max_rings) are ignored. Returns how many points were used.
-  std::size_t add_training_frame(std::span<const LidarPoint> points);
+  std::size_t add_training_frame(std::span<const lidar::LidarPoint> points);
 
-  PointClass classify(const LidarPoint& p) const {
+  PointClass classify(const lidar::LidarPoint& p) const {
     if (!is_finite_point(p) || !std::isfinite(p.azimuth_rad) || p.ring >= max_rings_) {
       return PointClass::invalid;
     }
@@ -65,8 +65,8 @@ class RangeImageBackground {
                                                                  : PointClass::background;
   }
 
-  ForegroundSelection select_foreground(std::span<const LidarPoint> points) const {
-    return perception::select_foreground(points, [this](const LidarPoint& p) { return classify(p); });
+  ForegroundSelection select_foreground(std::span<const lidar::LidarPoint> points) const {
+    return perception::select_foreground(points, [this](const lidar::LidarPoint& p) { return classify(p); });
   }
 
   int rings() const { return rings_; }

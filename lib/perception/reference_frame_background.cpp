@@ -5,7 +5,7 @@
 namespace rsu::perception {
 namespace {
 
-std::vector<GridPoint> to_grid_points(std::span<const LidarPoint> points) {
+std::vector<GridPoint> to_grid_points(std::span<const lidar::LidarPoint> points) {
   std::vector<GridPoint> out;
   out.reserve(points.size());
   for (const auto& p : points) {
@@ -16,7 +16,7 @@ std::vector<GridPoint> to_grid_points(std::span<const LidarPoint> points) {
 
 }  // namespace
 
-ReferenceFrameBackground::ReferenceFrameBackground(std::span<const LidarPoint> reference_points,
+ReferenceFrameBackground::ReferenceFrameBackground(std::span<const lidar::LidarPoint> reference_points,
                                                    const ReferenceFrameBackgroundConfig& config)
     : radius_(static_cast<float>(config.match_radius_m)),
       // The cell is a hair larger than r so that a point at distance exactly r can never be two cells

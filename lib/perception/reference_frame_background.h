@@ -31,10 +31,10 @@ class ReferenceFrameBackground {
  public:
   // reference_points: one or more frames without vehicles, in the map frame. Non-finite points are
   // ignored (counted in skipped_reference_points()).
-  explicit ReferenceFrameBackground(std::span<const LidarPoint> reference_points,
+  explicit ReferenceFrameBackground(std::span<const lidar::LidarPoint> reference_points,
                                     const ReferenceFrameBackgroundConfig& config = {});
 
-  PointClass classify(const LidarPoint& p) const {
+  PointClass classify(const lidar::LidarPoint& p) const {
     const GridPoint q{p.x, p.y, p.z};
     if (!grid_.in_domain(q)) {
       return PointClass::invalid;
@@ -42,8 +42,8 @@ class ReferenceFrameBackground {
     return grid_.any_within(q, radius_) ? PointClass::background : PointClass::foreground;
   }
 
-  ForegroundSelection select_foreground(std::span<const LidarPoint> points) const {
-    return perception::select_foreground(points, [this](const LidarPoint& p) { return classify(p); });
+  ForegroundSelection select_foreground(std::span<const lidar::LidarPoint> points) const {
+    return perception::select_foreground(points, [this](const lidar::LidarPoint& p) { return classify(p); });
   }
 
   std::size_t reference_point_count() const { return grid_.points().size(); }

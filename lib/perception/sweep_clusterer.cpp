@@ -86,7 +86,7 @@ void SweepClusterer::restart() {
   ++stats_.restarts;
 }
 
-void SweepClusterer::add(const LidarPoint& p, bool foreground) {
+void SweepClusterer::add(const lidar::LidarPoint& p, bool foreground) {
   ++stats_.points_seen;
   if (!std::isfinite(p.azimuth_rad) || !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
     ++stats_.invalid_points;

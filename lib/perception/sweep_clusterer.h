@@ -31,7 +31,7 @@
 // sensor's, ranges are measured from the LiDAR's map position).
 // A closed cluster is released when, in addition, no open cluster overlaps its azimuth span, so that
 // vehicles side by side in one line of sight reach association together (the RSU associates each
-// released batch with one global assignment: lib/rsu/rsu_core.h).
+// released batch with one global assignment: lib/core/rsu_core.h).
 //
 // Bookkeeping: points pending for more than half a rotation are dropped (counted) so that the next
 // rotation's points never merge with this one's (only points within d of the LiDAR itself can stay
@@ -67,7 +67,7 @@ struct SweepConfig {
 };
 
 struct SweptCluster {
-  std::vector<LidarPoint> points;  // map frame, in arrival order
+  std::vector<lidar::LidarPoint> points;  // map frame, in arrival order
 };
 
 struct SweepClustererStats {
@@ -101,7 +101,7 @@ class SweepClusterer {
 
   // Every point of the stream, in firing order, map frame (its azimuth_rad is still the sensor's beam
   // azimuth). Background points only advance the sweep; foreground points wait for their cluster.
-  void add(const LidarPoint& point, bool foreground);
+  void add(const lidar::LidarPoint& point, bool foreground);
 
   // Clusters closed by the sweep so far (see the file comment), in order of their first point.
   std::vector<SweptCluster> release_closed();
@@ -168,7 +168,7 @@ class SweepClusterer {
   TimeNs last_time_ = 0;
 
   // Pending foreground points and, in parallel, their unwrapped azimuth and planar range.
-  std::vector<LidarPoint> points_;
+  std::vector<lidar::LidarPoint> points_;
   std::vector<double> azimuth_;
   std::vector<double> range_;
   SweepClustererStats stats_;

@@ -2,7 +2,7 @@
 // fitting, then size correction with the size the vehicle announced, Algorithm 1 or the improved
 // correction), with the fix's covariance or the reason why there is no fix.
 //
-// This is the one function every part that turns points into a fix calls: rsud's core (lib/rsu), the
+// This is the one function every part that turns points into a fix calls: rsud's core (lib/core), the
 // pilot experiment (eval/pilot), the accuracy tests. They pass the same configuration: VehicleFixConfig's
 // defaults are what rsud runs unless its configuration file says otherwise (deploy/rsud.yaml,
 // perception.correction); an experiment that measures another setting says so in its output.

@@ -218,7 +218,7 @@ LayoutResult parse_layout(const PointCloud2View& cloud, const CloudLimits& limit
 
 CloudDecodeStats decode_points(const PointCloud2View& cloud, const PointCloud2Layout& l,
                                std::span<const std::uint16_t> elevation_to_channel,
-                               std::vector<LidarPoint>& out) {
+                               std::vector<lidar::LidarPoint>& out) {
   CloudDecodeStats s;
   const bool be = l.big_endian;
   out.reserve(out.size() + std::size_t{l.width} * l.height);
@@ -226,7 +226,7 @@ CloudDecodeStats decode_points(const PointCloud2View& cloud, const PointCloud2La
     const std::uint8_t* row_data = cloud.data.data() + std::size_t{row} * l.row_step;
     for (std::uint32_t col = 0; col < l.width; ++col) {
       const std::uint8_t* src = row_data + std::size_t{col} * l.point_step;
-      LidarPoint p;
+      lidar::LidarPoint p;
       p.x = static_cast<float>(read_value(src + l.x.offset, l.x.datatype, be));
       p.y = static_cast<float>(read_value(src + l.y.offset, l.y.datatype, be));
       p.z = static_cast<float>(read_value(src + l.z.offset, l.z.datatype, be));

@@ -124,7 +124,7 @@ struct CloudDecodeStats {
 // (ring_rank_to_channel()); a rank outside it is a bad ring.
 CloudDecodeStats decode_points(const PointCloud2View& cloud, const PointCloud2Layout& layout,
                                std::span<const std::uint16_t> elevation_to_channel,
-                               std::vector<LidarPoint>& out);
+                               std::vector<lidar::LidarPoint>& out);
 
 // Channel indices sorted by elevation, lowest first (ties keep channel order): rank -> channel.
 std::vector<std::uint16_t> ring_rank_to_channel(std::span<const double> elevation_deg);

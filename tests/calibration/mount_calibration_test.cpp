@@ -17,7 +17,7 @@ namespace rsu {
 namespace {
 
 struct Case {
-  calibrate::CalibrationResult result;
+  tools::CalibrationResult result;
   Pose3 truth;
 };
 
@@ -27,13 +27,13 @@ Case calibrate_in(const sim::Scene& static_scene, const sim::LidarConfig& lidar,
   const sim::LidarSimulator simulator(lidar.model, truth, lidar.noise, raycaster);
   const sim::SimulatedFrame frame = simulator.simulate_frame(0);
   std::vector<Eigen::Vector3d> background;
-  for (const LidarPoint& p : frame.frame.points)
+  for (const lidar::LidarPoint& p : frame.frame.points)
     background.emplace_back(p.x, p.y, p.z);
   const std::vector<Eigen::Vector3f> map = eval::sample_static_map(raycaster, 0.25, 5);
   const Pose3 start{truth.x + start_offset.x,         truth.y + start_offset.y,
                     truth.z + start_offset.z,         truth.roll + start_offset.roll,
                     truth.pitch + start_offset.pitch, truth.yaw + start_offset.yaw};
-  return Case{calibrate::calibrate_mount(background, map, start), truth};
+  return Case{tools::calibrate_mount(background, map, start), truth};
 }
 
 sim::Scenario corridor() {
@@ -121,7 +121,7 @@ TEST(MountCalibration, PointsWithoutAVoxelAreLeftOut) {
   EXPECT_FALSE(occupancy.occupied(Eigen::Vector3d(std::nan(""), 0, 0)));
   EXPECT_FALSE(occupancy.occupied(Eigen::Vector3d(1e300, 0, 0)));
   const std::vector<Eigen::Vector3d> background = {{std::nan(""), 1, 1}, {1e300, 0, 0}, {5, 0, 0}};
-  const calibrate::CalibrationResult r = calibrate::calibrate_mount(background, map, Pose3{});
+  const tools::CalibrationResult r = tools::calibrate_mount(background, map, Pose3{});
   EXPECT_EQ(r.background_points, 1U);
   EXPECT_EQ(r.verdict.verdict, calibration::Verdict::kFailed);
 }

@@ -35,7 +35,7 @@ TEST(LidarConfig, DefaultsAreTheSensorsOwn) {
   EXPECT_EQ(in.auxiliary_port, 0);
   EXPECT_EQ(c.core.time_source, core::TimeSource::kSensor);
   EXPECT_EQ(c.core.clock_tolerance, 100 * kNsPerMs);
-  EXPECT_EQ(c.core.sensor_options.returns, ReturnSelection::both);
+  EXPECT_EQ(c.core.sensor_options.returns, lidar::ReturnSelection::both);
   EXPECT_EQ(c.core.sensor_options.rotation_start_azimuth_deg, 0.0);
   EXPECT_TRUE(c.sensor_files.calibration.empty());
   // velodyne_udp is the same input under its older name.
@@ -52,7 +52,7 @@ TEST(LidarConfig, ReadsEveryKey) {
       "  input:\n"
       "    pcap: {file: captures/road.pcap, pace: max, loop: true, port: 2369, auxiliary_port: 8309}\n");
   EXPECT_EQ(c.sensor_files.calibration, "/etc/rsud/calib/VLP32.yaml");
-  EXPECT_EQ(c.core.sensor_options.returns, ReturnSelection::strongest);
+  EXPECT_EQ(c.core.sensor_options.returns, lidar::ReturnSelection::strongest);
   EXPECT_EQ(c.core.sensor_options.rotation_start_azimuth_deg, 180.0);
   EXPECT_EQ(c.core.time_source, core::TimeSource::kHostReceive);
   EXPECT_EQ(c.core.clock_tolerance, 20 * kNsPerMs);

@@ -58,7 +58,7 @@ TEST(NdtLocalizer, ConvergesFromAnOffsetGuessInTheCorridor) {
   const Pose2 truth{-12.0, -3.5, deg_to_rad(3.0)};
   const Pose3 mount{0.0, 0.0, 2.0, 0.0, 0.0, 0.0};
   const Pose3 sensor_in_map{truth.x, truth.y, mount.z, 0.0, 0.0, truth.yaw};
-  const sim::LidarSimulator lidar(make_vlp16(), sensor_in_map, sim::NoiseModel{}, raycaster);
+  const sim::LidarSimulator lidar(lidar::make_vlp16(), sensor_in_map, sim::NoiseModel{}, raycaster);
   const auto frame = lidar.simulate_frame(0);
 
   NdtConfig config;  // Autoware's parameters

@@ -5,7 +5,7 @@ as a sensor configured with udp_port_imu = udp_port_lidar sends them). Every pay
 in rsud's stats: the 30 IMU packets as packet.imu, the 192 lidar packets decoded (packet.accepted,
 decoder.frames_complete 3) and, since the capture's sensor counts time from its start (TIME_FROM_INTERNAL_OSC: 1.65e9 s off the host's
 clock) and rsud takes points on the sensor's time, refused as packet.clock_offset with a warning that says
-so: never used, never silent. (The RsuCore test tests/rsu/ouster_core_test.cpp serves the same packets
+so: never used, never silent. (The RsuCore test tests/core/ouster_core_test.cpp serves the same packets
 stamped by arrival.)
 
 Usage: rsud_ouster_udp.py --rsud PATH --work DIR

@@ -19,21 +19,21 @@ std::string temp_path(const std::string& name) {
 }
 
 // The points of a PCD file with `text` (written to a temporary file, removed afterwards).
-std::vector<LidarPoint> read_text(const std::string& name, const std::string& text) {
+std::vector<lidar::LidarPoint> read_text(const std::string& name, const std::string& text) {
   const std::string path = temp_path(name);
   {
     std::ofstream out(path, std::ios::binary);
     out << text;
   }
-  std::vector<LidarPoint> points = read_pcd(path);
+  std::vector<lidar::LidarPoint> points = read_pcd(path);
   std::filesystem::remove(path);
   return points;
 }
 
 TEST(PcdIo, RoundTripKeepsEveryField) {
-  std::vector<LidarPoint> points;
+  std::vector<lidar::LidarPoint> points;
   for (int i = 0; i < 100; ++i) {
-    LidarPoint p;
+    lidar::LidarPoint p;
     p.x = 0.5F * static_cast<float>(i);
     p.y = -1.25F * static_cast<float>(i);
     p.z = 0.01F * static_cast<float>(i);

@@ -17,7 +17,7 @@ std::string real_calibration(const std::string& name) {
 
 // The built-in tables are the factory defaults: nebula's (and the ROS velodyne driver's) calibration
 // files, read by the same parser lidar.calibration uses.
-void expect_equal_tables(const SensorModel& built_in, const SensorModel& from_file) {
+void expect_equal_tables(const lidar::SensorModel& built_in, const lidar::SensorModel& from_file) {
   ASSERT_EQ(built_in.laser_count(), from_file.laser_count());
   for (std::size_t i = 0; i < built_in.laser_count(); ++i) {
     EXPECT_NEAR(from_file.elevation_deg[i], built_in.elevation_deg[i], 1e-9) << "laser " << i;
@@ -27,9 +27,9 @@ void expect_equal_tables(const SensorModel& built_in, const SensorModel& from_fi
 }
 
 TEST(VelodyneCalibration, BuiltInTablesAreTheFactoryFiles) {
-  const SensorModel vlp16 = make_vlp16();
+  const lidar::SensorModel vlp16 = lidar::make_vlp16();
   expect_equal_tables(vlp16, apply_velodyne_calibration(vlp16, real_calibration("VLP16.yaml"), "VLP16.yaml"));
-  const SensorModel vlp32c = make_vlp32c();
+  const lidar::SensorModel vlp32c = lidar::make_vlp32c();
   expect_equal_tables(vlp32c,
                       apply_velodyne_calibration(vlp32c, real_calibration("VLP32.yaml"), "VLP32.yaml"));
 }
@@ -47,7 +47,7 @@ TEST(VelodyneCalibration, FileTablesReplaceTheBuiltInOnes) {
         return rest;
       }() +
       "num_lasers: 16\ndistance_resolution: 0.002\n";
-  const SensorModel m = apply_velodyne_calibration(make_vlp16(), text, "unit.yaml");
+  const lidar::SensorModel m = apply_velodyne_calibration(lidar::make_vlp16(), text, "unit.yaml");
   EXPECT_NEAR(m.elevation_deg[0], -0.2 * 180.0 / kPi, 1e-12);
   EXPECT_NEAR(m.elevation_deg[1], 0.1 * 180.0 / kPi, 1e-12);
   EXPECT_NEAR(m.azimuth_offset_deg[0], 0.02 * 180.0 / kPi, 1e-12);
@@ -59,7 +59,7 @@ TEST(VelodyneCalibration, FileTablesReplaceTheBuiltInOnes) {
 // The message of what apply_velodyne_calibration throws for `text` (empty if it does not throw).
 std::string error_of(const std::string& text) {
   try {
-    (void)apply_velodyne_calibration(make_vlp16(), text, "bad.yaml");
+    (void)apply_velodyne_calibration(lidar::make_vlp16(), text, "bad.yaml");
   } catch (const YamlError& e) {
     return e.what();
   }

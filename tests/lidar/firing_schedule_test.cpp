@@ -8,7 +8,7 @@
 
 #include "published_tables.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
@@ -208,4 +208,4 @@ TEST(LidarFiringSchedule, RejectsInvalidModels) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -12,7 +12,7 @@
 #include "lidar/velodyne_decoder.h"
 #include "packet_stream.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
@@ -236,4 +236,4 @@ TEST(LidarFrameAssembler, RejectsBadConfig) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -11,7 +11,7 @@
 #include "lidar/pcap.h"
 #include "tests/lidar/real_data.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 std::vector<std::uint8_t> bytes_of(std::size_t n, std::uint8_t seed) {
@@ -174,4 +174,4 @@ TEST(Ipv4Reassembly, FragmentedRealOusterCaptureReadsBack) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -11,7 +11,7 @@
 #include "packet_stream.h"
 #include "published_tables.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 TEST(LidarDecoderSeam, FactoryKnowsTheVelodyneModels) {
@@ -93,4 +93,4 @@ TEST(LidarDecoderSeam, EveryPayloadIsCountedOnce) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -30,7 +30,7 @@
 #include "tests/lidar/ouster_test_packets.h"
 #include "tests/lidar/real_data.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -56,11 +56,11 @@ const Capture kCaptures[] = {
 };
 
 std::string data_path(const std::string& name) {
-  return ::rsu::test::real_data_path("ouster/" + name);
+  return ::rsu::lidar::test::real_data_path("ouster/" + name);
 }
 
 std::vector<UdpDatagram> datagrams_of(const Capture& c) {
-  return ::rsu::test::read_capture(std::string("ouster/") + c.pcap);
+  return ::rsu::lidar::test::read_capture(std::string("ouster/") + c.pcap);
 }
 
 Metadata metadata_of(const Capture& c) {
@@ -412,4 +412,4 @@ TEST(OusterCapture, GoldenSummaries) {
 }
 
 }  // namespace
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

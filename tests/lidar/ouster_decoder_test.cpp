@@ -16,7 +16,7 @@
 #include "tests/lidar/ouster_test_packets.h"
 #include "tests/lidar/real_data.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 namespace {
 
 using test::PacketBuilder;
@@ -26,7 +26,7 @@ constexpr std::uint64_t kT0 = 5'000'000'000ULL;
 constexpr std::uint64_t kDt = 97'656;  // ns per column at 1024 x 10 Hz
 
 Metadata real_metadata(const std::string& name) {
-  return parse_metadata(io::read_text_file(::rsu::test::real_data_path("ouster/" + name)), name);
+  return parse_metadata(io::read_text_file(::rsu::lidar::test::real_data_path("ouster/" + name)), name);
 }
 
 // 16 beams: row 0 level and straight (azimuth 0), row 1 at +10 deg, row 2 4 deg clockwise, the rest
@@ -383,4 +383,4 @@ TEST(OusterDecoder, ProfileUnitsAndFlagBitsIgnored) {
 }
 
 }  // namespace
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

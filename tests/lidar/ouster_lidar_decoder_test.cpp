@@ -12,13 +12,13 @@
 #include "tests/lidar/ouster_test_packets.h"
 #include "tests/lidar/real_data.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 namespace {
 
 constexpr std::uint64_t kT0 = 5'000'000'000ULL;
 
 std::string metadata_text(const std::string& name) {
-  return io::read_text_file(::rsu::test::real_data_path("ouster/" + name));
+  return io::read_text_file(::rsu::lidar::test::real_data_path("ouster/" + name));
 }
 
 LidarDecoderOptions options_for(const std::string& metadata_name) {
@@ -85,7 +85,7 @@ TEST(OusterLidarDecoder, RealCaptureThroughTheSeam) {
   std::size_t imu = 0;
   std::size_t payloads = 0;
   PacketOutcome previous;
-  for (const UdpDatagram& d : ::rsu::test::read_capture("ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap")) {
+  for (const UdpDatagram& d : ::rsu::lidar::test::read_capture("ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap")) {
     ++payloads;
     const PacketOutcome o = decoder->decode(d.payload, d.time_ns, points);
     if (d.dst.port == 7503) {
@@ -197,4 +197,4 @@ TEST(OusterLidarDecoder, AzimuthWindow) {
 }
 
 }  // namespace
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

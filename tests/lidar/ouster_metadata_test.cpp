@@ -10,11 +10,11 @@
 #include "lidar/ouster/ouster_geometry.h"
 #include "tests/lidar/real_data.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 namespace {
 
 std::string data_path(const std::string& name) {
-  return ::rsu::test::real_data_path("ouster/" + name);
+  return ::rsu::lidar::test::real_data_path("ouster/" + name);
 }
 
 Metadata load(const std::string& name) {
@@ -256,4 +256,4 @@ TEST(OusterMetadata, SensorModelForTheRestOfThePipeline) {
 }
 
 }  // namespace
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

@@ -10,7 +10,7 @@
 
 #include "lidar/ouster/ouster_metadata.h"
 
-namespace rsu::ouster::test {
+namespace rsu::lidar::ouster::test {
 
 inline void put(std::vector<std::uint8_t>& b, std::size_t at, std::uint64_t v, int bytes) {
   for (int i = 0; i < bytes; ++i) {
@@ -146,4 +146,4 @@ inline std::vector<RawColumn> raw_columns(const Metadata& m, std::span<const std
   return out;
 }
 
-}  // namespace rsu::ouster::test
+}  // namespace rsu::lidar::ouster::test

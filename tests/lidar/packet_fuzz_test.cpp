@@ -9,7 +9,7 @@
 #include "lidar/velodyne_decoder.h"
 #include "packet_stream.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 std::uint64_t le32(std::span<const std::uint8_t> b, std::size_t at) {
@@ -195,4 +195,4 @@ TEST(LidarPacketFuzz, DataBytesNeverCauseRejection) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

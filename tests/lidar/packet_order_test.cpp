@@ -9,7 +9,7 @@
 
 #include "lidar/packet_order.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr TimeNs kPeriod = 663'552;  // VLP-32C packet period, ns
@@ -160,4 +160,4 @@ TEST(PacketOrder, RejectsANonPositivePeriodOrGap) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -9,7 +9,7 @@
 #include "lidar/firing_schedule.h"
 #include "lidar/velodyne_packet.h"
 
-namespace rsu::test {
+namespace rsu::lidar::test {
 
 struct EncodedPacket {
   PacketReturns returns;
@@ -44,4 +44,4 @@ inline EncodedPacket make_packet(const FiringSchedule& schedule, std::int64_t k,
   return p;
 }
 
-}  // namespace rsu::test
+}  // namespace rsu::lidar::test

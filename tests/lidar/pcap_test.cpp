@@ -5,7 +5,7 @@
 #include <random>
 #include <stdexcept>
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr UdpEndpoint kSensor{ipv4_address(192, 168, 1, 201), 2368};
@@ -286,4 +286,4 @@ TEST(LidarPcap, WriterRefusesUnrepresentableInput) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -3,7 +3,7 @@
 
 #include <array>
 
-namespace rsu::test {
+namespace rsu::lidar::test {
 
 constexpr std::array<double, 16> kVlp16ElevationDeg = {-15, 1, -13, 3,  -11, 5,  -9, 7,
                                                        -7,  9, -5,  11, -3,  13, -1, 15};
@@ -29,4 +29,4 @@ constexpr std::array<double, 32> kHdl32eElevationDeg = {
 constexpr double kSequenceUs = 55.296;
 constexpr double kFiringIntervalUs = 2.304;
 
-}  // namespace rsu::test
+}  // namespace rsu::lidar::test

@@ -15,7 +15,7 @@
 #include "lidar/velodyne_decoder.h"
 #include "real_data.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 double range_of(const LidarPoint& p) {
@@ -131,4 +131,4 @@ TEST(RealCapture, Vlp32cLimitedFieldOfViewIsNotInterpolatedAcross) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <unordered_map>
 
-namespace rsu::test {
+namespace rsu::lidar::test {
 namespace {
 
 struct Cell {
@@ -61,4 +61,4 @@ double share_matched(std::span<const LidarPoint> reference, std::span<const Lida
   return static_cast<double>(matched) / static_cast<double>(reference.size());
 }
 
-}  // namespace rsu::test
+}  // namespace rsu::lidar::test

@@ -13,7 +13,7 @@
 #include "lidar/pcap.h"
 #include "lidar/point.h"
 
-namespace rsu::test {
+namespace rsu::lidar::test {
 
 inline std::string real_data_path(const std::string& name) {
   return std::string(RSU_SOURCE_DIR) + "/tests/data/real/" + name;
@@ -39,4 +39,4 @@ inline std::vector<UdpDatagram> read_capture(const std::string& name) {
 // cell `radius` searched over the 27 cells around each reference point.
 double share_matched(std::span<const LidarPoint> reference, std::span<const LidarPoint> ours, double radius);
 
-}  // namespace rsu::test
+}  // namespace rsu::lidar::test

@@ -6,7 +6,7 @@
 #include <random>
 #include <stdexcept>
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr TimeNs kPeriod = 663'552;  // a VLP-32C packet
@@ -79,4 +79,4 @@ TEST(SensorClock, AClockStepStartsAfresh) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

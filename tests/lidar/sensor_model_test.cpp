@@ -8,7 +8,7 @@
 
 #include "published_tables.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
@@ -132,4 +132,4 @@ TEST(LidarSensorModel, ErrorNamesBrokenModels) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -19,7 +19,7 @@
 #include "published_tables.h"
 #include "real_data.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 double range_of(const LidarPoint& p) {
@@ -212,4 +212,4 @@ TEST(VelodyneDecoder, RealEarlyFirmwareVlp16DecodesAsConfigured) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

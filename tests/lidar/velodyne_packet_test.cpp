@@ -14,7 +14,7 @@
 #include "packet_stream.h"
 #include "published_tables.h"
 
-namespace rsu {
+namespace rsu::lidar {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
@@ -266,4 +266,4 @@ TEST(LidarVelodynePacket, ResultNames) {
 }
 
 }  // namespace
-}  // namespace rsu
+}  // namespace rsu::lidar

@@ -26,9 +26,9 @@ namespace {
 constexpr double kHz = 10.0;
 
 // A point at range r and Velodyne azimuth a (clockwise from +x), with the time a 10 Hz sweep reaches a.
-LidarPoint at(double r, double azimuth_deg, int rotation = 0) {
+lidar::LidarPoint at(double r, double azimuth_deg, int rotation = 0) {
   const double a = deg_to_rad(azimuth_deg);
-  LidarPoint p;
+  lidar::LidarPoint p;
   p.x = static_cast<float>(r * std::cos(a));
   p.y = static_cast<float>(-r * std::sin(a));
   p.z = 1.0F;
@@ -133,7 +133,7 @@ TEST(SweepClusterer, TimeGoingBackwardsRestartsAndDropsPending) {
 
 TEST(SweepClusterer, ReleaseAllEndsAFrameAndNonFinitePointsAreCounted) {
   SweepClusterer sweep({}, clustering(), Eigen::Vector2d::Zero(), kHz, 0.0);
-  LidarPoint bad = at(10.0, 5.0);
+  lidar::LidarPoint bad = at(10.0, 5.0);
   bad.x = std::numeric_limits<float>::quiet_NaN();
   sweep.add(bad, true);
   for (int i = 0; i < 20; ++i)
@@ -152,7 +152,7 @@ TEST(SweepClusterer, RejectsBadParameters) {
 
 // --- Laser-aware rule --------------------------------------------------------------------------
 
-std::vector<double> offsets_rad(const SensorModel& model) {
+std::vector<double> offsets_rad(const lidar::SensorModel& model) {
   std::vector<double> out;
   for (const double o : model.azimuth_offset_deg)
     out.push_back(deg_to_rad(o));
@@ -163,7 +163,7 @@ std::vector<double> offsets_rad(const SensorModel& model) {
 // read the encoder azimuth from whichever laser returns. The spread-only rule takes the largest
 // BEAM azimuth as the sweep and so lags by the whole 8.4 deg spread here.
 TEST(SweepClusterer, LaserAwareRuleReadsTheEncoderFromAnyLaser) {
-  const SensorModel vlp32c = make_vlp32c();
+  const lidar::SensorModel vlp32c = lidar::make_vlp32c();
   const std::vector<double> offsets = offsets_rad(vlp32c);
   ASSERT_DOUBLE_EQ(vlp32c.azimuth_offset_deg[1], -4.2);
   SweepConfig config;
@@ -175,13 +175,13 @@ TEST(SweepClusterer, LaserAwareRuleReadsTheEncoderFromAnyLaser) {
                                        std::span<const double>(offsets))
                       : SweepClusterer(config, clustering(), Eigen::Vector2d::Zero(), kHz, deg_to_rad(8.4));
       for (int i = 0; i < 20; ++i) {
-        LidarPoint p = at(r, 40.0 + 0.25 * i);
+        lidar::LidarPoint p = at(r, 40.0 + 0.25 * i);
         p.ring = 1;
         sweep.add(p, true);
       }
       double released_at = std::numeric_limits<double>::quiet_NaN();
       for (double a = 45.0; a < 90.0 && std::isnan(released_at); a += 0.05) {
-        LidarPoint p = at(50.0, a);
+        lidar::LidarPoint p = at(50.0, a);
         p.ring = 1;
         sweep.add(p, false);
         if (!sweep.release_closed().empty())
@@ -209,7 +209,7 @@ TEST(SweepClusterer, LaserAwareRejectsBadTablesAndCountsUnknownRings) {
   }
   const std::vector<double> two{0.0, 0.01};
   SweepClusterer sweep({}, clustering(), Eigen::Vector2d::Zero(), kHz, std::span<const double>(two));
-  LidarPoint p = at(10.0, 10.0);
+  lidar::LidarPoint p = at(10.0, 10.0);
   p.ring = 2;
   sweep.add(p, true);
   EXPECT_EQ(sweep.stats().invalid_points, 1U);
@@ -228,7 +228,7 @@ struct PlacedVehicle {
 
 // Offline components of `points` (planar distance <= tolerance), by union-find over pairs found
 // through a sort on x.
-std::vector<int> offline_components(const std::vector<LidarPoint>& points, double tolerance) {
+std::vector<int> offline_components(const std::vector<lidar::LidarPoint>& points, double tolerance) {
   std::vector<int> parent(points.size());
   std::iota(parent.begin(), parent.end(), 0);
   const auto find = [&](int i) {
@@ -242,10 +242,10 @@ std::vector<int> offline_components(const std::vector<LidarPoint>& points, doubl
   std::sort(order.begin(), order.end(),
             [&](std::size_t a, std::size_t b) { return points[a].x < points[b].x; });
   for (std::size_t i = 0; i < order.size(); ++i) {
-    const LidarPoint& p = points[order[i]];
+    const lidar::LidarPoint& p = points[order[i]];
     for (std::size_t j = i + 1;
          j < order.size() && static_cast<double>(points[order[j]].x - p.x) <= tolerance; ++j) {
-      const LidarPoint& q = points[order[j]];
+      const lidar::LidarPoint& q = points[order[j]];
       const double dx = static_cast<double>(q.x - p.x);
       const double dy = static_cast<double>(q.y - p.y);
       if (dx * dx + dy * dy <= tolerance * tolerance) {
@@ -259,7 +259,7 @@ std::vector<int> offline_components(const std::vector<LidarPoint>& points, doubl
   return label;
 }
 
-void check_exact_against_offline(const SensorModel& model, const std::vector<PlacedVehicle>& placed) {
+void check_exact_against_offline(const lidar::SensorModel& model, const std::vector<PlacedVehicle>& placed) {
   const Pose3 mount{.x = 2.0, .y = -3.0, .z = 2.0, .roll = 0.0, .pitch = 0.0, .yaw = 0.3};
   sim::Scene scene;
   scene.ground.half_extent_m = 60.0;
@@ -282,10 +282,10 @@ void check_exact_against_offline(const SensorModel& model, const std::vector<Pla
 
   // Map frame, as RsuCore hands points over; foreground = vehicle returns (the simulator's truth).
   const Eigen::Isometry3d to_map = mount.to_isometry();
-  std::vector<LidarPoint> points;
+  std::vector<lidar::LidarPoint> points;
   std::vector<bool> foreground;
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
-    LidarPoint p = frame.frame.points[i];
+    lidar::LidarPoint p = frame.frame.points[i];
     const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
     p.x = static_cast<float>(m.x());
     p.y = static_cast<float>(m.y());
@@ -293,7 +293,7 @@ void check_exact_against_offline(const SensorModel& model, const std::vector<Pla
     points.push_back(p);
     foreground.push_back(frame.truth[i].surface == sim::SurfaceClass::kVehicle);
   }
-  std::vector<LidarPoint> fg_points;
+  std::vector<lidar::LidarPoint> fg_points;
   std::vector<std::size_t> fg_index;  // stream index of each foreground point
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (foreground[i]) {
@@ -344,7 +344,7 @@ void check_exact_against_offline(const SensorModel& model, const std::vector<Pla
     for (const SweptCluster& c : clusters) {
       ASSERT_FALSE(c.points.empty());
       const int component = label_of.at({c.points.front().time_ns, c.points.front().ring});
-      for (const LidarPoint& p : c.points) {
+      for (const lidar::LidarPoint& p : c.points) {
         ASSERT_EQ(label_of.at({p.time_ns, p.ring}), component) << "two components released as one";
       }
       EXPECT_EQ(c.points.size(), component_size.at(component)) << "released before a later point joined";
@@ -353,7 +353,7 @@ void check_exact_against_offline(const SensorModel& model, const std::vector<Pla
         continue;
       ++released_while_sweeping;
       double needed = -std::numeric_limits<double>::infinity();
-      for (const LidarPoint& p : c.points) {
+      for (const lidar::LidarPoint& p : c.points) {
         const auto [u, r] = seen.at({p.time_ns, p.ring});
         needed = std::max(needed, r > kTolerance ? u + std::asin(kTolerance / r) - min_offset + margin
                                                  : std::numeric_limits<double>::infinity());
@@ -371,7 +371,7 @@ void check_exact_against_offline(const SensorModel& model, const std::vector<Pla
       previous_encoder = encoder;
       packet = k;
     }
-    const LidarPoint& p = points[i];
+    const lidar::LidarPoint& p = points[i];
     const double offset = offsets[p.ring];
     const double u = unwrap(static_cast<double>(p.azimuth_rad), offset);
     encoder = std::max(encoder, u - offset);
@@ -418,12 +418,12 @@ const std::vector<std::vector<PlacedVehicle>> kLayouts = {
 
 TEST(SweepClusterer, ExactAgainstOfflineClusteringVlp16) {
   for (const auto& layout : kLayouts)
-    check_exact_against_offline(make_vlp16(), layout);
+    check_exact_against_offline(lidar::make_vlp16(), layout);
 }
 
 TEST(SweepClusterer, ExactAgainstOfflineClusteringVlp32c) {
   for (const auto& layout : kLayouts)
-    check_exact_against_offline(make_vlp32c(), layout);
+    check_exact_against_offline(lidar::make_vlp32c(), layout);
 }
 
 }  // namespace

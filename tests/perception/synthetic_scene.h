@@ -97,7 +97,7 @@ struct Lidar3d {
 enum class HitKind { none, ground, wall, vehicle };
 
 struct LabelledPoint {
-  LidarPoint point;
+  lidar::LidarPoint point;
   HitKind kind = HitKind::none;
 };
 
@@ -180,8 +180,8 @@ inline std::vector<LabelledPoint> scan_3d(const Scene3d& scene, const Lidar3d& l
   return out;
 }
 
-inline std::vector<LidarPoint> points_of(const std::vector<LabelledPoint>& labelled) {
-  std::vector<LidarPoint> out;
+inline std::vector<lidar::LidarPoint> points_of(const std::vector<LabelledPoint>& labelled) {
+  std::vector<lidar::LidarPoint> out;
   out.reserve(labelled.size());
   for (const auto& l : labelled) {
     out.push_back(l.point);

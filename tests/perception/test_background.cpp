@@ -78,7 +78,7 @@ TEST(ReferenceFrameBackground, SameAnswerAsNearestNeighbourTest) {
   std::mt19937_64 rng(11);
   const auto ref = random_cloud(4000, 8.0F, rng);
   const auto cur = random_cloud(4000, 9.0F, rng);
-  std::vector<LidarPoint> ref_pts, cur_pts;
+  std::vector<lidar::LidarPoint> ref_pts, cur_pts;
   for (const auto& p : ref)
     ref_pts.push_back({p.x, p.y, p.z});
   for (const auto& p : cur)
@@ -105,12 +105,12 @@ TEST(ReferenceFrameBackground, SameAnswerAsNearestNeighbourTest) {
 }
 
 TEST(GroundHeightFilter, KeepsExactlyThePointsAboveThreshold) {
-  const std::vector<LidarPoint> pts = {{0, 0, 0.0F},
-                                       {1, 0, 0.19F},
-                                       {2, 0, 0.21F},
-                                       {3, 0, 1.5F},
-                                       {4, 0, std::numeric_limits<float>::quiet_NaN()},
-                                       {5, 0, -0.5F}};
+  const std::vector<lidar::LidarPoint> pts = {{0, 0, 0.0F},
+                                              {1, 0, 0.19F},
+                                              {2, 0, 0.21F},
+                                              {3, 0, 1.5F},
+                                              {4, 0, std::numeric_limits<float>::quiet_NaN()},
+                                              {5, 0, -0.5F}};
   const GroundHeightFilter filter({.ground_z = 0.0, .min_height = 0.2});
   const auto sel = filter.select_foreground(pts);
   EXPECT_EQ(sel.indices, (std::vector<std::uint32_t>{2, 3}));
@@ -168,7 +168,7 @@ TEST(RangeImageBackground, SeparatesVehiclesFromLearnedBackground) {
   EXPECT_EQ(model.training_frames(), 8);
   const auto frame = test::scan_3d(s.busy, s.lidar, phase(rng), rng);
   const Scores sc = score(
-      frame, [&](const LidarPoint& p) { return model.classify(p); }, true);
+      frame, [&](const lidar::LidarPoint& p) { return model.classify(p); }, true);
   EXPECT_GT(sc.recall, 0.99);
   EXPECT_LT(sc.false_positive, 0.002);
 }
@@ -183,7 +183,7 @@ TEST(RangeImageBackground, NeverReturnedCellsAreSkyAndAnythingThereIsForeground)
   EXPECT_TRUE(std::isinf(model.background_range(15, 1.0F)));
   EXPECT_NEAR(static_cast<double>(model.background_range(0, 1.0F)), 2.0 / std::tan(15.0 * test::kPi / 180.0),
               0.1);
-  LidarPoint bird{5.0F, 0.0F, 3.3F};
+  lidar::LidarPoint bird{5.0F, 0.0F, 3.3F};
   bird.ring = 15;
   bird.azimuth_rad = 0.0F;
   EXPECT_EQ(model.classify(bird), PointClass::foreground);
@@ -191,13 +191,13 @@ TEST(RangeImageBackground, NeverReturnedCellsAreSkyAndAnythingThereIsForeground)
 
 TEST(RangeImageBackground, InvalidPointsAreCountedNotCrashed) {
   RangeImageBackground model(Eigen::Vector2d::Zero(), {.max_rings = 64});
-  std::vector<LidarPoint> train(10);
+  std::vector<lidar::LidarPoint> train(10);
   for (std::size_t i = 0; i < train.size(); ++i) {
     train[i] = {10.0F, 0.0F, 0.0F};
     train[i].ring = static_cast<std::uint16_t>(i);
   }
   model.add_training_frame(train);
-  std::vector<LidarPoint> frame(4, LidarPoint{5.0F, 0.0F, 0.0F});
+  std::vector<lidar::LidarPoint> frame(4, lidar::LidarPoint{5.0F, 0.0F, 0.0F});
   frame[0].x = std::numeric_limits<float>::quiet_NaN();
   frame[1].ring = 64;  // beyond max_rings: garbage
   frame[2].azimuth_rad = std::numeric_limits<float>::infinity();
@@ -212,7 +212,7 @@ TEST(ReferenceFrameBackground, SeparatesVehiclesWithGroundPrefilter) {
   Street s;
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> phase(0.0, 1.0);
-  std::vector<LidarPoint> reference;
+  std::vector<lidar::LidarPoint> reference;
   for (int f = 0; f < 3; ++f) {
     const auto pts = test::points_of(test::scan_3d(s.empty, s.lidar, phase(rng), rng));
     reference.insert(reference.end(), pts.begin(), pts.end());
@@ -222,7 +222,7 @@ TEST(ReferenceFrameBackground, SeparatesVehiclesWithGroundPrefilter) {
   const auto frame = test::scan_3d(s.busy, s.lidar, phase(rng), rng);
   const Scores sc = score(
       frame,
-      [&](const LidarPoint& p) {
+      [&](const lidar::LidarPoint& p) {
         const PointClass c = ground.classify(p);
         return c == PointClass::foreground ? model.classify(p) : c;
       },

@@ -28,8 +28,8 @@ ClusterSet as_set(const Clustering& c) {
 }
 
 // Blobs of various sizes and spreads plus uniform clutter: many merges, chains and singletons.
-std::vector<LidarPoint> blobs_and_clutter(std::mt19937_64& rng) {
-  std::vector<LidarPoint> pts;
+std::vector<lidar::LidarPoint> blobs_and_clutter(std::mt19937_64& rng) {
+  std::vector<lidar::LidarPoint> pts;
   std::uniform_real_distribution<float> where(-40.0F, 40.0F);
   std::uniform_real_distribution<float> height(0.0F, 3.0F);
   std::uniform_int_distribution<int> count(3, 250);
@@ -69,7 +69,7 @@ TEST(EuclideanClustering, GridEqualsReferenceOnRandomScenes) {
 TEST(EuclideanClustering, FindsTheClustersTheTestBuilt) {
   // Three groups: a chain of points 0.6 m apart across many cells (one cluster), a tight blob, and a
   // pair 0.71 m apart (two singletons at tolerance 0.7, dropped as small).
-  std::vector<LidarPoint> pts;
+  std::vector<lidar::LidarPoint> pts;
   for (int i = 0; i < 20; ++i)
     pts.push_back({0.6F * static_cast<float>(i), 0.0F, 0.0F});  // 0..19
   for (int i = 0; i < 12; ++i)
@@ -91,7 +91,7 @@ TEST(EuclideanClustering, FindsTheClustersTheTestBuilt) {
 
 TEST(EuclideanClustering, PlanarIgnoresHeightSpatialDoesNot) {
   // A vehicle's roof 1.5 m above its sill: one cluster in 2D (Autoware's use_height: false), two in 3D.
-  std::vector<LidarPoint> pts;
+  std::vector<lidar::LidarPoint> pts;
   for (int i = 0; i < 10; ++i) {
     pts.push_back({0.3F * static_cast<float>(i), 0.0F, 0.3F});
     pts.push_back({0.3F * static_cast<float>(i), 0.1F, 1.8F});
@@ -102,7 +102,7 @@ TEST(EuclideanClustering, PlanarIgnoresHeightSpatialDoesNot) {
 }
 
 TEST(EuclideanClustering, OversizedClustersAreDroppedWholeLikePcl) {
-  std::vector<LidarPoint> pts;
+  std::vector<lidar::LidarPoint> pts;
   for (int i = 0; i < 30; ++i)
     pts.push_back({0.1F * static_cast<float>(i), 0.0F, 0.0F});
   for (int i = 0; i < 12; ++i)
@@ -117,7 +117,7 @@ TEST(EuclideanClustering, OversizedClustersAreDroppedWholeLikePcl) {
 }
 
 TEST(EuclideanClustering, SubsetIndicesReferToTheFrame) {
-  std::vector<LidarPoint> pts;
+  std::vector<lidar::LidarPoint> pts;
   for (int i = 0; i < 40; ++i)
     pts.push_back({0.1F * static_cast<float>(i), 0.0F, 0.0F});
   std::vector<std::uint32_t> odd;
@@ -130,7 +130,7 @@ TEST(EuclideanClustering, SubsetIndicesReferToTheFrame) {
 
 TEST(EuclideanClustering, BadInputIsCountedNotCrashed) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  std::vector<LidarPoint> pts(12, LidarPoint{1.0F, 1.0F, 0.0F});
+  std::vector<lidar::LidarPoint> pts(12, lidar::LidarPoint{1.0F, 1.0F, 0.0F});
   pts[3].x = nan;
   pts[4].y = std::numeric_limits<float>::infinity();
   pts[5].x = 1e30F;

@@ -39,15 +39,15 @@ const TrueBox* nearest_vehicle(const test::Scene3d& scene, const Eigen::Vector2d
 }
 
 // The firing time of each point of `frame`, by its coordinates (the objects keep only those).
-std::map<std::array<double, 3>, TimeNs> firing_times(const std::vector<LidarPoint>& frame) {
+std::map<std::array<double, 3>, TimeNs> firing_times(const std::vector<lidar::LidarPoint>& frame) {
   std::map<std::array<double, 3>, TimeNs> out;
-  for (const LidarPoint& p : frame)
+  for (const lidar::LidarPoint& p : frame)
     out[{static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)}] = p.time_ns;
   return out;
 }
 
 void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, const test::Scene3d& scene,
-                                        const std::vector<LidarPoint>& frame) {
+                                        const std::vector<lidar::LidarPoint>& frame) {
   const PerceptionResult result = pipeline.process(frame);
   const auto& s = result.stats;
   EXPECT_EQ(s.input_points, frame.size());
@@ -133,7 +133,7 @@ PointSet coordinates(const Detection& d) {
 template <typename Points>
 PointSet coordinates(const Points& points) {
   PointSet out;
-  for (const LidarPoint& p : points)
+  for (const lidar::LidarPoint& p : points)
     out.push_back({static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
   return sorted(out);
 }
@@ -155,7 +155,7 @@ TEST(PerceptionPipeline, ObjectsAreTheClustersRsudAndTheReferenceFind) {
   const PerceptionResult result = pipeline.process(frame);
 
   SweepClusterer swept(SweepConfig{}, config.clustering, s.lidar.position.head<2>(), 10.0, 0.0);
-  for (const LidarPoint& p : frame)
+  for (const lidar::LidarPoint& p : frame)
     swept.add(p, background.classify(p) == PointClass::foreground);
   const std::vector<SweptCluster> released = swept.release_all();
   const Clustering reference =
@@ -203,7 +203,7 @@ TEST(PerceptionPipeline, BadFramesAreCountedNotCrashed) {
   PerceptionPipeline pipeline({}, test::geometry_of(s.lidar));
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.5, rng)));
   EXPECT_TRUE(pipeline.process({}).objects.empty());
-  std::vector<LidarPoint> garbage(100);
+  std::vector<lidar::LidarPoint> garbage(100);
   for (std::size_t i = 0; i < garbage.size(); ++i) {
     garbage[i].x = i % 2 == 0 ? std::numeric_limits<float>::quiet_NaN() : 1.0F;
     garbage[i].z = 1.0F;

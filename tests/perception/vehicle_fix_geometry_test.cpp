@@ -51,7 +51,7 @@ struct View {
 // One rotation of `model` mounted `height` m above the road at the origin; the vehicle (id 1) stands at
 // `truth`; `occluders` stand in the scene too. Only the vehicle's own returns are kept (the test judges
 // the fix, not the segmentation).
-View look(const SensorModel& model, double height, const sim::VehicleShape& shape, const Pose2& truth,
+View look(const lidar::SensorModel& model, double height, const sim::VehicleShape& shape, const Pose2& truth,
           const std::vector<sim::Building>& occluders = {}) {
   sim::Scene scene;
   scene.ground.half_extent_m = 60.0;
@@ -68,7 +68,7 @@ View look(const SensorModel& model, double height, const sim::VehicleShape& shap
   View view;
   const Eigen::Isometry3d to_map = mount.to_isometry();
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
-    const LidarPoint& p = frame.frame.points[i];
+    const lidar::LidarPoint& p = frame.frame.points[i];
     const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
     if (m.z() < kGroundFilterM)
       continue;
@@ -128,7 +128,7 @@ TEST(VehicleFixGeometry, TopDownSparseRoofAndOneEnd) {
   for (const double distance : {15.0, 16.0, 17.0}) {
     for (const double yaw_deg : {0.0, 180.0, 8.0, 188.0}) {
       const Pose2 truth{distance, 0.0, deg_to_rad(yaw_deg)};
-      const View view = look(make_vlp32c(), 8.0, shape, truth);
+      const View view = look(lidar::make_vlp32c(), 8.0, shape, truth);
       ASSERT_GE(view.points.size(), 3U) << distance;
       // The view claimed: sparse (a few rings), reaching above the belt line (seen from above).
       EXPECT_LT(view.points.size(), 60U) << distance;
@@ -152,7 +152,7 @@ TEST(VehicleFixGeometry, SingleRingOnTheGlasshouse) {
   int fixed = 0, cases = 0;
   for (double yaw_deg = 0.0; yaw_deg < 180.0; yaw_deg += 30.0) {
     const Pose2 truth{35.5, 0.0, deg_to_rad(yaw_deg + 3.0)};
-    const View view = look(make_vlp16(), 2.0, shape, truth);
+    const View view = look(lidar::make_vlp16(), 2.0, shape, truth);
     if (view.points.size() < 3)
       continue;
     // One ring (within a few cm of one height) above the belt line holds much of the returns; the others
@@ -184,8 +184,8 @@ TEST(VehicleFixGeometry, TruncatedFaceBehindAnOccluder) {
   int fixed = 0, cases = 0;
   for (const double yaw_deg : {90.0, 80.0, 100.0, 270.0}) {
     const Pose2 truth{17.5, 0.0, deg_to_rad(yaw_deg)};
-    const View view = look(make_vlp32c(), 4.0, shape, truth, {cabinet});
-    const View clear = look(make_vlp32c(), 4.0, shape, truth);
+    const View view = look(lidar::make_vlp32c(), 4.0, shape, truth, {cabinet});
+    const View clear = look(lidar::make_vlp32c(), 4.0, shape, truth);
     ASSERT_GE(view.points.size(), 10U);
     // The claimed view: the cabinet hides a good part of what the LiDAR would see of the car.
     EXPECT_LT(static_cast<double>(view.points.size()), 0.8 * static_cast<double>(clear.points.size()));

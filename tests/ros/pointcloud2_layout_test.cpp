@@ -42,12 +42,12 @@ double sample_value(std::uint8_t datatype, int point) {
   }
 }
 
-std::vector<LidarPoint> decode(test::BuiltCloud& c, std::span<const std::uint16_t> ring_map = {},
-                               CloudDecodeStats* stats = nullptr) {
+std::vector<lidar::LidarPoint> decode(test::BuiltCloud& c, std::span<const std::uint16_t> ring_map = {},
+                                      CloudDecodeStats* stats = nullptr) {
   const PointCloud2View v = c.view();
   const LayoutResult layout = parse_layout(v);
   EXPECT_TRUE(layout.ok()) << to_string(layout.reject);
-  std::vector<LidarPoint> out;
+  std::vector<lidar::LidarPoint> out;
   if (!layout.ok())
     return out;
   const CloudDecodeStats s = decode_points(v, layout.layout, ring_map, out);
@@ -195,7 +195,7 @@ TEST(PointCloud2Layout, NonFiniteBadRingAndBadTimePointsAreSkippedAndCounted) {
 }
 
 TEST(PointCloud2Layout, ElevationOrderedRingsMapToChannels) {
-  const SensorModel vlp32 = make_vlp32c();
+  const lidar::SensorModel vlp32 = lidar::make_vlp32c();
   const std::vector<std::uint16_t> map = ring_rank_to_channel(vlp32.elevation_deg);
   ASSERT_EQ(map.size(), 32U);
   // Rank r is the channel with exactly r lower beams (the VLP-32C's elevations are distinct).
@@ -296,7 +296,7 @@ TEST(PointCloud2LayoutRejects, EveryReasonHasAName) {
 TEST(PointCloud2Layout, EmptyCloudIsValidAndDecodesToNothing) {
   auto c = xyz_cloud(0);
   c.width = 0;
-  std::vector<LidarPoint> out;
+  std::vector<lidar::LidarPoint> out;
   const auto v = c.view();
   const auto layout = parse_layout(v);
   ASSERT_TRUE(layout.ok());

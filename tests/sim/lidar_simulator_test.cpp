@@ -31,14 +31,14 @@ Scene ground_only() {
   return s;
 }
 
-Eigen::Vector3d xyz(const LidarPoint& p) {
+Eigen::Vector3d xyz(const lidar::LidarPoint& p) {
   return {p.x, p.y, p.z};
 }
 
 // A VLP-16 2 m above an empty ground plane: each downward ring draws a circle of radius
 // 2 / tan(|elevation|), if that is within the 100 m maximum range; no other ring returns.
 TEST(SimLidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
-  const SensorModel model = make_vlp16();
+  const lidar::SensorModel model = lidar::make_vlp16();
   const Raycaster rc(ground_only());
   const LidarSimulator sim(model, Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), rc);
   const SimulatedFrame f = sim.simulate_frame(0);
@@ -55,7 +55,7 @@ TEST(SimLidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
 
   std::map<int, int> per_ring;
   for (std::size_t i = 0; i < f.frame.points.size(); ++i) {
-    const LidarPoint& p = f.frame.points[i];
+    const lidar::LidarPoint& p = f.frame.points[i];
     ++per_ring[p.ring];
     const double w = model.elevation_deg.at(p.ring) * kPi / 180.0;
     ASSERT_LT(w, 0.0) << "an upward ring returned";
@@ -88,7 +88,7 @@ TEST(SimLidarSimulator, SameSeedSameFrameDifferentSeedDifferentFrame) {
   v.trajectory = StaticPose{{9.0, 4.0, 1.0}};
   scene.vehicles.push_back(v);
   const Raycaster rc(scene);
-  const SensorModel model = make_vlp32c();
+  const lidar::SensorModel model = lidar::make_vlp32c();
   NoiseModel noise;  // the paper's defaults
   noise.seed = 17;
   const LidarSimulator a(model, Pose3{0, 0, 2.0, 0, 0, 0.2}, noise, rc);
@@ -116,7 +116,7 @@ TEST(SimLidarSimulator, SameSeedSameFrameDifferentSeedDifferentFrame) {
 // Range noise: measured (quantised) range minus the true range along the cast ray is zero-mean with
 // the configured sigma (plus the quantisation's unit^2 / 12).
 TEST(SimLidarSimulator, RangeNoiseHasTheConfiguredSigma) {
-  const SensorModel model = make_vlp16();
+  const lidar::SensorModel model = lidar::make_vlp16();
   const Raycaster rc(ground_only());
   NoiseModel noise;
   noise.range_sigma_m = 0.02;
@@ -138,7 +138,7 @@ TEST(SimLidarSimulator, RangeNoiseHasTheConfiguredSigma) {
   EXPECT_NEAR(sigma, expected, 0.05 * expected);
   // Angular noise moves the ray: the points are not all exactly on their ring's circle any more.
   int off_circle = 0;
-  for (const LidarPoint& p : f.frame.points) {
+  for (const lidar::LidarPoint& p : f.frame.points) {
     const double w = model.elevation_deg.at(p.ring) * kPi / 180.0;
     off_circle += std::abs(std::hypot(double{p.x}, double{p.y}) - 2.0 / std::tan(-w)) > 0.05 ? 1 : 0;
   }
@@ -162,7 +162,7 @@ TEST(SimLidarSimulator, VehiclePointsLieOnTheMeshSurface) {
   const TriangleMesh& mesh = rc.vehicle_mesh(0);
   for (const bool noisy : {false, true}) {
     NoiseModel noise = noisy ? NoiseModel{} : no_noise();
-    const LidarSimulator sim(make_vlp16(), mount, noise, rc);
+    const LidarSimulator sim(lidar::make_vlp16(), mount, noise, rc);
     const SimulatedFrame f = sim.simulate_frame(0);
     int checked = 0;
     for (std::size_t i = 0; i < f.frame.points.size(); ++i) {
@@ -197,12 +197,12 @@ TEST(SimLidarSimulator, MovingVehicleIsSeenWhereItIsAtEachPointsTime) {
   scene.vehicles.push_back(v);
   const Raycaster rc(scene);
   const VehicleShape& s = v.shape;
-  const LidarSimulator sim(make_vlp32c(), Pose3{0, 0, 0.9, 0, 0, 0}, no_noise(), rc);
+  const LidarSimulator sim(lidar::make_vlp32c(), Pose3{0, 0, 0.9, 0, 0, 0}, no_noise(), rc);
   const SimulatedFrame f = sim.simulate_frame(0);
   int on_rear_face = 0;
   double x_min = 1e9, x_max = -1e9;
   for (std::size_t i = 0; i < f.frame.points.size(); ++i) {
-    const LidarPoint& p = f.frame.points[i];
+    const lidar::LidarPoint& p = f.frame.points[i];
     if (f.truth[i].surface != SurfaceClass::kVehicle) {
       continue;
     }
@@ -234,23 +234,23 @@ TEST(SimLidarSimulator, FramePointsEqualDecodedPackets) {
   b.y = 0;
   scene.buildings.push_back(b);
   const Raycaster rc(scene);
-  for (const SensorModel& model : {make_vlp16(), make_vlp32c()}) {
+  for (const lidar::SensorModel& model : {lidar::make_vlp16(), lidar::make_vlp32c()}) {
     const LidarSimulator sim(model, Pose3{0.5, -0.5, 2.0, 0.01, -0.02, 0.4}, NoiseModel{}, rc, 0, 90.0);
     const std::int64_t k0 = 10;
     const std::int64_t k1 = 40;
     const TimeNs start = sim.schedule().packet(k0).first_firing_ns;
     const TimeNs stop = sim.schedule().packet(k1 + 1).first_firing_ns;
-    VelodyneDecoder decoder(model);
-    std::vector<LidarPoint> decoded;
+    lidar::VelodyneDecoder decoder(model);
+    std::vector<lidar::LidarPoint> decoded;
     for (std::int64_t k = k0; k <= k1; ++k) {
-      const PacketReturns returns = sim.simulate_packet(k);
-      std::array<std::uint8_t, kPacketBytes> bytes{};
-      encode_packet(model, returns, bytes);
+      const lidar::PacketReturns returns = sim.simulate_packet(k);
+      std::array<std::uint8_t, lidar::kPacketBytes> bytes{};
+      lidar::encode_packet(model, returns, bytes);
       ASSERT_TRUE(decoder.decode(bytes, returns.blocks.first_firing_ns, decoded).is_data());
     }
     const SimulatedFrame f = sim.simulate_frame(start);
-    std::vector<LidarPoint> framed;
-    for (const LidarPoint& p : f.frame.points) {
+    std::vector<lidar::LidarPoint> framed;
+    for (const lidar::LidarPoint& p : f.frame.points) {
       if (p.time_ns < stop) {
         framed.push_back(p);
       }
@@ -289,31 +289,31 @@ TEST(SimLidarSimulator, Vlp32cPacketsDecodeToPointsOnTheCalibratedBeams) {
                                      .height = 30.0});
   const Raycaster rc(scene);
   const Pose3 mount{0.0, 0.0, 2.0, 0.0, 0.0, 0.0};
-  const SensorModel model = make_vlp32c();
+  const lidar::SensorModel model = lidar::make_vlp32c();
   const LidarSimulator sim(model, mount, no_noise(), rc, 0, 300.0);
-  VelodyneDecoder decoder(model);
+  lidar::VelodyneDecoder decoder(model);
   const Eigen::Vector2d normal(std::cos(0.6), std::sin(0.6));
   int on_wall = 0;
   for (std::int64_t k = 0; k < 300; ++k) {  // 0.2 s: the wall at about 0..70 deg azimuth clockwise
-    const PacketReturns returns = sim.simulate_packet(k);
-    std::array<std::uint8_t, kPacketBytes> bytes{};
-    encode_packet(model, returns, bytes);
-    std::vector<LidarPoint> points;
+    const lidar::PacketReturns returns = sim.simulate_packet(k);
+    std::array<std::uint8_t, lidar::kPacketBytes> bytes{};
+    lidar::encode_packet(model, returns, bytes);
+    std::vector<lidar::LidarPoint> points;
     ASSERT_TRUE(decoder.decode(bytes, returns.blocks.first_firing_ns, points).is_data());
     std::size_t next = 0;
-    for (int b = 0; b < kBlocksPerPacket; ++b) {
+    for (int b = 0; b < lidar::kBlocksPerPacket; ++b) {
       const auto bi = static_cast<std::size_t>(b);
-      const int from = b < kBlocksPerPacket - 1 ? b : b - 1;
+      const int from = b < lidar::kBlocksPerPacket - 1 ? b : b - 1;
       const double gap_deg =
           std::fmod(returns.blocks.azimuth_cdeg[static_cast<std::size_t>(from + 1)] -
                         returns.blocks.azimuth_cdeg[static_cast<std::size_t>(from)] + 36000.0,
                     36000.0) /
           100.0;
-      for (int c = 0; c < kChannelsPerBlock; ++c) {
+      for (int c = 0; c < lidar::kChannelsPerBlock; ++c) {
         if (returns.distance_raw[bi][static_cast<std::size_t>(c)] == 0)
           continue;
         ASSERT_LT(next, points.size());
-        const LidarPoint& p = points[next++];
+        const lidar::LidarPoint& p = points[next++];
         ASSERT_EQ(p.ring, c);
         const double azimuth_deg = returns.blocks.azimuth_cdeg[bi] / 100.0 +
                                    gap_deg * (c - c % 2) * 2.304 / 55.296 -
@@ -343,14 +343,14 @@ TEST(SimLidarSimulator, SectorMatchesTheFullFrameInsideTheWindow) {
   v.trajectory = StaticPose{{6.0, -6.0, 0.0}};
   scene.vehicles.push_back(v);
   const Raycaster rc(scene);
-  const LidarSimulator sim(make_vlp32c(), Pose3{0, 0, 2.0, 0, 0, 0}, NoiseModel{}, rc);
+  const LidarSimulator sim(lidar::make_vlp32c(), Pose3{0, 0, 2.0, 0, 0, 0}, NoiseModel{}, rc);
   for (const AzimuthSector sector : {AzimuthSector{0.5, 1.2}, AzimuthSector{6.0, 0.4}}) {
     const SimulatedFrame full = sim.simulate_frame(0);
     const SimulatedFrame part = sim.simulate_frame(0, sector);
     EXPECT_EQ(part.counts.firings, full.counts.firings);
     EXPECT_GT(part.counts.outside_sector, part.counts.firings / 2);
-    std::vector<LidarPoint> expected;
-    for (const LidarPoint& p : full.frame.points) {
+    std::vector<lidar::LidarPoint> expected;
+    for (const lidar::LidarPoint& p : full.frame.points) {
       const double a = p.azimuth_rad;
       const bool inside = sector.begin_rad <= sector.end_rad ? (a >= sector.begin_rad && a <= sector.end_rad)
                                                              : (a >= sector.begin_rad || a <= sector.end_rad);
@@ -369,13 +369,13 @@ TEST(SimLidarSimulator, SectorMatchesTheFullFrameInsideTheWindow) {
 
 TEST(SimLidarSimulator, PacketsOutsideTheSectorReportNoReturn) {
   const Raycaster rc(ground_only());
-  const LidarSimulator sim(make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), rc);
+  const LidarSimulator sim(lidar::make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), rc);
   // Packet 0 spans azimuths 0 .. 2.4 deg: a sector elsewhere leaves it empty.
-  const PacketReturns empty = sim.simulate_packet(0, AzimuthSector{1.0, 2.0});
-  const PacketReturns full = sim.simulate_packet(0);
+  const lidar::PacketReturns empty = sim.simulate_packet(0, AzimuthSector{1.0, 2.0});
+  const lidar::PacketReturns full = sim.simulate_packet(0);
   int full_returns = 0;
-  for (int b = 0; b < kBlocksPerPacket; ++b) {
-    for (int c = 0; c < kChannelsPerBlock; ++c) {
+  for (int b = 0; b < lidar::kBlocksPerPacket; ++b) {
+    for (int c = 0; c < lidar::kChannelsPerBlock; ++c) {
       EXPECT_EQ(empty.distance_raw[static_cast<std::size_t>(b)][static_cast<std::size_t>(c)], 0);
       full_returns +=
           full.distance_raw[static_cast<std::size_t>(b)][static_cast<std::size_t>(c)] != 0 ? 1 : 0;
@@ -388,19 +388,19 @@ TEST(SimLidarSimulator, BadConfigurationThrows) {
   const Raycaster rc(ground_only());
   NoiseModel negative;
   negative.range_sigma_m = -1.0;
-  EXPECT_THROW(LidarSimulator(make_vlp16(), Pose3{}, negative, rc), std::invalid_argument);
-  EXPECT_THROW(LidarSimulator(make_vlp16(), Pose3{0, 0, std::nan(""), 0, 0, 0}, NoiseModel{}, rc),
+  EXPECT_THROW(LidarSimulator(lidar::make_vlp16(), Pose3{}, negative, rc), std::invalid_argument);
+  EXPECT_THROW(LidarSimulator(lidar::make_vlp16(), Pose3{0, 0, std::nan(""), 0, 0, 0}, NoiseModel{}, rc),
                std::invalid_argument);
-  SensorModel broken = make_vlp16();
+  lidar::SensorModel broken = lidar::make_vlp16();
   broken.elevation_deg.pop_back();
   EXPECT_THROW(LidarSimulator(broken, Pose3{}, NoiseModel{}, rc), std::invalid_argument);
-  const LidarSimulator generic(make_generic(64), Pose3{0, 0, 2, 0, 0, 0}, NoiseModel{}, rc);
+  const LidarSimulator generic(lidar::make_generic(64), Pose3{0, 0, 2, 0, 0, 0}, NoiseModel{}, rc);
   EXPECT_THROW(generic.simulate_packet(0), std::invalid_argument);
   EXPECT_GT(generic.simulate_frame(0).frame.points.size(), 50000U);  // frames work without a packet format
 }
 
 TEST(SimLidarSimulator, OwnsItsRaycasterWhenBuiltFromAScene) {
-  const LidarSimulator sim(make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), ground_only());
+  const LidarSimulator sim(lidar::make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), ground_only());
   EXPECT_GT(sim.simulate_frame(0).frame.points.size(), 12000U);
 }
 

@@ -2,10 +2,9 @@
 """scripts/check_sizes.py on trees this test writes: silent on code within the limits, and naming each
 function over 80 lines (free, member defined in a class, constructor with an initialiser list, template
 with "class T") and each file over 450 lines, whatever braces comments and strings hold."""
-import pathlib
-import subprocess
 import sys
-import tempfile
+
+from checker_tree import run_on_tree
 
 
 def body(lines):
@@ -13,13 +12,7 @@ def body(lines):
 
 
 def run(checker, files):
-    with tempfile.TemporaryDirectory() as root:
-        for name, text in files.items():
-            path = pathlib.Path(root) / "lib" / name
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(text)
-        done = subprocess.run([sys.executable, checker, root], capture_output=True, text=True)
-        return done.returncode, done.stdout
+    return run_on_tree(checker, {f"lib/{name}": text for name, text in files.items()})
 
 
 def main():

@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-namespace rsu::cli {
+namespace rsu::tools::cli {
 
 struct RenamedOption {
   std::string_view old_name;  // without the leading "--"
@@ -40,4 +40,4 @@ inline void accept_renamed_options(int argc, char** argv, std::initializer_list<
   }
 }
 
-}  // namespace rsu::cli
+}  // namespace rsu::tools::cli

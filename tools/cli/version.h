@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string_view>
 
-namespace rsu::cli {
+namespace rsu::tools::cli {
 
 inline constexpr const char* kVersionHelp = "print the version and exit";
 
@@ -21,4 +21,4 @@ inline bool print_version_if_asked(int argc, char** argv, const char* program) {
   return false;
 }
 
-}  // namespace rsu::cli
+}  // namespace rsu::tools::cli

@@ -52,7 +52,7 @@ std::string mount_text(const Pose3& p) {
   return text;
 }
 
-std::string report(const calibrate::CalibrationResult& r) {
+std::string report(const tools::CalibrationResult& r) {
   std::ostringstream out;
   out.precision(6);
   const auto& c = r.uncertainty.covariance;
@@ -83,13 +83,13 @@ std::string report(const calibrate::CalibrationResult& r) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-calibrate"))
+  if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-calibrate"))
     return 0;
   po::options_description options(
       "rsu-calibrate --background PCD [--background PCD ...] --map PCD --initial x,y,z,roll,pitch,yaw\n"
       "The LiDAR's mount from its background scan (sensor frame) registered against the street's map\n"
       "(map frame), from a rough initial mount (metres; degrees). Exit: 0 good, 3 ambiguous, 4 failed");
-  options.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+  options.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
       "background", po::value<std::vector<std::string>>(), "background scan(s), PCD in the sensor frame")(
       "map", po::value<std::string>(), "the street's map, PCD in the map frame")(
       "initial", po::value<std::string>(), "rough mount: x,y,z,roll_deg,pitch_deg,yaw_deg")(
@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
       return vm.count("help") ? 0 : 2;
     }
     const Pose3 initial = parse_pose(vm["initial"].as<std::string>());
-    calibrate::CalibrationConfig config;
+    tools::CalibrationConfig config;
     config.coarse.half_extent_m = vm["search-radius-m"].as<double>();
     config.coarse.half_yaw_rad = deg_to_rad(vm["search-yaw-deg"].as<double>());
     if (!(config.coarse.half_extent_m >= 0.0 && config.coarse.half_extent_m <= 50.0) ||
@@ -114,12 +114,12 @@ int main(int argc, char** argv) {
           "--search-radius-m must be in [0, 50] m and --search-yaw-deg in [0, 180] deg");
     std::vector<Eigen::Vector3d> background;
     for (const std::string& file : vm["background"].as<std::vector<std::string>>())
-      for (const LidarPoint& p : io::read_pcd(file))
+      for (const lidar::LidarPoint& p : io::read_pcd(file))
         background.emplace_back(p.x, p.y, p.z);
     std::vector<Eigen::Vector3f> map;
-    for (const LidarPoint& p : io::read_pcd(vm["map"].as<std::string>()))
+    for (const lidar::LidarPoint& p : io::read_pcd(vm["map"].as<std::string>()))
       map.emplace_back(p.x, p.y, p.z);
-    const calibrate::CalibrationResult result = calibrate::calibrate_mount(background, map, initial, config);
+    const tools::CalibrationResult result = tools::calibrate_mount(background, map, initial, config);
     const std::string text = report(result);
     std::cout << text;
     if (vm.count("out")) {

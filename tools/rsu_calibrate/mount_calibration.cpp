@@ -9,7 +9,7 @@
 #include <cmath>
 #include <unordered_set>
 
-namespace rsu::calibrate {
+namespace rsu::tools {
 
 namespace {
 
@@ -149,4 +149,4 @@ CalibrationResult calibrate_mount(const std::vector<Eigen::Vector3d>& background
   return result;
 }
 
-}  // namespace rsu::calibrate
+}  // namespace rsu::tools

@@ -15,7 +15,7 @@
 #include "common/angles.h"
 #include "common/pose.h"
 
-namespace rsu::calibrate {
+namespace rsu::tools {
 
 struct CalibrationConfig {
   calibration::SearchGrid coarse{3.0, 0.5, deg_to_rad(20.0), deg_to_rad(1.0)};
@@ -58,4 +58,4 @@ CalibrationResult calibrate_mount(const std::vector<Eigen::Vector3d>& background
                                   const std::vector<Eigen::Vector3f>& map, const Pose3& initial,
                                   const CalibrationConfig& config = {});
 
-}  // namespace rsu::calibrate
+}  // namespace rsu::tools

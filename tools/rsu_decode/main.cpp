@@ -60,10 +60,10 @@ std::string model_of_product(std::uint8_t product) {
 
 std::string guess_model(const std::string& capture_path, std::uint16_t port) {
   rsu::io::CaptureFile capture(capture_path);
-  rsu::UdpDatagram d;
+  rsu::lidar::UdpDatagram d;
   while (capture.next(d)) {
-    if (d.dst.port == port && d.payload.size() == rsu::kPacketBytes) {
-      const std::string model = model_of_product(d.payload[rsu::kProductIdOffset]);
+    if (d.dst.port == port && d.payload.size() == rsu::lidar::kPacketBytes) {
+      const std::string model = model_of_product(d.payload[rsu::lidar::kProductIdOffset]);
       if (model.empty()) {
         throw std::runtime_error(
             "the first data packet's factory byte names no model rsu-decode knows: give --model");
@@ -82,19 +82,20 @@ struct Options {
   std::string model;
   std::string calibration;
   std::string metadata;
-  rsu::ReturnSelection returns = rsu::ReturnSelection::both;
+  rsu::lidar::ReturnSelection returns = rsu::lidar::ReturnSelection::both;
   double scan_phase_deg = 0.0;
   std::uint16_t port = 0;
 };
 
 int decode(const Options& o) {
-  rsu::LidarDecoderOptions sensor;
+  rsu::lidar::LidarDecoderOptions sensor;
   sensor.returns = o.returns;
   sensor.rotation_start_azimuth_deg = o.scan_phase_deg;
-  const std::string model =
-      o.model.empty() ? guess_model(o.capture, o.port != 0 ? o.port : rsu::kVelodyneDataPort) : o.model;
+  const std::string model = o.model.empty()
+                                ? guess_model(o.capture, o.port != 0 ? o.port : rsu::lidar::kVelodyneDataPort)
+                                : o.model;
   if (!o.calibration.empty()) {
-    const auto base = rsu::sensor_model_by_name(model);
+    const auto base = rsu::lidar::sensor_model_by_name(model);
     if (!base)
       throw std::runtime_error("--calibration: the " + model + " takes no Velodyne calibration file");
     sensor.calibrated_model =
@@ -104,21 +105,21 @@ int decode(const Options& o) {
     sensor.metadata_text = rsu::io::read_text_file(o.metadata);
     sensor.metadata_source = o.metadata;
   }
-  const std::unique_ptr<rsu::LidarDecoder> decoder = rsu::make_lidar_decoder(model, sensor);
-  const rsu::SensorPorts ports = decoder->default_ports();
+  const std::unique_ptr<rsu::lidar::LidarDecoder> decoder = rsu::lidar::make_lidar_decoder(model, sensor);
+  const rsu::lidar::SensorPorts ports = decoder->default_ports();
   const std::uint16_t data_port = o.port != 0 ? o.port : ports.data;
 
-  rsu::FrameAssemblerConfig assembly;
+  rsu::lidar::FrameAssemblerConfig assembly;
   assembly.emit_partial_frames = true;  // a capture's first and last rotations are listed too
   assembly.cut_azimuth_deg = rsu::rad_to_deg(decoder->geometry().rotation_start_azimuth_rad);
   assembly.rotation_hz = decoder->geometry().rotation_hz;
-  rsu::FrameAssembler assembler(assembly);
+  rsu::lidar::FrameAssembler assembler(assembly);
 
   fs::create_directories(o.out);
   int written = 0;
-  auto write = [&](std::vector<rsu::LidarFrame>&& frames, bool at_end) {
+  auto write = [&](std::vector<rsu::lidar::LidarFrame>&& frames, bool at_end) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
-      const rsu::LidarFrame& frame = frames[i];
+      const rsu::lidar::LidarFrame& frame = frames[i];
       char name[32];
       std::snprintf(name, sizeof name, "rotation_%04d.pcd", written);
       rsu::io::write_rotation_pcd((fs::path(o.out) / name).string(), frame.points, frame.start_ns);
@@ -131,8 +132,8 @@ int decode(const Options& o) {
   };
 
   rsu::io::CaptureFile capture(o.capture);
-  rsu::UdpDatagram d;
-  std::vector<rsu::LidarPoint> points;
+  rsu::lidar::UdpDatagram d;
+  std::vector<rsu::lidar::LidarPoint> points;
   std::uint64_t other = 0;
   while (capture.next(d)) {
     if (d.dst.port != data_port && (ports.auxiliary == 0 || d.dst.port != ports.auxiliary)) {
@@ -155,14 +156,14 @@ int decode(const Options& o) {
     if (value != 0 && !name.starts_with("note."))
       counts += (counts.empty() ? "" : ", ") + name + " " + std::to_string(value);
   }
-  const rsu::PcapSkipped skipped = capture.skipped();
+  const rsu::lidar::PcapSkipped skipped = capture.skipped();
   std::cout << (counts.empty() ? "no packet of the sensor" : counts) << "; " << other
             << " datagrams to other ports, "
             << skipped.not_ipv4 + skipped.not_udp + skipped.fragmented + skipped.malformed
             << " records not UDP or unusable\n";
-  if (capture.error() != rsu::PcapError::none) {
+  if (capture.error() != rsu::lidar::PcapError::none) {
     std::cerr << "rsu-decode: " << o.capture << " ends where it stops being readable ("
-              << rsu::to_string(capture.error()) << "): a capture cut off mid-record\n";
+              << rsu::lidar::to_string(capture.error()) << "): a capture cut off mid-record\n";
   }
   return 0;
 }
@@ -170,13 +171,13 @@ int decode(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-decode"))
+  if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-decode"))
     return 0;
-  rsu::cli::accept_renamed_options(argc, argv, {{"scan-phase", "scan-phase-deg"}}, "rsu-decode");
+  rsu::tools::cli::accept_renamed_options(argc, argv, {{"scan-phase", "scan-phase-deg"}}, "rsu-decode");
   Options o;
   std::string returns = "both";
   po::options_description visible(kAbout);
-  visible.add_options()("help,h", "show this help and exit")("version", rsu::cli::kVersionHelp)(
+  visible.add_options()("help,h", "show this help and exit")("version", rsu::tools::cli::kVersionHelp)(
       "out,o", po::value<std::string>(&o.out), "folder for the rotation_NNNN.pcd files (created)")(
       "model,m", po::value<std::string>(&o.model),
       "the sensor: vlp16, vlp32c, hdl32e (default: from the packets), or an Ouster (os1-128, ..., with "
@@ -206,7 +207,7 @@ int main(int argc, char** argv) {
     std::cout << visible;
     return 0;
   }
-  const auto selection = rsu::return_selection_by_name(returns);
+  const auto selection = rsu::lidar::return_selection_by_name(returns);
   if (o.capture.empty() || o.out.empty() || !selection || o.scan_phase_deg < 0 || o.scan_phase_deg >= 360) {
     std::cerr << "rsu-decode: "
               << (o.capture.empty() ? "a CAPTURE is required"

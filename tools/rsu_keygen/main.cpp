@@ -118,7 +118,7 @@ int run(int argc, char** argv) {
   std::string ids_text;
   std::string public_key_path;
   po::options_description visible(kAbout);
-  visible.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+  visible.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
       "force", "overwrite existing key files")("trust-list", po::value<std::string>(&trust_list),
                                                "trust list file to add the public key to")(
       "role", po::value<std::string>(&role_text), "rsu or vehicle (with --trust-list)")(
@@ -179,7 +179,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-keygen"))
+  if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-keygen"))
     return 0;
   try {
     return run(argc, argv);

@@ -116,7 +116,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   double burst_period_s = 0.0, burst_length_s = 0.0;
   long long tamper_from_ns = 0;
   Options o;
-  d.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+  d.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
       "vehicle", po::value<std::string>(&vehicle)->required(),
       "ADDR:PORT where the vehicle receives corrections")(
       "listen", po::value<std::vector<std::string>>(&listen)->required(),
@@ -228,7 +228,7 @@ int run(const Options& o) {
 }  // namespace rsu::tools
 
 int main(int argc, char** argv) {
-  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-relay"))
+  if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-relay"))
     return 0;
   std::optional<rsu::tools::Options> options;
   try {

@@ -18,7 +18,7 @@ sim::Scenario load_scenario(const po::variables_map& vm) {
   sim::Scenario scenario = sim::load_scenario_file(vm["scenario"].as<std::string>());
   if (vm.count("model")) {
     const std::string name = vm["model"].as<std::string>();
-    auto model = sensor_model_by_name(name);
+    auto model = lidar::sensor_model_by_name(name);
     if (!model)
       throw std::runtime_error("--model: unknown LiDAR model \"" + name + "\"");
     model->rpm = scenario.lidar.model.rpm;

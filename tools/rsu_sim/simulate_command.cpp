@@ -52,7 +52,7 @@ void write_topdown(const std::filesystem::path& out_dir, const sim::Scenario& sc
   std::ofstream points(out_dir / "topdown_points.csv");
   points << "x,y,z,label\n";
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
-    const LidarPoint& p = frame.frame.points[i];
+    const lidar::LidarPoint& p = frame.frame.points[i];
     const Eigen::Vector3d m = sensor_to_map * Eigen::Vector3d(p.x, p.y, p.z);
     const auto& truth = frame.truth[i];
     const long label =
@@ -133,16 +133,16 @@ int run_simulate(const std::vector<std::string>& args) {
 
   std::uint64_t packets = 0;
   if (scenario.lidar.model.has_packet_format()) {
-    std::vector<std::uint8_t> pcap = pcap_global_header();
+    std::vector<std::uint8_t> pcap = lidar::pcap_global_header();
     const std::int64_t first = simulator.packet_index_at(scenario.start_ns);
     const std::int64_t last = simulator.packet_index_at(scenario.start_ns + frames * period);
-    std::array<std::uint8_t, kPacketBytes> payload{};
+    std::array<std::uint8_t, lidar::kPacketBytes> payload{};
     for (std::int64_t k = first; k < last; ++k) {
-      const PacketReturns returns = simulator.simulate_packet(k);
-      encode_packet(scenario.lidar.model, returns, payload);
-      append_udp_record(pcap, returns.blocks.first_firing_ns,
-                        {ipv4_address(192, 168, 1, 201), kVelodyneDataPort},
-                        {ipv4_address(255, 255, 255, 255), kVelodyneDataPort}, payload);
+      const lidar::PacketReturns returns = simulator.simulate_packet(k);
+      lidar::encode_packet(scenario.lidar.model, returns, payload);
+      lidar::append_udp_record(pcap, returns.blocks.first_firing_ns,
+                               {lidar::ipv4_address(192, 168, 1, 201), lidar::kVelodyneDataPort},
+                               {lidar::ipv4_address(255, 255, 255, 255), lidar::kVelodyneDataPort}, payload);
       ++packets;
     }
     write_file(out_dir / "packets.pcap", pcap);

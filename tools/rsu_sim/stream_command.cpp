@@ -103,16 +103,16 @@ int run_stream(const std::vector<std::string>& args) {
   const TimeNs clock_offset = has_epoch         ? static_cast<TimeNs>(vm["epoch-ns"].as<long long>())
                               : clock == "wall" ? edge::host_now_ns() - sim_start
                                                 : 0;
-  std::array<std::uint8_t, kPacketBytes> payload{};
-  std::optional<std::array<std::uint8_t, kPacketBytes>> held_back;  // sent after the next packet
+  std::array<std::uint8_t, lidar::kPacketBytes> payload{};
+  std::optional<std::array<std::uint8_t, lidar::kPacketBytes>> held_back;  // sent after the next packet
   std::uint64_t sent = 0, failed = 0, dropped = 0, reordered = 0;
-  const auto send = [&](const std::array<std::uint8_t, kPacketBytes>& bytes) {
+  const auto send = [&](const std::array<std::uint8_t, lidar::kPacketBytes>& bytes) {
     boost::system::error_code ec;
     socket.send_to(asio::buffer(bytes), destination, 0, ec);
     ec ? ++failed : ++sent;
   };
   for (std::int64_t k = first; k < last; ++k) {
-    PacketReturns returns = simulator.simulate_packet(k);
+    lidar::PacketReturns returns = simulator.simulate_packet(k);
     const TimeNs since_start = returns.blocks.first_firing_ns - sim_start;
     if (has_epoch && !vm.count("fast")) {
       std::this_thread::sleep_until(std::chrono::system_clock::time_point(
@@ -122,7 +122,7 @@ int run_stream(const std::vector<std::string>& args) {
       std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(since_start));
     }
     returns.blocks.first_firing_ns += clock_offset;
-    encode_packet(scenario.lidar.model, returns, payload);
+    lidar::encode_packet(scenario.lidar.model, returns, payload);
     if (loss > 0.0 && impairment_draw(impair_seed, 1, k) < loss) {
       ++dropped;
       continue;

@@ -140,9 +140,9 @@ int run(const po::variables_map& vm) {
 }  // namespace rsu::tools
 
 int main(int argc, char** argv) {
-  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-vehicle-replay"))
+  if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-vehicle-replay"))
     return 0;
-  rsu::cli::accept_renamed_options(
+  rsu::tools::cli::accept_renamed_options(
       argc, argv, {{"ndt-sigma-xy", "ndt-sigma-xy-m"}, {"ndt-sigma-yaw", "ndt-sigma-yaw-rad"}},
       "rsu-vehicle-replay");
   namespace po = boost::program_options;
@@ -151,7 +151,7 @@ int main(int argc, char** argv) {
       "ndt.csv "
       "> fused.csv\n(the NDT CSV and the corrections file rsu-vehicle read and wrote in a live "
       "run)\n\noptions");
-  d.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+  d.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
       "corrections-in", po::value<std::string>()->required(),
       "the corrections rsu-vehicle received (its --corrections file)")(
       "corrections", po::value<std::string>(), "write them again with the replay's decisions")(

@@ -132,7 +132,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   std::string trust_path;
   double max_age_ms = 1000.0;
   po::options_description d(kAbout);
-  d.add_options()("help,h", "show this help")("version", rsu::cli::kVersionHelp)(
+  d.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
       "vehicle-id", po::value<std::uint64_t>(&vehicle_id)->required(),
       "non-zero vehicle id (stable for the trip)")(
       "length-m", po::value<double>(&o.client.size.length_m)->default_value(4.89, "4.89"),
@@ -375,18 +375,18 @@ int run(const Options& options) {
 }  // namespace rsu::vehicle_client::cli
 
 int main(int argc, char** argv) {
-  if (rsu::cli::print_version_if_asked(argc, argv, "rsu-vehicle"))
+  if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-vehicle"))
     return 0;
-  rsu::cli::accept_renamed_options(argc, argv,
-                                   {{"length", "length-m"},
-                                    {"width", "width-m"},
-                                    {"height", "height-m"},
-                                    {"ref-offset-x", "ref-offset-x-m"},
-                                    {"ref-offset-y", "ref-offset-y-m"},
-                                    {"ndt-sigma-xy", "ndt-sigma-xy-m"},
-                                    {"ndt-sigma-yaw", "ndt-sigma-yaw-rad"},
-                                    {"ndt-max-fitness", "ndt-max-fitness-m2"}},
-                                   "rsu-vehicle");
+  rsu::tools::cli::accept_renamed_options(argc, argv,
+                                          {{"length", "length-m"},
+                                           {"width", "width-m"},
+                                           {"height", "height-m"},
+                                           {"ref-offset-x", "ref-offset-x-m"},
+                                           {"ref-offset-y", "ref-offset-y-m"},
+                                           {"ndt-sigma-xy", "ndt-sigma-xy-m"},
+                                           {"ndt-sigma-yaw", "ndt-sigma-yaw-rad"},
+                                           {"ndt-max-fitness", "ndt-max-fitness-m2"}},
+                                          "rsu-vehicle");
   std::optional<rsu::vehicle_client::cli::Options> options;
   try {
     options = rsu::vehicle_client::cli::parse_options(argc, argv);

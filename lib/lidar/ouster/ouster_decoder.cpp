@@ -7,7 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 namespace {
 
 constexpr std::uint64_t kMaxTimestampNs = static_cast<std::uint64_t>(std::numeric_limits<TimeNs>::max());
@@ -277,4 +277,4 @@ PacketResult Decoder::decode(std::span<const std::uint8_t> payload, std::vector<
   return PacketResult::accepted;
 }
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

@@ -22,7 +22,7 @@
 #include "lidar/ouster/ouster_packet.h"
 #include "lidar/point.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 
 // Checks run in this order; the first failure refuses the packet whole.
 enum class PacketResult {
@@ -129,4 +129,4 @@ class Decoder {
   int received_ = 0;     // window columns decoded in the current frame
 };
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

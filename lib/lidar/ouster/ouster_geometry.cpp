@@ -5,7 +5,7 @@
 
 #include "common/angles.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 
 BeamGeometry::BeamGeometry(const Metadata& metadata)
     : beam_x_mm_(metadata.beam_origin_x_mm),
@@ -96,4 +96,4 @@ SensorModel sensor_model(const Metadata& metadata, double min_range_m) {
   return s;
 }
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

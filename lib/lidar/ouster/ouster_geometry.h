@@ -22,7 +22,7 @@
 #include "lidar/ouster/ouster_metadata.h"
 #include "lidar/sensor_model.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 
 class BeamGeometry {
  public:
@@ -62,4 +62,4 @@ class BeamGeometry {
 // range the profile's range field can hold, no Velodyne packet format.
 SensorModel sensor_model(const Metadata& metadata, double min_range_m);
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

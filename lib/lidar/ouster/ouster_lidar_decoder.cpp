@@ -8,7 +8,7 @@
 #include "common/angles.h"
 #include "io/yaml_field.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 namespace {
 
 constexpr std::array<PacketResult, 9> kRefusals = {
@@ -171,4 +171,4 @@ std::unique_ptr<LidarDecoder> make_ouster_decoder(std::string_view model, const 
                                               rotation_start_azimuth_deg);
 }
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

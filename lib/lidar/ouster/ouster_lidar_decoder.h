@@ -25,7 +25,7 @@
 #include "lidar/lidar_decoder.h"
 #include "lidar/ouster/ouster_decoder.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 
 class OusterLidarDecoder final : public LidarDecoder {
  public:
@@ -70,4 +70,4 @@ std::unique_ptr<LidarDecoder> make_ouster_decoder(std::string_view model, const 
                                                   const std::string& metadata_source,
                                                   double rotation_start_azimuth_deg);
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

@@ -13,7 +13,7 @@
 #include "io/yaml_field.h"
 #include "lidar/ouster/ouster_packet.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 namespace {
 
 using io::YamlField;
@@ -378,4 +378,4 @@ Metadata parse_metadata(const std::string& text, const std::string& source_name)
   return m;
 }
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

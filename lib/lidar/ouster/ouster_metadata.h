@@ -25,7 +25,7 @@
 
 #include <Eigen/Core>
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 
 // The lidar packet profiles decoded here (the metadata's udp_profile_lidar). Dual-return and
 // FuSa/zone profiles are refused with an error naming them.
@@ -90,4 +90,4 @@ struct Metadata {
 // a rigid transform.
 Metadata parse_metadata(const std::string& text, const std::string& source_name);
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

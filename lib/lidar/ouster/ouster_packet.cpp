@@ -3,7 +3,7 @@
 
 #include "common/byte_order.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 namespace {
 
 // LEGACY column header: timestamp, measurement id, frame id, encoder count.
@@ -106,4 +106,4 @@ Pixel PacketReader::pixel(std::span<const std::uint8_t> packet, int column, int 
   return p;
 }
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

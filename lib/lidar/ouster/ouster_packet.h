@@ -22,7 +22,7 @@
 
 #include "lidar/ouster/ouster_metadata.h"
 
-namespace rsu::ouster {
+namespace rsu::lidar::ouster {
 
 constexpr std::size_t kMaxUdpPayload = 65507;
 constexpr std::size_t kImuPacketBytes = 48;  // the LEGACY IMU packet (port 7503 by default)
@@ -80,4 +80,4 @@ class PacketReader {
   PacketLayout layout_;
 };
 
-}  // namespace rsu::ouster
+}  // namespace rsu::lidar::ouster

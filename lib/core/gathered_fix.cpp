@@ -1,0 +1,114 @@
+#include "core/gathered_fix.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/angles.h"
+#include "lidar/sensor_model.h"
+#include "tracking/association.h"
+#include "tracking/vehicle_hypothesis.h"
+
+namespace rsu::core {
+
+void count(const GatheredFix& f, LidarStats& stats) {
+  stats.fragments_merged += f.fragments_merged;
+  stats.clusters_unmatched += f.fragments_unmatched;
+  if (f.outcome == GatheredFixOutcome::doubtful_cluster)
+    ++stats.clusters_unmatched;
+  else if (f.outcome == GatheredFixOutcome::out_of_coverage)
+    ++stats.clusters_out_of_coverage;
+  else if (f.outcome == GatheredFixOutcome::inconsistent)
+    ++stats.corrections_inconsistent;
+  else if (!f.ok())
+    ++stats.corrections_failed;  // no assigned cluster, no rectangle, or the correction refused it
+}
+
+namespace {
+
+// What the fix needs to know of the LiDAR: where it stands, the road's height, and its lasers'
+// elevations and azimuth step from the configured model's table (a model without one, e.g. a sensor
+// described by its own metadata, leaves every direction counted as observed: fewer, not wrong, bounds).
+perception::LidarGeometry lidar_geometry(const RsuCoreConfig& config, const LidarMount& mount) {
+  perception::LidarGeometry lidar;
+  lidar.position = mount.position();
+  lidar.ground_z = config.perception.ground.ground_z;
+  if (const auto model = lidar::sensor_model_by_name(config.sensor_model)) {
+    for (const double e : model->elevation_deg)
+      lidar.elevations_rad.push_back(deg_to_rad(e));
+    lidar.azimuth_step_rad = deg_to_rad(model->azimuth_step_deg());
+  }
+  return lidar;
+}
+
+}  // namespace
+
+GatheredVehicleFixer::GatheredVehicleFixer(const RsuCoreConfig& config, const LidarMount& mount)
+    : fix_config_(config.perception.fix),
+      hypothesis_(config.hypothesis),
+      association_(config.association),
+      lidar_(lidar_geometry(config, mount)),
+      coverage_radius_m_(config.coverage_radius_m) {}
+
+perception::VehicleFix GatheredVehicleFixer::fix_announced(std::span<const Eigen::Vector3d> points,
+                                                           const v2i::VehicleAnnouncement& a,
+                                                           TimeNs sweep_time,
+                                                           const perception::LidarGeometry& lidar) const {
+  // The yaw prior: the announced yaw carried to the sweep time with the announced motion (the
+  // hypothesis model), with its grown uncertainty.
+  const tracking::VehicleHypothesis at_sweep = tracking::predict_hypothesis(a, sweep_time, hypothesis_);
+  const double yaw_var = at_sweep.covariance(2, 2);
+  perception::AnnouncedVehicle vehicle;
+  vehicle.size = {a.size.length_m, a.size.width_m, a.size.height_m};
+  if (std::isfinite(at_sweep.yaw) && std::isfinite(yaw_var) && yaw_var >= 0.0) {
+    vehicle.yaw_prior = perception::YawPrior{at_sweep.yaw, std::max(std::sqrt(yaw_var), 1e-3)};
+  }
+  return perception::fix_vehicle(points, vehicle, lidar, fix_config_);
+}
+
+bool GatheredVehicleFixer::fits_vehicle(const perception::RectangleFit& fit,
+                                        const v2i::VehicleAnnouncement& a, TimeNs sweep_time) const {
+  return tracking::check_pair(fit, tracking::predict_hypothesis(a, sweep_time, hypothesis_), association_)
+             .verdict == tracking::PairGate::kPass;
+}
+
+GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a,
+                                      bool lost_nearby) const {
+  GatheredFix out;
+  perception::LidarGeometry lidar = lidar_;
+  lidar.complete_sweep = !lost_nearby;
+  // A near vehicle was held because its assigned detection lay outside its footprint (the gatherer);
+  // if none of its own came while the sweep passed it, that one is more likely a neighbour's (its own
+  // hidden, or its packets lost): no fix rather than someone else's.
+  if (!held.far && held.assigned_size > 0 && !held.assigned_own) {
+    out.outcome = GatheredFixOutcome::doubtful_cluster;
+    return out;
+  }
+  out.sweep_time = held.sweep_time();
+  out.fix = fix_announced(held.points, a, out.sweep_time, lidar);
+  if (held.parts > 1 && fits_vehicle(out.fix.fit, a, out.sweep_time)) {
+    out.fragments_merged = held.parts - 1;
+  } else if (held.parts > 1) {
+    // The union is not one vehicle of this size (something else was inside the footprint): the
+    // detection the assignment chose, alone; the correction's consistency check guards it. Without
+    // one, every part was only gathered (inside the grown footprint): none is known to be this
+    // vehicle's rather than a neighbour's, so no fix.
+    out.fragments_unmatched = held.parts - 1;
+    if (held.assigned_size == 0) {
+      out.outcome = GatheredFixOutcome::no_assigned_cluster;
+      return out;
+    }
+    out.sweep_time = held.assigned_time;
+    out.fix = fix_announced(held.assigned_points(), a, out.sweep_time, lidar);
+  }
+  if (!out.fix.fit.ok())
+    out.outcome = GatheredFixOutcome::fit_failed;
+  else if ((out.fix.fit.center - lidar_.xy()).norm() > coverage_radius_m_)
+    out.outcome = GatheredFixOutcome::out_of_coverage;
+  else if (out.fix.status() == perception::CorrectionStatus::inconsistent_box)
+    out.outcome = GatheredFixOutcome::inconsistent;
+  else
+    out.outcome = out.fix.ok() ? GatheredFixOutcome::fixed : GatheredFixOutcome::correction_failed;
+  return out;
+}
+
+}  // namespace rsu::core

@@ -1,0 +1,42 @@
+// An announced vehicle's predicted footprint grown by its uncertainty (GatheringConfig): where the
+// detections of that vehicle may lie when its pose, carried to the sweep time, is uncertain.
+#pragma once
+
+#include <array>
+
+#include <Eigen/Core>
+
+#include "core/rsu_core_config.h"
+#include "perception/detection.h"
+#include "tracking/vehicle_hypothesis.h"
+
+namespace rsu::core {
+
+class GrownFootprint {
+ public:
+  // The announced box at the predicted pose, every corner moved out by footprint_sigmas standard
+  // deviations of the predicted centre (largest axis) and of the yaw (at the corners), clamped to
+  // [min_margin_m, max_margin_m].
+  GrownFootprint(const tracking::VehicleHypothesis& vehicle, const GatheringConfig& config);
+
+  // Share of the detection's points inside the grown footprint.
+  double inside_fraction(const perception::Detection& detection) const;
+  // Whether at least min_inside_fraction of the detection's points lie in the footprint grown by the
+  // minimum margin and one sigma of the predicted centre only: the vehicle's own, rather than a
+  // neighbour's inside the wider margin (a vehicle that knows it is lost may be found farther off).
+  bool tightly_inside(const perception::Detection& detection) const;
+
+  const std::array<Eigen::Vector2d, 4>& corners() const { return corners_; }
+
+ private:
+  double fraction_inside(const perception::Detection& detection, const Eigen::Vector2d& half) const;
+
+  Eigen::Vector2d centre_;
+  double yaw_;
+  Eigen::Vector2d half_;        // grown half extents along and across the vehicle
+  Eigen::Vector2d tight_half_;  // the same grown by the minimum margin and one centre sigma
+  double min_inside_fraction_;
+  std::array<Eigen::Vector2d, 4> corners_;
+};
+
+}  // namespace rsu::core

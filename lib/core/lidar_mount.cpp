@@ -1,0 +1,32 @@
+#include "core/lidar_mount.h"
+
+#include <cmath>
+
+namespace rsu::core {
+
+LidarMount::LidarMount(const Pose3& sensor_to_map)
+    : pose_(sensor_to_map),
+      sensor_to_map_(sensor_to_map.to_isometry()),
+      map_to_sensor_(sensor_to_map_.inverse()),
+      xy_(sensor_to_map.x, sensor_to_map.y) {}
+
+void LidarMount::to_map_frame(std::span<const lidar::LidarPoint> in,
+                              std::vector<lidar::LidarPoint>& out) const {
+  const Eigen::Matrix3f r = sensor_to_map_.linear().cast<float>();
+  const Eigen::Vector3f t = sensor_to_map_.translation().cast<float>();
+  out.resize(in.size());
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const Eigen::Vector3f q = r * Eigen::Vector3f(in[i].x, in[i].y, in[i].z) + t;
+    out[i] = in[i];
+    out[i].x = q.x();
+    out[i].y = q.y();
+    out[i].z = q.z();
+  }
+}
+
+double LidarMount::beam_azimuth(const Eigen::Vector2d& xy) const {
+  const Eigen::Vector3d s = map_to_sensor_ * Eigen::Vector3d(xy.x(), xy.y(), pose_.z);
+  return -std::atan2(s.y(), s.x());
+}
+
+}  // namespace rsu::core

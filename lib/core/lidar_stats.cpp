@@ -1,0 +1,35 @@
+#include "core/lidar_stats.h"
+
+namespace rsu::core {
+
+void report(const lidar::PacketOrderStats& o, const perception::SweepClustererStats& s, const LidarStats& l,
+            CounterList& out) {
+  out.add("packet", "released", o.released);  // into perception, in time order
+  out.add("packet", "lost", o.lost);
+  out.add("packet", "reordered", o.reordered);
+  out.add("packet", "late_dropped", o.late);
+  out.add("packet", "duplicate", o.duplicate);
+  out.add("packet", "stream_gaps", o.stream_gaps);
+  out.add("packet", "too_late", l.packets_too_late);
+  out.add("packet", "clock_offset", l.packets_clock_offset);
+  out.add("sweep", "foreground_points", s.foreground_points);
+  out.add("sweep", "clusters_released", s.clusters_released);
+  out.add("sweep", "clusters_dropped_small", s.clusters_dropped_small);
+  out.add("sweep", "clusters_dropped_large", s.clusters_dropped_large);
+  out.add("sweep", "points_dropped_stale", s.points_dropped_stale);
+  out.add("sweep", "points_dropped_overflow", s.points_dropped_overflow);
+  out.add("sweep", "points_dropped_restart", s.points_dropped_restart);
+  out.add("sweep", "invalid_points", s.invalid_points);
+  out.add("sweep", "restarts", s.restarts);
+  out.add("lidar", "background_frames", l.background_frames);
+  out.add("lidar", "fits_failed", l.fits_failed);
+  out.add("lidar", "clusters_out_of_coverage", l.clusters_out_of_coverage);
+  out.add("lidar", "clusters_unmatched", l.clusters_unmatched);
+  out.add("lidar", "fragments_merged", l.fragments_merged);
+  out.add("lidar", "corrections_failed", l.corrections_failed);
+  out.add("lidar", "corrections_inconsistent", l.corrections_inconsistent);
+  out.add("lidar", "corrections_encode_failed", l.corrections_encode_failed);
+  out.add("lidar", "corrections", l.corrections);
+}
+
+}  // namespace rsu::core

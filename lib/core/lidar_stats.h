@@ -1,0 +1,36 @@
+// What RsuCore counts on the LiDAR side, from learning the background to the corrections sent, and how
+// the stages before it are listed in the stats file.
+#pragma once
+
+#include <cstdint>
+
+#include "common/counter_list.h"
+#include "lidar/packet_order.h"
+#include "perception/sweep_clusterer.h"
+
+namespace rsu::core {
+
+struct LidarStats {
+  std::uint64_t background_frames = 0;
+  std::uint64_t clusters_fitted = 0;
+  std::uint64_t fits_failed = 0;
+  std::uint64_t clusters_out_of_coverage = 0;
+  std::uint64_t clusters_unmatched = 0;   // no registered vehicle within the gates: unregistered
+  std::uint64_t fragments_merged = 0;     // extra clusters of one vehicle fitted with its main one
+  std::uint64_t vehicles_in_batches = 0;  // registered vehicles offered to association
+  std::uint64_t corrections_failed = 0;   // size correction refused the matched cluster
+  // the known-size box contradicts the points, or the points do not decide where it sits: no fix
+  std::uint64_t corrections_inconsistent = 0;
+  std::uint64_t corrections_encode_failed = 0;
+  std::uint64_t corrections = 0;
+  std::uint64_t packets_too_late = 0;      // older than RsuCoreConfig::max_packet_age when processed
+  std::uint64_t packets_clock_offset = 0;  // time_source sensor: the sensor's clock beyond the tolerance
+};
+
+// packet.lost / reordered / late_dropped / duplicate / stream_gaps (the reorder stage's), packet.too_late,
+// packet.clock_offset,
+// sweep.* (the sweep clusterer's) and lidar.*.
+void report(const lidar::PacketOrderStats& order, const perception::SweepClustererStats& sweep,
+            const LidarStats& stats, CounterList& out);
+
+}  // namespace rsu::core

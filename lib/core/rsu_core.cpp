@@ -1,0 +1,292 @@
+#include "core/rsu_core.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+
+#include "common/angles.h"
+#include "common/counter_list.h"
+#include "tracking/association.h"
+
+namespace rsu::core {
+namespace {
+
+// `config` after the checks its parts do not make themselves (the decoder checks the sensor).
+const RsuCoreConfig& checked(const RsuCoreConfig& config) {
+  const Pose3& m = config.mount;
+  for (const double v : {m.x, m.y, m.z, m.roll, m.pitch, m.yaw}) {
+    if (!std::isfinite(v))
+      throw std::invalid_argument("LiDAR mount pose must be finite");
+  }
+  if (!(config.coverage_radius_m > 0.0))
+    throw std::invalid_argument("coverage radius must be > 0");
+  if (config.background.learning_frames < 0)
+    throw std::invalid_argument("learning frames must be >= 0");
+  if (config.security.mode == v2i::SecurityMode::kSigned && !config.signing_key)
+    throw std::invalid_argument("signed mode needs the RSU's signing key (security.key_file)");
+  return config;
+}
+
+// The release rule's margin grows by how far beams may lead the rotor at their firing (the VLP-32C's
+// precision azimuth: sensor_model.h), so that the exact rule stays exact.
+perception::SweepConfig sweep_config(const RsuCoreConfig& config, const lidar::SweepGeometry& geometry) {
+  perception::SweepConfig c = config.sweep;
+  c.release_margin_deg += rad_to_deg(geometry.azimuth_lead_rad);
+  return c;
+}
+
+lidar::FrameAssemblerConfig assembler_config(const lidar::SweepGeometry& geometry) {
+  lidar::FrameAssemblerConfig c;
+  c.rotation_hz = geometry.rotation_hz;
+  c.cut_azimuth_deg = rad_to_deg(geometry.rotation_start_azimuth_rad);
+  return c;
+}
+
+// Whether a learned background stays valid under `b`: it depends on the sensor, its pose and the
+// background model's parameters only.
+bool same_background_setup(const RsuCoreConfig& a, const RsuCoreConfig& b) {
+  return a.sensor_model == b.sensor_model && a.sensor_options == b.sensor_options && a.mount == b.mount &&
+         perception::background_model_config(a.perception) ==
+             perception::background_model_config(b.perception);
+}
+
+void append(LidarStepResult& into, LidarStepResult&& step) {
+  for (OutgoingCorrection& c : step.corrections)
+    into.corrections.push_back(std::move(c));
+  into.background_became_ready = into.background_became_ready || step.background_became_ready;
+}
+
+}  // namespace
+
+RsuCore::RsuCore(const RsuCoreConfig& config)
+    : config_(checked(config)),
+      mount_(config.mount),
+      packets_(config),
+      assembler_(assembler_config(packets_.decoder().geometry())),
+      background_(perception::background_model_config(config.perception), mount_.xy()),
+      clusterer_(sweep_config(config, packets_.decoder().geometry()), config.perception.clustering,
+                 mount_.xy(), packets_.decoder().geometry().rotation_hz,
+                 packets_.decoder().geometry().ring_azimuth_offset_rad),
+      sweep_(mount_, config.perception.clustering.tolerance_m, config.sweep.release_margin_deg,
+             packets_.decoder().geometry()),
+      background_ready_(config.background.learning_frames == 0),
+      announcements_(config),
+      gatherer_(config.gathering, config.association, mount_.xy()),
+      fixer_(config, mount_),
+      corrections_(config) {}
+
+// The map of the daemon: one batch of the sweep, through the paper's steps (docs/architecture.md).
+LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Release release, TimeNs now) {
+  // Foreground: the static scene removed point by point (the learned background, paper Sec. 4.1).
+  for (const lidar::LidarPoint& p : points)
+    clusterer_.add(p, background_.classify(p) == perception::PointClass::foreground);
+  sweep_.advance(points);
+  // Clusters: Euclidean clustering, each cluster released as soon as the sweep has passed it.
+  std::vector<perception::SweptCluster> clusters =
+      release == Release::everything ? clusterer_.release_all() : clusterer_.release_closed();
+  // Fit: a rectangle for each cluster (L-shape fitting, paper Sec. 3.1).
+  std::vector<perception::Detection> detections = detect(std::move(clusters));
+  if (!detections.empty()) {
+    // Predict: the announced vehicles carried to the batch's sweep time.
+    const std::vector<tracking::VehicleHypothesis> vehicles = predict_announced(detections, now);
+    // Associate: which detection is which vehicle (gates, one global assignment).
+    const tracking::AssociationResult pairs = tracking::associate(detections, vehicles, config_.association);
+    // Gather: each vehicle's detections, across batches, until the sweep has passed it (fragments).
+    lidar_stats_.clusters_unmatched += gatherer_.gather(std::move(detections), vehicles, pairs, sweep_);
+  }
+  // Fix and correction: each vehicle the sweep has passed, size-corrected with its announced size
+  // (paper Sec. 3.2, Algorithm 1 or the improved correction), its correction to send.
+  LidarStepResult result;
+  for (const HeldVehicle& held : gatherer_.release(release == Release::everything, sweep_))
+    correct(held, now, result);
+  return result;
+}
+
+std::vector<perception::Detection> RsuCore::detect(std::vector<perception::SweptCluster>&& clusters) {
+  std::vector<perception::Detection> detections;
+  for (const perception::SweptCluster& cluster : clusters) {
+    if (cluster.points.empty())
+      continue;
+    perception::Detection d = perception::detect(cluster.points, mount_.xy(), config_.perception.fix.fit);
+    ++lidar_stats_.clusters_fitted;
+    if (!d.fit.ok()) {
+      ++lidar_stats_.fits_failed;  // too small or thin to fit alone, but maybe a fragment of a vehicle
+    } else if ((d.fit.center - mount_.xy()).norm() > config_.coverage_radius_m) {
+      ++lidar_stats_.clusters_out_of_coverage;
+      continue;
+    }
+    detections.push_back(std::move(d));
+  }
+  return detections;
+}
+
+// The registered vehicles not corrected yet in this rotation, predicted to the batch's sweep time: the
+// median of its detections' (they were swept within a few degrees of each other).
+std::vector<tracking::VehicleHypothesis> RsuCore::predict_announced(
+    std::span<const perception::Detection> detections, TimeNs now) {
+  std::vector<TimeNs> times;
+  for (const perception::Detection& d : detections)
+    times.push_back(d.sweep_time_ns);
+  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
+  const TimeNs batch_time = times[times.size() / 2];
+  std::vector<tracking::VehicleHypothesis> vehicles;
+  for (const v2i::RegisteredVehicle* v : announcements_.registry().active(now)) {
+    if (!corrections_.corrected_this_rotation(v->announcement.vehicle_id, batch_time,
+                                              sweep_.rotation_period_ns()))
+      vehicles.push_back(tracking::predict_hypothesis(v->announcement, batch_time, config_.hypothesis));
+  }
+  lidar_stats_.vehicles_in_batches += vehicles.size();
+  return vehicles;
+}
+
+void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& result) {
+  const v2i::RegisteredVehicle* vehicle = announcements_.registry().find(held.vehicle_id, now);
+  if (vehicle == nullptr || held.points.empty())
+    return;
+  // Packets lost while the sweep crossed the vehicle (or just before its first points: its leading part
+  // may be what was lost).
+  const bool lost_nearby = last_loss_ns_ >= held.first_time - sweep_.rotation_period_ns() / 8;
+  const GatheredFix fix = fixer_.fix(held, vehicle->announcement, lost_nearby);
+  count(fix, lidar_stats_);
+  if (!fix.ok())
+    return;
+  std::optional<OutgoingCorrection> out =
+      corrections_.build(vehicle->announcement, fix.fix, fix.sweep_time, now);
+  if (!out) {
+    ++lidar_stats_.corrections_encode_failed;
+    return;
+  }
+  ++lidar_stats_.corrections;
+  result.corrections.push_back(std::move(*out));
+}
+
+LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now) {
+  LidarStepResult result;
+  const PacketIntakeStep step = packets_.push(payload, now);
+  result.packet = step.packet;
+  if (!step.packet.is_data())
+    return result;  // counted by the decoder, by kind and reason
+  follow_geometry();
+  if (step.clock_refused) {
+    ++lidar_stats_.packets_clock_offset;
+    return result;
+  }
+  if (step.shedding_began)
+    clusterer_.restart();  // what is open now lacks the shed points: never fitted as whole
+  if (step.shed) {
+    ++lidar_stats_.packets_too_late;
+    return result;
+  }
+  while (packets_.pop(ordered_scratch_)) {
+    if (packets_.order_stats().lost != packets_lost_ && !ordered_scratch_.empty()) {
+      packets_lost_ = packets_.order_stats().lost;
+      last_loss_ns_ = ordered_scratch_.front().time_ns;
+    }
+    append(result, on_lidar_points(ordered_scratch_, now));
+  }
+  return result;
+}
+
+LidarStepResult RsuCore::on_lidar_points(std::span<const lidar::LidarPoint> points, TimeNs now) {
+  mount_.to_map_frame(points, map_scratch_);
+  if (!background_ready_)
+    return learn(map_scratch_, false);
+  return process(map_scratch_, Release::passed, now);
+}
+
+LidarStepResult RsuCore::on_lidar_frame(std::span<const lidar::LidarPoint> points, TimeNs now) {
+  mount_.to_map_frame(points, map_scratch_);
+  if (!background_ready_)
+    return learn(map_scratch_, true);
+  return process(map_scratch_, Release::everything, now);  // a whole rotation: every vehicle swept
+}
+
+LidarStepResult RsuCore::flush(TimeNs now) {
+  LidarStepResult result;
+  while (packets_.pop(ordered_scratch_, true))
+    append(result, on_lidar_points(ordered_scratch_, now));
+  if (background_ready_)
+    append(result, process({}, Release::everything, now));
+  return result;
+}
+
+void RsuCore::follow_geometry() {
+  const lidar::SweepGeometry& g = packets_.decoder().geometry();
+  sweep_.follow(g);
+  // A rotation rate measured anew (the decoder smooths it packet by packet): passed on when it moved
+  // by more than 0.1 %, which is what unwrapping across gaps and the rotation period need.
+  if (std::abs(g.rotation_hz - sweep_.rotation_hz()) <= 1e-3 * sweep_.rotation_hz())
+    return;
+  sweep_.set_rotation_hz(g.rotation_hz);
+  assembler_.set_rotation_hz(g.rotation_hz);
+  clusterer_.set_rotation_hz(g.rotation_hz);
+}
+
+void RsuCore::add_background_frame(std::span<const lidar::LidarPoint> map_points) {
+  background_.add_background_frame(map_points);
+  ++lidar_stats_.background_frames;
+}
+
+LidarStepResult RsuCore::learn(std::span<const lidar::LidarPoint> map_points, bool whole_frame) {
+  LidarStepResult result;
+  if (whole_frame) {
+    add_background_frame(map_points);
+  } else {
+    for (const lidar::LidarFrame& frame : assembler_.add(map_points))
+      add_background_frame(frame.points);
+  }
+  if (static_cast<int>(lidar_stats_.background_frames) >= config_.background.learning_frames) {
+    background_ready_ = true;
+    result.background_became_ready = true;
+  }
+  return result;
+}
+
+void RsuCore::load_background(const std::vector<std::vector<lidar::LidarPoint>>& frames) {
+  for (const auto& frame : frames) {
+    mount_.to_map_frame(frame, map_scratch_);
+    add_background_frame(map_scratch_);
+  }
+  background_ready_ = true;
+}
+
+std::size_t RsuCore::expire(TimeNs now) {
+  const std::size_t n = announcements_.expire(now);
+  corrections_.forget_unregistered(announcements_.registry(), now);
+  return n;
+}
+
+ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
+  RsuCore fresh(next);  // throws, leaving *this untouched, if `next` is unusable
+  ReloadSummary summary;
+  summary.vehicles_before = announcements_.registry().active(now).size();
+  fresh.announcements_ = std::move(announcements_).reloaded(next, now);
+  summary.vehicles_after = fresh.announcements_.registry().active(now).size();
+  summary.background_kept = same_background_setup(config_, next);
+  if (summary.background_kept) {
+    fresh.background_ = std::move(background_);
+    fresh.background_ready_ = background_ready_;
+    fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
+  }
+  fresh.packets_ = std::move(packets_).reloaded(next);
+  fresh.sweep_.follow(fresh.packets_.decoder().geometry());
+  fresh.corrections_ = std::move(corrections_).reloaded(next);
+  *this = std::move(fresh);
+  return summary;
+}
+
+void RsuCore::report(CounterList& out) const {
+  announcements_.report(out);
+  packets_.report(out);
+  core::report(packets_.order_stats(), clusterer_.stats(), lidar_stats_, out);
+  packets_.report_clock(out);
+}
+
+std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
+  CounterList out;
+  report(out);
+  return out.entries();
+}
+
+}  // namespace rsu::core

@@ -1,0 +1,173 @@
+// The RSU's whole decision logic, pure (no sockets, threads, clocks or files: docs/architecture.md):
+// the daemon hands it datagrams and LiDAR data with the time they arrived and sends what it returns.
+// Tests drive it with hand-stepped time, so everything the daemon decides is tested here in
+// microseconds. It orchestrates; each step is its own part:
+//
+//   announcements -> AnnouncementIntake (rate limit, authentication, decoding, validation, registry)
+//   LiDAR packets -> PacketIntake (decoder, reorder, shedding) -> LidarMount (map frame)
+//       while learning: whole rotations train the background model (or load_background())
+//       then, batch by batch as the sweep passes (RsuCore::process, the map of the daemon):
+//       foreground -> clusters (perception::SweepClusterer) -> fit (perception::detect) -> predict the
+//       announced vehicles -> associate (tracking::associate) -> gather (VehicleGatherer) -> fix
+//       (GatheredVehicleFixer: perception::fix_vehicle) -> correction (CorrectionBuilder)
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/time.h"
+#include "core/announcement_intake.h"
+#include "core/correction_builder.h"
+#include "core/datagram_outcome.h"
+#include "core/gathered_fix.h"
+#include "core/lidar_mount.h"
+#include "core/lidar_stats.h"
+#include "core/packet_intake.h"
+#include "core/rsu_core_config.h"
+#include "core/sweep_position.h"
+#include "core/vehicle_gatherer.h"
+#include "lidar/frame_assembler.h"
+#include "lidar/lidar_decoder.h"
+#include "lidar/packet_order.h"
+#include "lidar/point.h"
+#include "perception/background_model.h"
+#include "perception/detection.h"
+#include "perception/sweep_clusterer.h"
+#include "tracking/vehicle_hypothesis.h"
+
+namespace rsu::core {
+
+struct LidarStepResult {
+  std::vector<OutgoingCorrection> corrections;
+  bool background_became_ready = false;  // learning finished during this step (log it)
+  // on_lidar_packet: what the decoder made of the payload (refused ones: the reason, to log).
+  lidar::PacketOutcome packet;
+};
+
+struct ReloadSummary {
+  bool background_kept = false;  // false: the LiDAR or background setup changed, learning restarts
+  std::size_t vehicles_before = 0;
+  std::size_t vehicles_after = 0;
+};
+
+class RsuCore {
+ public:
+  // Throws std::invalid_argument for an unusable configuration (unknown sensor model, a model without
+  // a packet format, non-finite mount, signed mode without a signing key, ...), with a message naming
+  // what is wrong.
+  explicit RsuCore(const RsuCoreConfig& config);
+
+  // One datagram from the announcement port, received at `now`. Never throws on content. In signed mode
+  // it is authenticated first (v2i/message_authenticator.h): dropped and counted unless a trusted
+  // vehicle key signed it for that vehicle id, fresh and not replayed.
+  DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now) {
+    return announcements_.on_datagram(bytes, source, now);
+  }
+  // An announcement another RSU accepted from a vehicle and shared on the data bus, received at `now`.
+  // It takes the datagram path (authentication: the vehicle's own signature over its original bytes,
+  // fresh, not replayed; decode, validation, reply_to against the vehicle's address, registry),
+  // is rate-limited per origin RSU, and is skipped when the registry already holds that announcement
+  // or a newer one (the vehicle also announced here, or another peer shared it first). The caller must
+  // not share it again: only what on_datagram() accepted is shared, so nothing loops. Never throws.
+  DatagramOutcome on_peer_announcement(std::span<const std::uint8_t> datagram, const PeerProvenance& from,
+                                       TimeNs now) {
+    return announcements_.on_peer_announcement(datagram, from, now);
+  }
+
+  // One UDP payload of the LiDAR (lidar/lidar_decoder.h: the configured sensor's decoder). `now` is its
+  // receive time: it resolves what the packet's own time leaves ambiguous. Data packets pass a reorder
+  // stage first (RsuCoreConfig::packet_order): held ones are processed later.
+  LidarStepResult on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now);
+  // Points in the SENSOR frame, in firing order, from a streaming source (a part of a rotation).
+  LidarStepResult on_lidar_points(std::span<const lidar::LidarPoint> points_in_sensor_frame, TimeNs now);
+  // One whole rotation (PCD replay, simulator frame): its clusters are released at its end.
+  LidarStepResult on_lidar_frame(std::span<const lidar::LidarPoint> points_in_sensor_frame, TimeNs now);
+  // Releases every pending cluster (drain at shutdown).
+  LidarStepResult flush(TimeNs now);
+
+  // Background frames recorded elsewhere (PCD files, sensor frame): the model is ready afterwards.
+  void load_background(const std::vector<std::vector<lidar::LidarPoint>>& frames_in_sensor_frame);
+  bool background_ready() const { return background_ready_; }
+
+  // Forgets silent vehicles (call about once a second); returns how many.
+  std::size_t expire(TimeNs now);
+
+  // Applies a new configuration, keeping the registered vehicles, the signers' replay state, the
+  // signing sequence and, when the LiDAR and background setup are unchanged, the learned background.
+  // The new trust list and key take effect (SIGHUP). Throws std::invalid_argument (and changes
+  // nothing) if `next` is unusable.
+  ReloadSummary reload(const RsuCoreConfig& next, TimeNs now);
+
+  // The encoded RsuAdvertisement, signed in signed mode, generated at `now` (empty if encoding failed).
+  std::vector<std::uint8_t> advertisement(TimeNs now) { return corrections_.advertisement(now); }
+
+  // Everything counted and measured, zeros included, in a stable order, each with its kind: for the
+  // stats file, the metrics and logs.
+  void report(CounterList& out) const;
+  // The counts and levels of report() as ("area.reason", value).
+  std::vector<std::pair<std::string, std::uint64_t>> counters() const;
+
+  const RsuCoreConfig& config() const { return config_; }
+  const v2i::VehicleRegistry& registry() const { return announcements_.registry(); }
+  const EnumCounter<DatagramStage>& datagram_stages() const { return announcements_.datagram_stages(); }
+  const EnumCounter<DatagramStage>& peer_stages() const { return announcements_.peer_stages(); }
+  const EnumCounter<v2i::DecodeStatus>& decode_counts() const { return announcements_.decode_counts(); }
+  const EnumCounter<v2i::AnnouncementReason>& validation_counts() const {
+    return announcements_.validator().counts();
+  }
+  const v2i::MessageAuthenticator& authenticator() const { return announcements_.authenticator(); }
+  // The configured sensor's packet decoder (its counters, geometry and notices).
+  const lidar::LidarDecoder& lidar_decoder() const { return packets_.decoder(); }
+  // Notices for the operator (log them once each, as warnings): the decoder's, and the sensor clock
+  // crossing the tolerance (and what RsuCore then does).
+  std::vector<std::string> take_lidar_notices() { return packets_.take_notices(); }
+  SensorClockReport sensor_clock() const { return packets_.sensor_clock(); }
+  const lidar::PacketOrderStats& packet_order_stats() const { return packets_.order_stats(); }
+  const perception::SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
+  const LidarStats& lidar_stats() const { return lidar_stats_; }
+  const Eigen::Vector2d& lidar_xy() const { return mount_.xy(); }
+
+ private:
+  enum class Release { passed, everything };
+
+  // One batch of the sweep, the paper's steps in order (the .cpp quotes it in docs/architecture.md).
+  LidarStepResult process(std::span<const lidar::LidarPoint> map_points, Release release, TimeNs now);
+  std::vector<perception::Detection> detect(std::vector<perception::SweptCluster>&& clusters);
+  std::vector<tracking::VehicleHypothesis> predict_announced(
+      std::span<const perception::Detection> detections, TimeNs now);
+  void correct(const HeldVehicle& held, TimeNs now, LidarStepResult& result);
+
+  LidarStepResult learn(std::span<const lidar::LidarPoint> map_points, bool whole_frame);
+  void add_background_frame(std::span<const lidar::LidarPoint> map_points);
+  // Passes a changed rotation rate or packet period measured by the decoder on to the stages.
+  void follow_geometry();
+
+  RsuCoreConfig config_;
+  LidarMount mount_;
+  PacketIntake packets_;
+  lidar::FrameAssembler assembler_;  // whole rotations for background learning
+  perception::BackgroundModel background_;
+  perception::SweepClusterer clusterer_;
+  SweepPosition sweep_;
+  bool background_ready_ = false;
+  AnnouncementIntake announcements_;
+  VehicleGatherer gatherer_;
+  GatheredVehicleFixer fixer_;
+  CorrectionBuilder corrections_;
+  LidarStats lidar_stats_;
+
+  std::vector<lidar::LidarPoint> ordered_scratch_;  // a packet released by the reorder stage
+  // Lost packets: how many so far, and the firing time after the latest gap. A vehicle swept around a
+  // gap may miss a part, so its fix counts none of its sides as seen (GatheredVehicleFixer).
+  std::uint64_t packets_lost_ = 0;
+  TimeNs last_loss_ns_ = std::numeric_limits<TimeNs>::min();
+  std::vector<lidar::LidarPoint> map_scratch_;
+};
+
+}  // namespace rsu::core

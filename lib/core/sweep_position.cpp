@@ -1,0 +1,67 @@
+#include "core/sweep_position.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "common/angles.h"
+
+namespace rsu::core {
+namespace {
+
+double azimuth_spread_rad(const lidar::SweepGeometry& geometry) {
+  const std::vector<double>& offsets = geometry.ring_azimuth_offset_rad;
+  if (offsets.empty())
+    return 0.0;
+  const auto [lo, hi] = std::minmax_element(offsets.begin(), offsets.end());
+  return *hi - *lo;
+}
+
+}  // namespace
+
+SweepPosition::SweepPosition(const LidarMount& mount, double cluster_tolerance_m, double release_margin_deg,
+                             const lidar::SweepGeometry& geometry)
+    : mount_(mount),
+      tolerance_m_(cluster_tolerance_m),
+      release_margin_rad_(deg_to_rad(release_margin_deg)),
+      rotation_hz_(geometry.rotation_hz) {
+  follow(geometry);
+}
+
+void SweepPosition::follow(const lidar::SweepGeometry& geometry) {
+  lag_rad_ = azimuth_spread_rad(geometry) + geometry.azimuth_lead_rad + release_margin_rad_;
+}
+
+void SweepPosition::advance(std::span<const lidar::LidarPoint> points) {
+  if (!points.empty() && std::isfinite(points.back().azimuth_rad)) {
+    latest_ = points.back();
+    known_ = true;
+  }
+}
+
+TimeNs SweepPosition::passed_time(std::span<const Eigen::Vector2d> outline) const {
+  if (!known_ || outline.empty())
+    return 0;
+  // Beam azimuths clockwise from the sensor's +x, relative to the first outline point so that an
+  // outline across the 0/360 deg cut needs no unwrapping.
+  const double reference = mount_.beam_azimuth(outline.front());
+  double ahead = 0.0;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector2d& q : outline) {
+    ahead = std::max(ahead, wrap_angle(mount_.beam_azimuth(q) - reference));
+    nearest = std::min(nearest, (q - mount_.xy()).norm());
+  }
+  // The clusterer's rule: a point at range r is closed once the earliest future firing is asin(d / r)
+  // past it, and future firings lag the sweep by the offset spread plus the margin.
+  const double d = tolerance_m_;
+  const double closing = nearest > d ? std::asin(d / nearest) : std::numbers::pi / 2.0;
+  const double target = reference + ahead + closing + lag_rad_;
+  const double forward = wrap_angle_positive(target - static_cast<double>(latest_.azimuth_rad));
+  if (forward > std::numbers::pi)
+    return latest_.time_ns;  // already behind the sweep
+  const double radians_per_ns = 2.0 * std::numbers::pi / static_cast<double>(rotation_period_ns());
+  return latest_.time_ns + static_cast<TimeNs>(forward / radians_per_ns);
+}
+
+}  // namespace rsu::core

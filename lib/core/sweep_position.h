@@ -1,0 +1,49 @@
+// Where the LiDAR's sweep is (the latest point of the stream: its beam azimuth and firing time) and
+// when it will have passed a place on the map far enough that no cluster there can still grow (the
+// perception::SweepClusterer's closing rule, sweep_clusterer.h): what tells RsuCore that every cluster of a
+// vehicle has been released.
+#pragma once
+
+#include <span>
+
+#include <Eigen/Core>
+
+#include "common/time.h"
+#include "core/lidar_mount.h"
+#include "lidar/lidar_decoder.h"
+#include "lidar/point.h"
+
+namespace rsu::core {
+
+class SweepPosition {
+ public:
+  // `cluster_tolerance_m`: the clustering tolerance; `release_margin_deg`: perception::SweepConfig's margin.
+  SweepPosition(const LidarMount& mount, double cluster_tolerance_m, double release_margin_deg,
+                const lidar::SweepGeometry& geometry);
+
+  // The sensor's geometry as the decoder measures it now (offsets, lead, rotation rate).
+  void follow(const lidar::SweepGeometry& geometry);
+  // The rotation rate the stages run at (RsuCore passes a measured one on when it moved enough).
+  void set_rotation_hz(double rotation_hz) { rotation_hz_ = rotation_hz; }
+  // The points just added to the clusterer (map frame): the last one is where the sweep is.
+  void advance(std::span<const lidar::LidarPoint> points);
+
+  double rotation_hz() const { return rotation_hz_; }
+  bool known() const { return known_; }
+  TimeNs time() const { return latest_.time_ns; }
+  TimeNs rotation_period_ns() const { return static_cast<TimeNs>(1e9 / rotation_hz_); }
+  // The firing time at which the sweep has passed every point of `outline` (map frame) far enough
+  // that no cluster near them can still grow; 0 before the sweep is known or for an empty outline.
+  TimeNs passed_time(std::span<const Eigen::Vector2d> outline) const;
+
+ private:
+  LidarMount mount_;
+  double tolerance_m_;
+  double release_margin_rad_;
+  double lag_rad_ = 0.0;  // how far future firings lag the sweep: offsets' spread + lead + margin
+  double rotation_hz_;
+  bool known_ = false;
+  lidar::LidarPoint latest_;
+};
+
+}  // namespace rsu::core

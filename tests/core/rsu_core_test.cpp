@@ -1,0 +1,457 @@
+// RsuCore with hand-stepped time: announcements into the registry, real Velodyne packets of a
+// simulated roadside VLP-16 into corrections, and every refusal counted by its reason.
+#include "core/rsu_core.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "common/angles.h"
+#include "core_counter.h"
+#include "sim_stream.h"
+#include "v2i/wire_codec.h"
+
+namespace rsu::core {
+namespace {
+
+using testing::announce;
+using testing::counter;
+using testing::SimStream;
+using testing::static_vehicle;
+
+constexpr int kEmptyRotations = 5;  // the scene without vehicles: enough for 3 whole learning frames
+
+RsuCoreConfig test_config() {
+  RsuCoreConfig c;
+  c.rsu_id = 77;
+  c.sensor_model = "vlp16";
+  c.mount = testing::roadside_mount();
+  c.background.learning_frames = 3;
+  // These tests are about everything but signatures (rsu_core_security_test.cpp covers signed mode).
+  c.security.mode = v2i::SecurityMode::kInsecure;
+  return c;
+}
+
+SourceEndpoint from(const std::string& address) {
+  return {address, 40000};
+}
+
+// Announces `pose` for vehicle `id` at 10 Hz from time t0 to t1 (sequence numbers from 1).
+void announce_between(RsuCore& core, std::uint64_t id, const Pose2& pose, const std::string& address,
+                      TimeNs t0, TimeNs t1) {
+  std::uint32_t seq = 1;
+  for (TimeNs t = t0; t <= t1; t += 100 * kNsPerMs, ++seq) {
+    const auto bytes = v2i::encode_v2i_message(announce(id, seq, t, pose, address));
+    const DatagramOutcome out = core.on_datagram(bytes, from(address), t);
+    ASSERT_TRUE(out.accepted()) << out.reason();
+  }
+}
+
+double distance(const v2i::Correction& c, const Pose2& truth) {
+  return std::hypot(c.pose.x - truth.x, c.pose.y - truth.y);
+}
+
+TEST(RsuCore, AnnouncementsEnterTheRegistry) {
+  RsuCore core(test_config());
+  const TimeNs now = 5 * kNsPerSecond;
+  const auto a = announce(42, 7, now, {10.0, 2.0, 0.5}, "192.0.2.5");
+  const DatagramOutcome first = core.on_datagram(v2i::encode_v2i_message(a), from("192.0.2.5"), now);
+  EXPECT_TRUE(first.accepted());
+  EXPECT_EQ(first.upsert, v2i::UpsertOutcome::kAdded);
+  EXPECT_EQ(first.vehicle_id, 42U);
+  const v2i::RegisteredVehicle* v = core.registry().find(42, now);
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(v->announcement.sequence, 7U);
+  EXPECT_DOUBLE_EQ(v->announcement.pose.x, 10.0);
+  EXPECT_EQ(v->announcement.reply_to.address, "192.0.2.5");
+
+  // The same sequence again is a duplicate; a newer one updates.
+  EXPECT_EQ(core.on_datagram(v2i::encode_v2i_message(a), from("192.0.2.5"), now + 1).reason(),
+            "registry:duplicate_sequence");
+  auto b = a;
+  b.sequence = 8;
+  b.pose.x = 11.0;
+  EXPECT_EQ(core.on_datagram(v2i::encode_v2i_message(b), from("192.0.2.5"), now + 2).upsert,
+            v2i::UpsertOutcome::kUpdated);
+  EXPECT_DOUBLE_EQ(core.registry().find(42, now + 2)->announcement.pose.x, 11.0);
+
+  // Silent beyond the registry timeout: gone.
+  EXPECT_EQ(core.expire(now + 3 * kNsPerSecond), 1U);
+  EXPECT_EQ(core.registry().find(42, now + 3 * kNsPerSecond), nullptr);
+}
+
+TEST(RsuCore, BadDatagramsAreCountedByReason) {
+  RsuCore core(test_config());
+  const TimeNs now = 5 * kNsPerSecond;
+  const std::string host = "192.0.2.9";
+  const auto good = v2i::encode_v2i_message(announce(5, 1, now, {10.0, 2.0, 0.5}, host));
+  ASSERT_FALSE(good.empty());
+
+  const std::vector<std::uint8_t> empty;
+  const std::vector<std::uint8_t> garbage = {0xde, 0xad, 0xbe, 0xef, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01};
+  const std::vector<std::uint8_t> truncated(good.begin(),
+                                            good.begin() + static_cast<std::ptrdiff_t>(good.size() / 2));
+  const std::vector<std::uint8_t> oversized(4000, 0x08);
+  auto version = announce(6, 1, now, {10.0, 2.0, 0.5}, host);
+  version.protocol_version = 9;
+  auto nan_size = announce(7, 1, now, {10.0, 2.0, 0.5}, host);
+  nan_size.size.length_m = std::numeric_limits<double>::quiet_NaN();
+  auto zero = announce(8, 1, now, {10.0, 2.0, 0.5}, host);
+  zero.size.length_m = 0.0;
+  auto huge = announce(9, 1, now, {10.0, 2.0, 0.5}, host);
+  huge.size.length_m = 100.0;
+  auto spoofed = announce(10, 1, now, {10.0, 2.0, 0.5}, "198.51.100.1");  // reply_to another host
+  v2i::Correction not_an_announcement;
+  not_an_announcement.vehicle_id = 3;
+
+  struct Case {
+    std::vector<std::uint8_t> bytes;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {empty, "decode:empty"},
+      {garbage, "decode:parse_error"},
+      {truncated, "decode:parse_error"},
+      {oversized, "decode:too_large"},
+      {v2i::encode_v2i_message(version), "decode:unsupported_version"},
+      {v2i::encode_v2i_message(nan_size), "validation:non_finite"},
+      {v2i::encode_v2i_message(zero), "validation:length_out_of_range"},
+      {v2i::encode_v2i_message(huge), "validation:length_out_of_range"},
+      {v2i::encode_v2i_message(spoofed), "reply_to_mismatch"},
+      {v2i::encode_v2i_message(not_an_announcement), "not_announcement"},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(core.on_datagram(c.bytes, from(host), now).reason(), c.expected);
+  }
+  EXPECT_EQ(core.decode_counts().count(v2i::DecodeStatus::kParseError), 2U);
+  EXPECT_EQ(core.decode_counts().count(v2i::DecodeStatus::kEmpty), 1U);
+  EXPECT_EQ(core.decode_counts().count(v2i::DecodeStatus::kTooLarge), 1U);
+  EXPECT_EQ(core.validation_counts().count(v2i::AnnouncementReason::kLengthOutOfRange), 2U);
+  EXPECT_EQ(core.decode_counts().count(v2i::DecodeStatus::kUnsupportedVersion), 1U);
+  EXPECT_EQ(core.datagram_stages().count(DatagramStage::kValidation), 3U);
+  EXPECT_EQ(core.datagram_stages().count(DatagramStage::kReplyToMismatch), 1U);
+  EXPECT_EQ(core.registry().size(), 0U);
+
+  // A flood from one host: the pre-decode limit (burst 100) stops it; another host is still served.
+  const std::string flooder = "192.0.2.66";
+  std::uint64_t limited = 0;
+  for (int i = 0; i < 1000; ++i) {
+    limited += core.on_datagram(garbage, from(flooder), now + i).stage == DatagramStage::kFloodLimited;
+  }
+  EXPECT_GE(limited, 1000U - 101U);
+  EXPECT_EQ(core.datagram_stages().count(DatagramStage::kFloodLimited), limited);
+  EXPECT_TRUE(core.on_datagram(good, from(host), now + 2000).accepted());
+
+  // Every counter is listed, and the listing agrees with the typed counts.
+  bool found = false;
+  for (const auto& [name, value] : core.counters()) {
+    if (name == "datagram.flood_limited") {
+      found = true;
+      EXPECT_EQ(value, limited);
+    }
+  }
+  EXPECT_TRUE(found);
+}
+
+TEST(RsuCore, LearnsTheBackgroundFromWholeRotationsThenReportsReady) {
+  SimStream stream({}, 100);
+  RsuCore core(test_config());
+  int ready_steps = 0;
+  TimeNs ready_at = -1;
+  stream.run_until(core, 6 * stream.rotation_ns(), [&](const LidarStepResult& r, TimeNs now) {
+    if (r.background_became_ready) {
+      ++ready_steps;
+      ready_at = now;
+    }
+  });
+  EXPECT_EQ(ready_steps, 1);
+  EXPECT_TRUE(core.background_ready());
+  EXPECT_EQ(core.lidar_stats().background_frames, 3U);
+  // The first (partial) rotation is not used: ready after rotation 4 ends, not before rotation 3 does.
+  EXPECT_GT(ready_at, 3 * stream.rotation_ns());
+  EXPECT_LT(ready_at, 5 * stream.rotation_ns());
+  // The learned background is the scene: further empty rotations give no foreground clusters.
+  stream.run_until(core, 8 * stream.rotation_ns());
+  EXPECT_EQ(core.sweep_stats().clusters_released, 0U);
+  EXPECT_TRUE(stream.corrections().empty());
+}
+
+TEST(RsuCore, RegisteredVehicleGetsCorrectionsNearTheTruth) {
+  // A vehicle 15 m from the LiDAR, straddling the sensor's 0 deg azimuth (a frame cut).
+  const Pose2 truth{17.0, 2.0, 0.4};
+  SimStream stream({static_vehicle(1, truth)}, kEmptyRotations);
+  RsuCore core(test_config());
+  const TimeNs t_end = (kEmptyRotations + 4) * stream.rotation_ns();
+  // The vehicle's own estimate is 0.6 m and 4 deg off.
+  announce_between(core, 1, {truth.x + 0.4, truth.y - 0.45, truth.yaw + deg_to_rad(4.0)}, "192.0.2.10",
+                   kEmptyRotations * stream.rotation_ns() - 200 * kNsPerMs,
+                   kEmptyRotations * stream.rotation_ns());
+  stream.run_until(core, t_end);
+
+  ASSERT_GE(stream.corrections().size(), 3U);
+  std::uint32_t expected_sequence = 0;
+  for (const auto& [out, emitted_at] : stream.corrections()) {
+    const v2i::Correction& c = out.correction;
+    EXPECT_EQ(c.vehicle_id, 1U);
+    EXPECT_EQ(c.rsu_id, 77U);
+    EXPECT_EQ(c.sequence, expected_sequence++);
+    EXPECT_EQ(out.destination.address, "192.0.2.10");
+    EXPECT_EQ(out.destination.port, 47001U);
+    EXPECT_LT(distance(c, truth), 0.10) << c.pose.x << ", " << c.pose.y;
+    EXPECT_LT(angle_distance(c.pose.yaw, truth.yaw), deg_to_rad(2.0));
+    // Swept in the last rotation before it was sent, and sent at most a few ms after.
+    EXPECT_LE(c.sweep_time, emitted_at);
+    EXPECT_GT(c.sweep_time, emitted_at - stream.rotation_ns());
+    EXPECT_GT(c.quality.points_used, 50U);
+    EXPECT_GE(c.quality.faces_seen, 1U);
+    EXPECT_NEAR(c.quality.range_m, std::hypot(truth.x - 2.0, truth.y + 3.0), 3.0);
+    EXPECT_GT(c.pose_covariance(0, 0), 0.0);
+    // The bytes say the same.
+    const v2i::DecodedMessage decoded = v2i::decode_v2i_message(out.bytes);
+    ASSERT_EQ(decoded.status, v2i::DecodeStatus::kOk);
+    const auto* d = std::get_if<v2i::Correction>(&decoded.body);
+    ASSERT_NE(d, nullptr);
+    EXPECT_EQ(d->sweep_time, c.sweep_time);
+    EXPECT_DOUBLE_EQ(d->pose.x, c.pose.x);
+  }
+}
+
+TEST(RsuCore, RoofFragmentIsFittedWithTheBodyNotInsteadOfIt) {
+  // 15.5 m in front of a VLP-16 at 2 m: its -1 deg ring reaches the roof's far edge at ~17 m, metres
+  // behind the visible faces, so the roof edge is a cluster of its own (~10 points) whose centre can
+  // be nearer the vehicle's announced position than the body's. Every correction must use the body.
+  const Pose3 m = testing::roadside_mount();
+  const Eigen::Vector2d rel = Eigen::Rotation2Dd(m.yaw) * Eigen::Vector2d(15.0, 4.0);
+  const Pose2 truth{m.x + rel.x(), m.y + rel.y(), m.yaw + deg_to_rad(20.0)};
+  SimStream stream({static_vehicle(1, truth)}, kEmptyRotations);
+  RsuCore core(test_config());
+  const TimeNs t1 = kEmptyRotations * stream.rotation_ns();
+  announce_between(core, 1, {truth.x + 0.4, truth.y - 0.3, truth.yaw + 0.05}, "192.0.2.10",
+                   t1 - 100 * kNsPerMs, t1);
+  stream.run_until(core, t1 + 11 * stream.rotation_ns());
+  ASSERT_GE(stream.corrections().size(), 9U);
+  for (const auto& [out, emitted_at] : stream.corrections()) {
+    EXPECT_LT(distance(out.correction, truth), 0.10) << out.correction.quality.points_used << " points";
+    EXPECT_GT(out.correction.quality.points_used, 60U);
+  }
+  EXPECT_GT(core.lidar_stats().fragments_merged, 0U);  // the geometry does produce roof fragments
+}
+
+TEST(RsuCore, CorrectionLeavesSoonAfterTheSweepPassedTheVehicle) {
+  // About 90 deg into the rotation (clockwise from the sensor's +x): a frame-based RSU would hold
+  // the fix for ~75 ms until the rotation ends; the sector release sends it within a few ms.
+  const double bearing = testing::roadside_mount().yaw - deg_to_rad(90.0);
+  const Pose2 truth{2.0 + 15.0 * std::cos(bearing), -3.0 + 15.0 * std::sin(bearing), 1.0};
+  SimStream stream({static_vehicle(1, truth)}, kEmptyRotations);
+  RsuCore core(test_config());
+  announce_between(core, 1, truth, "192.0.2.10", kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs,
+                   kEmptyRotations * stream.rotation_ns());
+  stream.run_until(core, (kEmptyRotations + 2) * stream.rotation_ns());
+  ASSERT_FALSE(stream.corrections().empty());
+  for (const auto& [out, emitted_at] : stream.corrections()) {
+    EXPECT_LT(distance(out.correction, truth), 0.10);
+    // The vehicle spans ~20 deg (5.5 ms of sweep) around its mean time: sent within ~10 ms of it.
+    EXPECT_LT(emitted_at - out.correction.sweep_time, 10 * kNsPerMs);
+  }
+}
+
+TEST(RsuCore, UnregisteredVehicleGetsNothing) {
+  SimStream stream({static_vehicle(1, {17.0, 2.0, 0.4})}, kEmptyRotations);
+  RsuCore core(test_config());
+  stream.run_until(core, (kEmptyRotations + 3) * stream.rotation_ns());
+  EXPECT_TRUE(stream.corrections().empty());
+  EXPECT_GE(core.lidar_stats().clusters_unmatched, 2U);  // it was seen, and matched nobody
+}
+
+TEST(RsuCore, RegisteredVehicleOutOfViewGetsNothing) {
+  // Vehicle 2 is registered but not in the scene (announced 25 m away from the one that is).
+  SimStream stream({static_vehicle(1, {17.0, 2.0, 0.4})}, kEmptyRotations);
+  RsuCore core(test_config());
+  announce_between(core, 2, {-20.0, -15.0, 0.0}, "192.0.2.20",
+                   kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs,
+                   kEmptyRotations * stream.rotation_ns());
+  stream.run_until(core, (kEmptyRotations + 3) * stream.rotation_ns());
+  EXPECT_TRUE(stream.corrections().empty());
+  EXPECT_GE(core.lidar_stats().clusters_unmatched, 2U);
+  EXPECT_GE(core.lidar_stats().vehicles_in_batches, 2U);  // it was offered, and matched nothing
+}
+
+TEST(RsuCore, TwoVehiclesSideBySideAreNotSwapped) {
+  // Adjacent lanes, 3.5 m apart; each vehicle's own estimate is 1 m off TOWARDS the other, so a
+  // nearest-announcement choice would be close to a coin toss.
+  const Pose2 a{18.0, 1.75, 0.05};
+  const Pose2 b{18.5, 5.25, 0.05};
+  SimStream stream({static_vehicle(1, a), static_vehicle(2, b)}, kEmptyRotations);
+  RsuCore core(test_config());
+  const TimeNs t0 = kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs;
+  const TimeNs t1 = kEmptyRotations * stream.rotation_ns();
+  announce_between(core, 1, {a.x, a.y + 1.0, a.yaw}, "192.0.2.1", t0, t1);
+  announce_between(core, 2, {b.x, b.y - 1.0, b.yaw}, "192.0.2.2", t0, t1);
+  stream.run_until(core, (kEmptyRotations + 3) * stream.rotation_ns());
+
+  int for_a = 0;
+  int for_b = 0;
+  for (const auto& [out, emitted_at] : stream.corrections()) {
+    const v2i::Correction& c = out.correction;
+    const Pose2& truth = c.vehicle_id == 1 ? a : b;
+    EXPECT_LT(distance(c, truth), 0.10) << "vehicle " << c.vehicle_id;
+    EXPECT_EQ(out.destination.address, c.vehicle_id == 1 ? "192.0.2.1" : "192.0.2.2");
+    (c.vehicle_id == 1 ? for_a : for_b) += 1;
+  }
+  EXPECT_GE(for_a, 2);
+  EXPECT_GE(for_b, 2);
+}
+
+TEST(RsuCore, FlushReleasesTheClusterStillOpenAtShutdown) {
+  const Pose2 truth{17.0, 2.0, 0.4};
+  SimStream stream({static_vehicle(1, truth)}, kEmptyRotations);
+  RsuCore core(test_config());
+  announce_between(core, 1, truth, "192.0.2.10", kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs,
+                   kEmptyRotations * stream.rotation_ns());
+  // Stop the stream with the sweep in the middle of the vehicle (bearing ~1.4 deg CCW of the sensor's
+  // +x, i.e. just before azimuth 360 deg at the end of the rotation): nothing was released yet.
+  const TimeNs stop = (kEmptyRotations + 1) * stream.rotation_ns() - stream.rotation_ns() / 360 * 2;
+  stream.run_until(core, stop);
+  const std::size_t before = stream.corrections().size();
+  const std::uint64_t refused_before = core.lidar_stats().corrections_inconsistent;
+  const LidarStepResult drained = core.flush(stop);
+  // Half a vehicle: it reaches the correction, which either sends it (the vehicle's, roughly right)
+  // or refuses it with a counted reason when the half box does not decide the pose; it is not lost.
+  ASSERT_LE(drained.corrections.size(), 1U);
+  if (drained.corrections.empty()) {
+    EXPECT_EQ(core.lidar_stats().corrections_inconsistent, refused_before + 1);
+  } else {
+    EXPECT_EQ(drained.corrections[0].correction.vehicle_id, 1U);
+    EXPECT_LT(distance(drained.corrections[0].correction, truth), 1.0);
+  }
+  EXPECT_EQ(before + 0, stream.corrections().size());
+}
+
+TEST(RsuCore, ReloadKeepsTheRegistryAndTheLearnedBackground) {
+  const Pose2 truth{17.0, 2.0, 0.4};
+  SimStream stream({static_vehicle(1, truth)}, kEmptyRotations);
+  RsuCore core(test_config());
+  const TimeNs t1 = kEmptyRotations * stream.rotation_ns();
+  announce_between(core, 1, truth, "192.0.2.10", t1 - 100 * kNsPerMs, t1);
+  stream.run_until(core, t1);
+  ASSERT_TRUE(core.background_ready());
+
+  RsuCoreConfig next = test_config();
+  next.rsu_id = 78;
+  next.registry.capacity = 10;  // a registry change: vehicles are re-entered
+  const ReloadSummary s = core.reload(next, t1);
+  EXPECT_TRUE(s.background_kept);
+  EXPECT_EQ(s.vehicles_before, 1U);
+  EXPECT_EQ(s.vehicles_after, 1U);
+  EXPECT_TRUE(core.background_ready());
+  stream.run_until(core, t1 + 2 * stream.rotation_ns());
+  ASSERT_FALSE(stream.corrections().empty());
+  EXPECT_EQ(stream.corrections().back().correction.correction.rsu_id, 78U);
+  EXPECT_LT(distance(stream.corrections().back().correction.correction, truth), 0.10);
+
+  // A broken config is refused and changes nothing; moving the LiDAR drops the background.
+  RsuCoreConfig broken = next;
+  broken.sensor_model = "vlp99";
+  EXPECT_THROW(core.reload(broken, t1), std::invalid_argument);
+  EXPECT_EQ(core.config().rsu_id, 78U);
+  RsuCoreConfig moved = next;
+  moved.mount.x += 1.0;
+  EXPECT_FALSE(core.reload(moved, t1).background_kept);
+  EXPECT_FALSE(core.background_ready());
+  EXPECT_NE(core.registry().find(1, t1), nullptr);
+}
+
+TEST(RsuCore, RejectsUnusableConfigurations) {
+  RsuCoreConfig c = test_config();
+  c.sensor_model = "generic64";  // no packet format
+  EXPECT_THROW(RsuCore{c}, std::invalid_argument);
+  c = test_config();
+  c.mount.z = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(RsuCore{c}, std::invalid_argument);
+}
+
+// A packet of the VLP-16 with no returns, first firing at t (azimuths advancing as the sensor's would).
+std::array<std::uint8_t, lidar::kPacketBytes> empty_packet(TimeNs t) {
+  lidar::PacketReturns r;
+  r.blocks.first_firing_ns = t;
+  for (std::size_t b = 0; b < r.blocks.azimuth_cdeg.size(); ++b)
+    r.blocks.azimuth_cdeg[b] = static_cast<std::uint16_t>(40 * b);
+  std::array<std::uint8_t, lidar::kPacketBytes> payload{};
+  lidar::encode_packet(*lidar::sensor_model_by_name("vlp16"), r, payload);
+  return payload;
+}
+
+TEST(RsuCore, PacketsProcessedTooLateAreShedNotFixedFrom) {
+  RsuCoreConfig config = test_config();
+  config.max_packet_age = 150 * kNsPerMs;
+  RsuCore core(config);
+  const TimeNs t = 10 * kNsPerSecond;
+  core.on_lidar_packet(empty_packet(t), t + 2 * kNsPerMs);                // on time
+  core.on_lidar_packet(empty_packet(t + 1'327'000), t + 149 * kNsPerMs);  // behind, within the limit
+  core.on_lidar_packet(empty_packet(t + 2'654'000), t + 2'654'000 + 151 * kNsPerMs);  // too late
+  EXPECT_EQ(counter(core, "packet.accepted"), 3U);
+  EXPECT_EQ(core.lidar_stats().packets_too_late, 1U);
+  config.max_packet_age = 0;  // never shed
+  RsuCore patient(config);
+  patient.on_lidar_packet(empty_packet(t), t + 10 * kNsPerSecond);
+  EXPECT_EQ(patient.lidar_stats().packets_too_late, 0U);
+}
+
+// A sensor whose clock is 52 s behind the host's (as in a real capture): with time_source sensor every
+// packet is refused as clock_offset (not silently shed as too late) and one notice says so and what to
+// do; with host_receive the packets are stamped by arrival and used.
+TEST(RsuCore, ASensorClockFarOffIsRefusedLoudlyOrStampedByArrival) {
+  const TimeNs offset = 52 * kNsPerSecond;
+  const TimeNs t = 100 * kNsPerSecond;
+  for (const TimeSource source : {TimeSource::kSensor, TimeSource::kHostReceive}) {
+    RsuCoreConfig config = test_config();
+    config.time_source = source;
+    RsuCore core(config);
+    for (int k = 0; k < 20; ++k) {
+      const TimeNs first = t + k * 1'327'104;
+      core.on_lidar_packet(empty_packet(first), first + offset + 2 * kNsPerMs);
+    }
+    const bool refused = source == TimeSource::kSensor;
+    EXPECT_EQ(counter(core, "packet.accepted"), 20U);
+    EXPECT_EQ(counter(core, "packet.clock_offset"), refused ? 20U : 0U);
+    EXPECT_EQ(counter(core, "packet.too_late"), 0U);
+    ASSERT_TRUE(core.sensor_clock().known);
+    EXPECT_NEAR(static_cast<double>(core.sensor_clock().offset_ns),
+                static_cast<double>(offset + 2 * kNsPerMs - 1'327'104), 1e3);
+    EXPECT_TRUE(core.sensor_clock().beyond_tolerance);
+    const std::vector<std::string> notices = core.take_lidar_notices();
+    ASSERT_EQ(notices.size(), 1U);
+    EXPECT_NE(notices[0].find("52.001 s behind the host's"), std::string::npos) << notices[0];
+    EXPECT_EQ(notices[0].find("REFUSED") != std::string::npos, refused) << notices[0];
+    EXPECT_TRUE(core.take_lidar_notices().empty());  // once
+    // The sensor's clock is set right: said once more, and its packets are used.
+    for (int k = 20; k < 25; ++k) {
+      const TimeNs first = t + offset + k * 1'327'104;
+      core.on_lidar_packet(empty_packet(first), first + 2 * kNsPerMs);
+    }
+    EXPECT_EQ(counter(core, "packet.clock_offset"), refused ? 20U : 0U);
+    const std::vector<std::string> again = core.take_lidar_notices();
+    ASSERT_EQ(again.size(), 1U);
+    EXPECT_NE(again[0].find("within"), std::string::npos) << again[0];
+  }
+}
+
+TEST(RsuCore, GarbageLidarPacketsAreCountedNotFatal) {
+  RsuCore core(test_config());
+  std::vector<std::uint8_t> short_packet(100, 0xff);
+  std::vector<std::uint8_t> junk(lidar::kPacketBytes, 0x00);
+  EXPECT_TRUE(core.on_lidar_packet(short_packet, 0).corrections.empty());
+  EXPECT_TRUE(core.on_lidar_packet(junk, 0).corrections.empty());
+  EXPECT_EQ(counter(core, "packet.wrong_size"), 1U);
+  EXPECT_EQ(counter(core, "packet.unknown_product"), 1U);  // all zeros: product byte 0
+  EXPECT_EQ(core.lidar_decoder().packets_seen(), 2U);
+}
+
+}  // namespace
+}  // namespace rsu::core
