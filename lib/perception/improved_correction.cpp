@@ -259,106 +259,175 @@ CorrectedPose refused(CorrectionStatus status) {
   return out;
 }
 
-}  // namespace
-
-CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::Vector2d> outline,
-                               std::span<const Eigen::Vector3d> points, const VehicleSize& size,
-                               const LidarGeometry& lidar, const std::optional<YawPrior>& prior,
-                               const CorrectionConfig& config) {
+// Why the inputs cannot be corrected, or ok.
+CorrectionStatus input_status(const RectangleFit& fit, const VehicleSize& size, const LidarGeometry& lidar,
+                              const std::optional<YawPrior>& prior) {
   if (!fit.ok())
-    return refused(CorrectionStatus::no_fit);
+    return CorrectionStatus::no_fit;
   if (!valid_size(size))
-    return refused(CorrectionStatus::invalid_size);
+    return CorrectionStatus::invalid_size;
   if (!lidar.position.allFinite() || !std::isfinite(lidar.ground_z) ||
       (prior && !(std::isfinite(prior->yaw) && std::isfinite(prior->sigma) && prior->sigma > 0.0)))
-    return refused(CorrectionStatus::invalid_input);
+    return CorrectionStatus::invalid_input;
+  return CorrectionStatus::ok;
+}
 
+std::vector<Eigen::Vector3d> finite_points(std::span<const Eigen::Vector3d> points) {
   std::vector<Eigen::Vector3d> finite;
   finite.reserve(points.size());
   for (const auto& p : points) {
     if (p.allFinite())
       finite.push_back(p);
   }
-  const RectangleFit refined =
-      config.refine_on_faces ? refine_on_faces(fit, outline, lidar.xy(), config.fit, config.refinement) : fit;
-  const double range = (refined.center - lidar.xy()).norm();
+  return finite;
+}
+
+View view_of(std::span<const Eigen::Vector3d> finite, const RectangleFit& fit, const VehicleSize& size,
+             const LidarGeometry& lidar, const CorrectionConfig& config) {
+  const double range = (fit.center - lidar.xy()).norm();
   // Without a usable announced height every point counts as the lower body (the footprint's outline).
   const bool height_known = std::isfinite(size.height) && size.height > 0.0;
-  View view{finite,
-            lidar,
-            config,
-            lower_body_height(size, config),
-            height_known ? size.height : 1e9,
-            std::sqrt(point_noise_variance(range, config.covariance) +
-                      config.covariance.face_tilt_sigma_m * config.covariance.face_tilt_sigma_m)};
+  return {finite,
+          lidar,
+          config,
+          lower_body_height(size, config),
+          height_known ? size.height : 1e9,
+          std::sqrt(point_noise_variance(range, config.covariance) +
+                    config.covariance.face_tilt_sigma_m * config.covariance.face_tilt_sigma_m)};
+}
 
-  // Yaw evidence: the seen faces that are vertical surfaces of the body.
+// The yaw evidence: the (at most two) seen faces, each counting only its points on vertical surfaces of
+// the body; the range is the fit's.
+FixEvidence yaw_evidence(const View& view, const RectangleFit& fit) {
   FixEvidence evidence;
-  evidence.range_m = range;
+  evidence.range_m = (fit.center - view.lidar.xy()).norm();
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
-    if (refined.edges[i].seen)
-      evidence.seen_faces[f++] = informative_face(view, refined, i);
+    if (fit.edges[i].seen)
+      evidence.seen_faces[f++] = informative_face(view, fit, i);
   }
-  const double face_information = face_yaw_information(evidence, config.covariance);
+  return evidence;
+}
 
-  CorrectedPose out;
-  YawDecision yaw;
+// The yaw the box is placed along: the faces' (decide_yaw), or the vehicle's own where nothing seen tells
+// the direction; `refusal` says why there is none (ok when there is one).
+struct ChosenYaw {
+  YawDecision decision;
+  CorrectionStatus refusal = CorrectionStatus::ok;
+};
+
+ChosenYaw choose_yaw(const View& view, const RectangleFit& fit, const VehicleSize& size,
+                     double face_information, std::span<const Eigen::Vector2d> outline,
+                     const std::optional<YawPrior>& prior) {
+  ChosenYaw out;
   if (face_information > 0.0) {
-    yaw = decide_yaw(view, refined, size, face_information, outline, prior);
-    if (yaw.contradicts_prior && config.strict_consistency_checks)
-      return refused(CorrectionStatus::inconsistent_box);
+    out.decision = decide_yaw(view, fit, size, face_information, outline, prior);
+    if (out.decision.contradicts_prior && view.config.strict_consistency_checks)
+      out.refusal = CorrectionStatus::inconsistent_box;
   } else if (prior) {
     // Nothing seen tells the direction: the vehicle's own, with its uncertainty.
-    yaw.yaw = prior->yaw;
-    yaw.prior_information = prior_information(*prior, config);
-    yaw.prior_share = 1.0;
+    out.decision.yaw = prior->yaw;
+    out.decision.prior_information = prior_information(*prior, view.config);
+    out.decision.prior_share = 1.0;
   } else {
-    return refused(CorrectionStatus::yaw_unobserved);
+    out.refusal = CorrectionStatus::yaw_unobserved;
   }
+  return out;
+}
 
-  // The box along the final axes: axis 0 the length.
-  const Frame frame = frame_at(refined.center, yaw.yaw);
+// The known-size box along `frame` (axis 0 the length), or nothing when it does not hold the points.
+std::optional<Placement> place_known_box(const View& view, const Frame& frame, const VehicleSize& size,
+                                         double yaw_information) {
+  const CorrectionConfig& config = view.config;
   const std::vector<BoxPoint> in_frame = view.in_frame(frame);
-  const Placement box = place_box(view, frame, in_frame, {size.length, size.width}, 0,
-                                  1.0 / std::sqrt(face_information + yaw.prior_information));
+  const Placement box =
+      place_box(view, frame, in_frame, {size.length, size.width}, 0, 1.0 / std::sqrt(yaw_information));
   std::vector<Eigen::Vector2d> local;
   local.reserve(in_frame.size());
   for (const BoxPoint& p : in_frame)
     local.push_back(p.local);
   if (!box.contained || outside_fraction(local, box.centre, {size.length / 2.0, size.width / 2.0},
                                          config.inconsistent_outside_m) > config.max_outside_fraction)
-    return refused(CorrectionStatus::inconsistent_box);
+    return std::nullopt;
+  return box;
+}
 
+// The yaw as sent: the direction nearest the vehicle's own heading when it announced one, else folded
+// to a half turn (the points alone cannot tell front from back).
+double reported_yaw(double yaw, const std::optional<YawPrior>& prior) {
+  if (!prior)
+    return fold_half_turn(yaw);
+  return angle_distance(yaw, prior->yaw) <= kPi / 2.0 ? wrap_angle(yaw) : wrap_angle(yaw + kPi);
+}
+
+CorrectedPose corrected_pose(const Frame& frame, const Placement& box, const YawDecision& yaw,
+                             const std::optional<YawPrior>& prior) {
+  CorrectedPose out;
   const Eigen::Vector2d centre = frame.map(box.centre);
-  double reported_yaw = yaw.yaw;
-  if (prior) {
-    reported_yaw = angle_distance(reported_yaw, prior->yaw) <= kPi / 2.0 ? wrap_angle(reported_yaw)
-                                                                         : wrap_angle(reported_yaw + kPi);
-    out.heading_from_prior = true;
-  } else {
-    reported_yaw = fold_half_turn(reported_yaw);
-  }
   out.status = CorrectionStatus::ok;
-  out.pose = {centre.x(), centre.y(), reported_yaw};
+  out.pose = {centre.x(), centre.y(), reported_yaw(yaw.yaw, prior)};
+  out.heading_from_prior = prior.has_value();
   out.alignment_point = frame.map(box.anchor);
   out.resolution = yaw.resolution;
   out.confidence = yaw.confidence;
   out.yaw_prior_share = yaw.prior_share;
+  return out;
+}
 
-  evidence.range_m = (out.alignment_point - lidar.xy()).norm();
-  evidence.yaw = reported_yaw;
-  evidence.lever = centre - out.alignment_point;
+// The fix's covariance (fix_covariance.h): the faces' evidence completed with what placing the box and
+// deciding the yaw showed, at the point the box was anchored at.
+Eigen::Matrix3d covariance_of(const CorrectedPose& fix, FixEvidence evidence, const Placement& box,
+                              const YawDecision& yaw, const LidarGeometry& lidar,
+                              const CorrectionConfig& config) {
+  evidence.range_m = (fix.alignment_point - lidar.xy()).norm();
+  evidence.yaw = fix.pose.yaw;
+  evidence.lever = Eigen::Vector2d(fix.pose.x, fix.pose.y) - fix.alignment_point;
   evidence.length_axis = box.evidence[0];
   evidence.width_axis = box.evidence[1];
   evidence.assignment_confidence = yaw.confidence;
   evidence.alternative_offset = yaw.alternative_offset;
   evidence.prior_yaw_information = yaw.prior_information;
-  out.covariance = fix_covariance(evidence, config.covariance);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(out.covariance.topLeftCorner<2, 2>());
+  return fix_covariance(evidence, config.covariance);
+}
+
+// The covariance places the vehicle within what a fix may claim (tighter for an incomplete sweep).
+bool position_bounded(const CorrectedPose& fix, const LidarGeometry& lidar, const CorrectionConfig& config) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(fix.covariance.topLeftCorner<2, 2>());
   const double max_sigma =
       lidar.complete_sweep ? config.max_position_sigma_m : kMaxPositionSigmaIncompleteSweepM;
-  if (!(std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) <= max_sigma))
+  return std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) <= max_sigma;
+}
+
+}  // namespace
+
+CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::Vector2d> outline,
+                               std::span<const Eigen::Vector3d> points, const VehicleSize& size,
+                               const LidarGeometry& lidar, const std::optional<YawPrior>& prior,
+                               const CorrectionConfig& config) {
+  if (const CorrectionStatus invalid = input_status(fit, size, lidar, prior); invalid != CorrectionStatus::ok)
+    return refused(invalid);
+  // The fitted rectangle re-fit to its seen faces (face_refinement.h).
+  const RectangleFit refined =
+      config.refine_on_faces ? refine_on_faces(fit, outline, lidar.xy(), config.fit, config.refinement) : fit;
+  const std::vector<Eigen::Vector3d> finite = finite_points(points);
+  const View view = view_of(finite, refined, size, lidar, config);
+  // Yaw: what the seen faces tell, the length/width assignment, the vehicle's own heading where they
+  // tell little.
+  const FixEvidence evidence = yaw_evidence(view, refined);
+  const double face_information = face_yaw_information(evidence, config.covariance);
+  const ChosenYaw yaw = choose_yaw(view, refined, size, face_information, outline, prior);
+  if (yaw.refusal != CorrectionStatus::ok)
+    return refused(yaw.refusal);
+  // The known-size box along the final axes, placed axis by axis (box_axis.h).
+  const Frame frame = frame_at(refined.center, yaw.decision.yaw);
+  const std::optional<Placement> box =
+      place_known_box(view, frame, size, face_information + yaw.decision.prior_information);
+  if (!box)
+    return refused(CorrectionStatus::inconsistent_box);
+  // The fix and how far it can be trusted.
+  CorrectedPose out = corrected_pose(frame, *box, yaw.decision, prior);
+  out.covariance = covariance_of(out, evidence, *box, yaw.decision, lidar, config);
+  if (!position_bounded(out, lidar, config))
     return refused(CorrectionStatus::position_unbounded);
   return out;
 }
