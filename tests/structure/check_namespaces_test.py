@@ -5,16 +5,14 @@ aliases, forward declarations of another folder's types, namespaces in comments 
 each file whose namespace does not."""
 import sys
 
+from checker_tree import Expectations
 from checker_tree import run_on_tree as run
 
 
 def main():
     checker = sys.argv[1]
-    failures = []
-
-    def expect(what, condition):
-        if not condition:
-            failures.append(what)
+    expectations = Expectations()
+    expect = expectations.expect
 
     following = {
         "lib/common/time.h": "namespace rsu {\nusing TimeNs = long;\n}\n",
@@ -47,9 +45,7 @@ def main():
                    "tools/cli/version.h:1: namespace rsu::cli (folder tools/cli: rsu::tools or rsu::tools::cli)"]:
         expect(f"names {needle!r} in {out!r}", needle in out)
     expect(f"names five files in {out!r}", out.count("\n") == 5)
-    for f in failures:
-        print("FAILED:", f)
-    return 1 if failures else 0
+    return expectations.exit_code()
 
 
 if __name__ == "__main__":

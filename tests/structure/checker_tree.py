@@ -16,3 +16,19 @@ def run_on_tree(checker, files):
             path.write_text(text)
         done = subprocess.run([sys.executable, checker, root], capture_output=True, text=True)
         return done.returncode, done.stdout
+
+
+class Expectations:
+    """Collects what a test expected and did not find; `exit_code()` prints each and says whether any."""
+
+    def __init__(self):
+        self.failures = []
+
+    def expect(self, what, condition):
+        if not condition:
+            self.failures.append(what)
+
+    def exit_code(self):
+        for f in self.failures:
+            print("FAILED:", f)
+        return 1 if self.failures else 0
