@@ -61,8 +61,10 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
   }
   const YamlField ndt = doc.required("ndt");
   ndt.expect_map({"resolution_m", "step_size_m", "transformation_epsilon", "max_iterations", "crop_range_m",
-                  "voxel_leaf_m", "random_sample_points", "output_sigma_xy_m", "output_sigma_yaw_rad",
-                  "initial_pose_error"});
+                  "voxel_leaf_m", "random_sample_points", "output_covariance", "output_sigma_xy_m",
+                  "output_sigma_yaw_rad", "laplace_scale", "laplace_min_sigma_xy_m",
+                  "laplace_min_sigma_yaw_rad", "fitness_nominal_m2", "fitness_sigma_m_per_m2",
+                  "fitness_sigma_rad_per_m2", "initial_pose_error"});
   c.ndt.resolution_m = ndt.positive_or("resolution_m", c.ndt.resolution_m);
   c.ndt.step_size_m = ndt.positive_or("step_size_m", c.ndt.step_size_m);
   c.ndt.transformation_epsilon = ndt.positive_or("transformation_epsilon", c.ndt.transformation_epsilon);
@@ -73,6 +75,23 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
       static_cast<int>(ndt.positive_or("random_sample_points", c.ndt.random_sample_points));
   c.ndt.output_sigma_xy_m = ndt.positive_or("output_sigma_xy_m", c.ndt.output_sigma_xy_m);
   c.ndt.output_sigma_yaw_rad = ndt.positive_or("output_sigma_yaw_rad", c.ndt.output_sigma_yaw_rad);
+  if (ndt.has("output_covariance")) {
+    const YamlField kind = ndt.child("output_covariance");
+    const std::string name = kind.text();
+    if (name != "fixed" && name != "laplace") {
+      kind.fail("expected fixed or laplace, got \"" + name + "\"");
+    }
+    c.ndt.covariance_estimate =
+        name == "laplace" ? NdtConfig::CovarianceEstimate::kLaplace : NdtConfig::CovarianceEstimate::kFixed;
+  }
+  c.ndt.laplace_scale = ndt.positive_or("laplace_scale", c.ndt.laplace_scale);
+  c.ndt.laplace_min_sigma_xy_m = ndt.positive_or("laplace_min_sigma_xy_m", c.ndt.laplace_min_sigma_xy_m);
+  c.ndt.laplace_min_sigma_yaw_rad =
+      ndt.positive_or("laplace_min_sigma_yaw_rad", c.ndt.laplace_min_sigma_yaw_rad);
+  c.ndt.fitness_nominal_m2 = ndt.positive_or("fitness_nominal_m2", c.ndt.fitness_nominal_m2);
+  c.ndt.fitness_sigma_m_per_m2 = ndt.non_negative_or("fitness_sigma_m_per_m2", c.ndt.fitness_sigma_m_per_m2);
+  c.ndt.fitness_sigma_rad_per_m2 =
+      ndt.non_negative_or("fitness_sigma_rad_per_m2", c.ndt.fitness_sigma_rad_per_m2);
   if (ndt.has("initial_pose_error")) {
     const YamlField e = ndt.child("initial_pose_error");
     e.expect_map({"x", "y", "yaw_deg"});

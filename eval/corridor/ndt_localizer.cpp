@@ -6,9 +6,14 @@
 #include <pcl/point_types.h>
 #include <pcl/registration/ndt.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+
+#include "fusion/covariance_floor.h"
 
 namespace rsu::eval {
 
@@ -37,6 +42,50 @@ double horizontal_degeneracy(const Eigen::Matrix<double, 6, 6>& hessian) {
     return std::numeric_limits<double>::infinity();  // no curvature at all along some direction
   }
   return std::sqrt(strongest / weakest);
+}
+
+// Autoware's LAPLACE_APPROXIMATION: the score near its maximum as a Gaussian, whose covariance is the
+// inverse of the information -H. Over all six parameters (x, y, z, roll, pitch, yaw: PCL's order), then
+// the (x, y, yaw) marginal, so that what z and tilt leave open counts too; where the six are not all
+// curved (a saddle in tilt), the (x, y, yaw) block alone, or the (x, y) block alone (Autoware's). Empty
+// when the match has no curvature along some horizontal direction.
+template <int N>
+std::optional<Eigen::Matrix<double, N, N>> inverse_information(const Eigen::Matrix<double, N, N>& hessian) {
+  const Eigen::Matrix<double, N, N> information = -0.5 * (hessian + hessian.transpose());
+  const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(information);
+  if (llt.info() != Eigen::Success) {
+    return std::nullopt;
+  }
+  const Eigen::Matrix<double, N, N> covariance = llt.solve(Eigen::Matrix<double, N, N>::Identity());
+  return covariance.allFinite() ? std::optional<Eigen::Matrix<double, N, N>>(covariance) : std::nullopt;
+}
+
+std::optional<Eigen::Matrix3d> laplace_covariance(const Eigen::Matrix<double, 6, 6>& hessian,
+                                                  double fallback_yaw_variance) {
+  constexpr int kIndex[3] = {0, 1, 5};  // x, y, yaw
+  Eigen::Matrix3d block;
+  const auto full = inverse_information<6>(hessian);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      block(i, j) = full ? (*full)(kIndex[i], kIndex[j]) : hessian(kIndex[i], kIndex[j]);
+    }
+  }
+  if (full) {
+    return block;
+  }
+  if (const auto xy_yaw = inverse_information<3>(block)) {
+    return xy_yaw;
+  }
+  // Not even curved in yaw: the (x, y) block alone (Autoware's), the yaw at the fixed figure (scaled as
+  // the rest).
+  const auto xy = inverse_information<2>(Eigen::Matrix2d(hessian.topLeftCorner<2, 2>()));
+  if (!xy) {
+    return std::nullopt;
+  }
+  Eigen::Matrix3d out = Eigen::Matrix3d::Zero();
+  out.topLeftCorner<2, 2>() = *xy;
+  out(2, 2) = fallback_yaw_variance;
+  return out;
 }
 
 }  // namespace
@@ -122,11 +171,27 @@ NdtResult NdtLocalizer::align(const std::vector<lidar::LidarPoint>& scan, const 
   result.iterations = impl_->ndt.getFinalNumIteration();
   result.converged = impl_->ndt.hasConverged() && result.iterations < config_.max_iterations;
   result.fitness = impl_->ndt.getFitnessScore();
-  result.degeneracy = horizontal_degeneracy(impl_->ndt.hessian_at(aligned));
+  const Eigen::Matrix<double, 6, 6> hessian = impl_->ndt.hessian_at(aligned);
+  result.degeneracy = horizontal_degeneracy(hessian);
   result.pose = Pose2{t(0, 3), t(1, 3), std::atan2(t(1, 0), t(0, 0))};
-  result.covariance.diagonal() << config_.output_sigma_xy_m * config_.output_sigma_xy_m,
+  result.fixed_covariance.diagonal() << config_.output_sigma_xy_m * config_.output_sigma_xy_m,
       config_.output_sigma_xy_m * config_.output_sigma_xy_m,
       config_.output_sigma_yaw_rad * config_.output_sigma_yaw_rad;
+  result.covariance = result.fixed_covariance;
+  if (config_.covariance_estimate == NdtConfig::CovarianceEstimate::kLaplace) {
+    // No curvature along some direction: the match knows nothing there (a huge variance, not the fixed one).
+    constexpr double kNoInformationVariance = 1e4;
+    const auto laplace = laplace_covariance(hessian, result.fixed_covariance(2, 2));
+    result.covariance = laplace ? Eigen::Matrix3d(config_.laplace_scale * *laplace)
+                                : Eigen::Matrix3d(Eigen::Matrix3d::Identity() * kNoInformationVariance);
+    fusion::raise_to_floor(result.covariance, config_.laplace_min_sigma_xy_m,
+                           config_.laplace_min_sigma_yaw_rad);
+    const double excess = std::max(0.0, result.fitness - config_.fitness_nominal_m2);
+    const double sigma_xy = config_.fitness_sigma_m_per_m2 * excess;
+    const double sigma_yaw = config_.fitness_sigma_rad_per_m2 * excess;
+    result.covariance.diagonal() +=
+        Eigen::Vector3d(sigma_xy * sigma_xy, sigma_xy * sigma_xy, sigma_yaw * sigma_yaw);
+  }
   return result;
 }
 

@@ -26,10 +26,28 @@ struct NdtConfig {
   double crop_range_m = 60.0;
   double voxel_leaf_m = 3.0;
   int random_sample_points = 1500;
-  // The pose covariance NDT reports: Autoware publishes a fixed one (output_pose_covariance), 0.15 m and
-  // 0.025 rad standard deviations.
+  // The pose covariance NDT reports. Fixed: Autoware's default (output_pose_covariance), 0.15 m and
+  // 0.025 rad standard deviations, whatever the match. Laplace: the match's own statement, after
+  // Autoware's LAPLACE_APPROXIMATION: `laplace_scale` times the inverse of the score's curvature at the
+  // solution (PCL's score is no calibrated log-likelihood: the scale is measured), at least
+  // `laplace_min_sigma_*`, plus what a poor fit adds: scan points far from the map (unmapped objects:
+  // other vehicles, a mast) pull the match off without flattening its curvature, and in the corridor the
+  // error grew with the fitness above its nominal value (RMS 0.01 m at 0.045 m^2, 0.07 m at 0.085 m^2,
+  // 0.13 m at 0.15 m^2: README), so each m^2 of fitness above `fitness_nominal_m2` adds
+  // `fitness_sigma_m_per_m2` (and `fitness_sigma_rad_per_m2` in yaw) to the standard deviation.
+  // The curvature cannot see a match that slides along a street with nothing along it (the degraded
+  // corridor's NDT was 0.46 m off claiming 6 cm): the degeneracy indicator says so (NdtResult), and the
+  // vehicle weakens such poses itself (vehicle/vehicle_core.h).
+  enum class CovarianceEstimate { kFixed, kLaplace };
+  CovarianceEstimate covariance_estimate = CovarianceEstimate::kFixed;
   double output_sigma_xy_m = 0.15;
   double output_sigma_yaw_rad = 0.025;
+  double laplace_scale = 4.0;
+  double laplace_min_sigma_xy_m = 0.02;
+  double laplace_min_sigma_yaw_rad = 0.005;
+  double fitness_nominal_m2 = 0.045;
+  double fitness_sigma_m_per_m2 = 1.5;
+  double fitness_sigma_rad_per_m2 = 0.1;
   // Points within this radius of the sensor are the vehicle itself.
   double self_filter_radius_m = 3.0;
 };
@@ -37,8 +55,11 @@ struct NdtConfig {
 // The match and how it went: the quality indicator the vehicle passes on with each pose
 // (vehicle/ndt_quality.h), so that it knows when its own localization is the one that failed.
 struct NdtResult {
-  Pose2 pose;  // the vehicle's footprint centre and yaw, map frame
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  Pose2 pose;                                            // the vehicle's footprint centre and yaw, map frame
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // (x, y, yaw), as NdtConfig::covariance_estimate
+  // Autoware's fixed covariance (NdtConfig::output_sigma_*), whichever is reported: the initial guess's
+  // predictor is tuned with it (vehicle_ndt_run.cpp).
+  Eigen::Matrix3d fixed_covariance = Eigen::Matrix3d::Zero();
   // Stopped because a step fell below the transformation epsilon, not at the iteration cap (PCL's own
   // hasConverged() is true at the cap as well).
   bool converged = false;

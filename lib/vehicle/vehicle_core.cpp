@@ -1,9 +1,10 @@
 #include "vehicle/vehicle_core.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+
+#include "fusion/covariance_floor.h"
 
 namespace rsu::vehicle {
 
@@ -22,52 +23,34 @@ VehicleCore::VehicleCore(const VehicleCoreConfig& config)
 
 NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
   ++stats_.ndt_poses;
-  Eigen::Matrix3d covariance = ndt.covariance;
-  const bool degraded = assess(ndt.quality, config_.ndt_quality) == NdtHealth::kDegraded;
+  Eigen::Matrix3d weakened = ndt.covariance;
+  const bool flagged = assess(ndt.quality, config_.ndt_quality) == NdtHealth::kDegraded;
+  const bool degraded = flagged || (last_degraded_ndt_ && ndt.time >= *last_degraded_ndt_ &&
+                                    ndt.time - *last_degraded_ndt_ <= config_.degraded_ndt_persistence);
   if (degraded) {
-    // The match says it failed: its pose is no 0.15 m estimate, in either filter.
-    covariance *= config_.degraded_ndt_variance_scale;
+    // The match says it failed: its pose is no 3 cm (or 0.15 m) estimate.
+    weakened *= config_.degraded_ndt_variance_scale;
+    fusion::raise_to_floor(weakened, config_.degraded_ndt_min_sigma_m, 0.0);
     ++stats_.ndt_degraded;
   }
   if (degraded && !previous_degraded_) {
-    doubt_own_at(ndt.time, covariance);
+    doubt_own_at(ndt.time, weakened);
     monitor_.annul_exclusions_since(ndt.time - config_.ndt_degraded_hold);
   }
-  own_.add({ndt.time, fusion::MeasurementSource::kNdt, ndt.pose, covariance});
+  own_.add({ndt.time, fusion::MeasurementSource::kNdt, ndt.pose, weakened});
   previous_degraded_ = degraded;
-  if (degraded) {
+  if (flagged) {
     last_degraded_ndt_ = ndt.time;
   }
-  fuser_.add_ndt(ndt.pose, covariance, ndt.time);
+  const bool weaken_in_fused =
+      degraded && (!config_.weaken_degraded_ndt_only_with_rsu || rsu_admitted_near(ndt.time));
+  stats_.ndt_weakened_in_fused += weaken_in_fused ? 1 : 0;
+  fuser_.add_ndt(ndt.pose, weaken_in_fused ? weakened : ndt.covariance, ndt.time);
   NdtStep step;
   step.fused = fuser_.pose_at(ndt.time);
   step.announce = state_to_announce(ndt, step.fused);
   return step;
 }
-
-namespace {
-
-// Raises the position covariance's eigenvalues to at least sigma_xy^2 and the yaw variance to at least
-// sigma_yaw^2; true when it had to.
-bool raise_to_floor(Eigen::Matrix3d& c, double sigma_xy, double sigma_yaw) {
-  bool raised = false;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(c.topLeftCorner<2, 2>());
-  if (eigen.info() == Eigen::Success && eigen.eigenvalues().minCoeff() < sigma_xy * sigma_xy) {
-    const Eigen::Vector2d floored = eigen.eigenvalues().cwiseMax(sigma_xy * sigma_xy);
-    c.topLeftCorner<2, 2>() = eigen.eigenvectors() * floored.asDiagonal() * eigen.eigenvectors().transpose();
-    raised = true;
-  }
-  if (c(2, 2) < sigma_yaw * sigma_yaw) {
-    // Keep the yaw's correlation with the position: scale its row and column.
-    const double scale = sigma_yaw / std::sqrt(std::max(c(2, 2), 1e-300));
-    c.row(2) *= scale;
-    c.col(2) *= scale;
-    raised = true;
-  }
-  return raised;
-}
-
-}  // namespace
 
 CorrectionStep VehicleCore::on_correction(const v2i::Correction& received) {
   CorrectionStep step;
@@ -75,7 +58,8 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& received) {
     return step;
   }
   v2i::Correction correction = received;
-  if (raise_to_floor(correction.pose_covariance, config_.min_rsu_sigma_m, config_.min_rsu_yaw_sigma_rad)) {
+  if (fusion::raise_to_floor(correction.pose_covariance, config_.min_rsu_sigma_m,
+                             config_.min_rsu_yaw_sigma_rad)) {
     ++stats_.fixes_covariance_raised;
   }
   Reanchor reanchor = Reanchor::kNever;
@@ -163,6 +147,14 @@ OwnEstimate VehicleCore::own_status_at(TimeNs t) const {
     return OwnEstimate::kDegraded;
   }
   return OwnEstimate::kHealthy;
+}
+
+bool VehicleCore::rsu_admitted_near(TimeNs t) const {
+  return std::any_of(monitor_.sources().begin(), monitor_.sources().end(), [&](const auto& entry) {
+    const SourceRecord& s = entry.second;
+    return s.state == SourceState::kAdmitted && s.fixes > 0 &&
+           std::llabs(t - s.last_time) <= config_.ndt_degraded_hold;
+  });
 }
 
 void VehicleCore::doubt_own_at(TimeNs time, const Eigen::Matrix3d& covariance) {

@@ -43,11 +43,23 @@ struct VehicleCoreConfig {
   bool check_integrity = true;
   IntegrityConfig integrity;
   NdtQualityLimits ndt_quality;
-  // A degraded NDT pose's covariance is multiplied by this (x4: a 0.15 m sigma becomes 0.30 m; the
-  // degraded corridor's NDT was up to 0.46 m off along the road). More lets the fused pose lag its own
-  // wandering NDT further when no RSU is there (x10: 0.170 m MAE there against NDT's 0.135 m; x4: 0.156);
-  // less lets the degraded NDT pull the pose from a good RSU (x2: the VLP-16's fused MAE 0.117 m, x4: 0.053).
+  // A degraded NDT pose's covariance is multiplied by this, and its position raised to at least
+  // `degraded_ndt_min_sigma_m`: a match that says it failed is no 3 cm (or 0.15 m) estimate, whatever
+  // its curvature claims (the degraded corridor's NDT was up to 0.46 m off along the road while its
+  // Laplace covariance said 3-6 cm). Less lets the degraded NDT pull the pose from a good RSU (0.3 m:
+  // the VLP-16's fused MAE there 0.102 m, 0.45 m: 0.054 m; replayed, README).
   double degraded_ndt_variance_scale = 4.0;
+  double degraded_ndt_min_sigma_m = 0.45;
+  // The own estimate (the integrity reference) always takes a degraded pose so. The fused filter only
+  // while an RSU is admitted and was heard within ndt_degraded_hold: with no outside source to take over,
+  // the NDT pose is the best the vehicle has, and weakening it only makes the filter lag NDT's own wander
+  // (the degraded corridor with no RSU: 0.156 m against NDT's 0.135 m).
+  bool weaken_degraded_ndt_only_with_rsu = true;
+  // A healthy-looking pose this soon after a degraded one is taken as degraded too: the street that made
+  // the match fail is still there (the degraded corridor's poses between flagged ones were as far off).
+  // 0.5 s: in the corridor only two poses are flagged, and a longer persistence blinds the checks after
+  // them (the 0.5 deg mount-yaw RSU fused to 0.034 m with 1 s, 0.024 m with 0.5 s; replayed).
+  TimeNs degraded_ndt_persistence = 500 * kNsPerMs;
   // ... and the own estimate counts as failed from this long before to this long after it.
   TimeNs ndt_degraded_hold = 1 * kNsPerSecond;
   // The own estimate's speed may have followed the failing match before it said so.
@@ -87,9 +99,10 @@ struct CorrectionStep {
 
 struct VehicleCoreStats {
   std::uint64_t ndt_poses = 0;
-  std::uint64_t ndt_degraded = 0;                 // poses whose quality said the match failed
-  std::uint64_t fixes_own_failed = 0;             // fixes checked while the own estimate counted as failed
-  std::uint64_t fixes_without_own = 0;            // fixes before the own estimate existed
+  std::uint64_t ndt_degraded = 0;           // poses whose quality said the match failed (or just had)
+  std::uint64_t ndt_weakened_in_fused = 0;  // ... of them weakened in the fused filter (an RSU admitted)
+  std::uint64_t fixes_own_failed = 0;       // fixes checked while the own estimate counted as failed
+  std::uint64_t fixes_without_own = 0;      // fixes before the own estimate existed
   std::uint64_t fixes_fused_after_probation = 0;  // held back on probation, fused once admitted
   std::uint64_t restarts_after_exclusion = 0;     // fused filter restarted from the own estimate
   std::uint64_t fixes_covariance_raised = 0;      // fixes claiming less than min_rsu_sigma_*
@@ -112,6 +125,8 @@ class VehicleCore {
  private:
   VehicleState state_to_announce(const NdtPose& ndt, const std::optional<fusion::StateEstimate>& fused) const;
   OwnEstimate own_status_at(TimeNs t) const;
+  // An admitted RSU was heard within ndt_degraded_hold of `t`: someone can take over from a failed NDT.
+  bool rsu_admitted_near(TimeNs t) const;
   // The first degraded NDT pose after healthy ones: the match may have been failing before it said so,
   // so the own estimate's pose uncertainty grows by the degraded pose's covariance and its speed
   // uncertainty by degraded_speed_sigma_mps (the degraded poses themselves then come in with theirs).

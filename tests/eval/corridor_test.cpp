@@ -2,6 +2,8 @@
 // statistics of the table, against ground truth the tests compute themselves.
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
+
 #include <cmath>
 #include <limits>
 #include <string>
@@ -72,6 +74,26 @@ TEST(NdtLocalizer, ConvergesFromAnOffsetGuessInTheCorridor) {
   EXPECT_LT(angle_distance(result.pose.yaw, truth.yaw), deg_to_rad(0.5));
   EXPECT_GT(result.scan_points, 100u);
   EXPECT_NEAR(result.covariance(0, 0), config.output_sigma_xy_m * config.output_sigma_xy_m, 1e-12);
+
+  // The match's own covariance (Laplace): the same pose, a covariance tighter than Autoware's fixed
+  // 0.15 m where the corridor's lamps and hedges hold the match, never below its floor, and honest: the
+  // error is within 3 sigma on each axis.
+  NdtConfig laplace_config;
+  laplace_config.covariance_estimate = NdtConfig::CovarianceEstimate::kLaplace;
+  NdtLocalizer laplace_ndt(laplace_config, map, 5);
+  const NdtResult laplace = laplace_ndt.align(frame.frame.points, mount, guess);
+  EXPECT_DOUBLE_EQ(laplace.pose.x, result.pose.x);
+  EXPECT_EQ(laplace.fixed_covariance, result.covariance);
+  const Eigen::Matrix3d& c = laplace.covariance;
+  EXPECT_TRUE(c.isApprox(c.transpose()));
+  EXPECT_GT(c.llt().info() == Eigen::Success ? c.determinant() : -1.0, 0.0);
+  for (int axis = 0; axis < 2; ++axis) {
+    const double sigma = std::sqrt(c(axis, axis));
+    EXPECT_GE(sigma, laplace_config.laplace_min_sigma_xy_m - 1e-9);
+    EXPECT_LT(sigma, laplace_config.output_sigma_xy_m);
+    EXPECT_LE(std::abs((axis == 0 ? laplace.pose.x - truth.x : laplace.pose.y - truth.y)), 3.0 * sigma);
+  }
+  EXPECT_LE(angle_distance(laplace.pose.yaw, truth.yaw), 3.0 * std::sqrt(c(2, 2)));
 }
 
 TEST(ErrorStats, MatchesHandComputedValues) {

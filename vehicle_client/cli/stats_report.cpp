@@ -51,8 +51,9 @@ void print_summary(std::FILE* out, const VehicleClientStats& c, const vehicle::V
       ull(f.rsu_rejected_yaw_branch), ull(f.rsu_rejected_other), ull(f.late), ull(f.reapplied),
       ull(f.rsu_reanchors), ull(f.ndt_restarts));
   const vehicle::IntegrityTotals& t = core.integrity().totals();
-  std::fprintf(out, "; NDT poses %llu (degraded %llu); integrity:", ull(core.stats().ndt_poses),
-               ull(core.stats().ndt_degraded));
+  std::fprintf(out, "; NDT poses %llu (degraded %llu, weakened in the fused filter %llu); integrity:",
+               ull(core.stats().ndt_poses), ull(core.stats().ndt_degraded),
+               ull(core.stats().ndt_weakened_in_fused));
   for_each_count(t.verdicts, 0, [&](vehicle::FixVerdict v, std::uint64_t n) {
     std::fprintf(out, " %s=%llu", vehicle::to_string(v), ull(n));
   });
@@ -81,7 +82,8 @@ void write_stats_file(const std::string& path, const VehicleClientStats& c,
       << "\nfuser.rsu_rejected_yaw_branch " << f.rsu_rejected_yaw_branch << "\nfuser.rsu_reanchors "
       << f.rsu_reanchors << "\nfuser.ndt_restarts " << f.ndt_restarts << "\n";
   out << "ndt.poses " << core.stats().ndt_poses << "\nndt.degraded " << core.stats().ndt_degraded
-      << "\nintegrity.fixes_own_failed " << core.stats().fixes_own_failed << "\n";
+      << "\nndt.weakened_in_fused " << core.stats().ndt_weakened_in_fused << "\nintegrity.fixes_own_failed "
+      << core.stats().fixes_own_failed << "\n";
   const vehicle::IntegrityTotals& t = core.integrity().totals();
   for (std::size_t i = 0; i < static_cast<std::size_t>(vehicle::FixVerdict::kCount); ++i) {
     const auto v = static_cast<vehicle::FixVerdict>(i);

@@ -1,0 +1,34 @@
+// A floor under a pose covariance (x, y, yaw): no estimate is credited with more precision than its
+// source can have, whatever it states. Used where an outside figure enters the vehicle's filters (an RSU's
+// fix, vehicle/vehicle_core.cpp) and where a match's own curvature is turned into a covariance
+// (eval/corridor/ndt_localizer.cpp).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+namespace rsu::fusion {
+
+// Raises the position block's eigenvalues to at least sigma_xy^2 (keeping its axes) and the yaw variance
+// to at least sigma_yaw^2 (scaling its row and column, so that its correlation with the position stays);
+// true when it had to.
+inline bool raise_to_floor(Eigen::Matrix3d& c, double sigma_xy, double sigma_yaw) {
+  bool raised = false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(c.topLeftCorner<2, 2>());
+  if (eigen.info() == Eigen::Success && eigen.eigenvalues().minCoeff() < sigma_xy * sigma_xy) {
+    const Eigen::Vector2d floored = eigen.eigenvalues().cwiseMax(sigma_xy * sigma_xy);
+    c.topLeftCorner<2, 2>() = eigen.eigenvectors() * floored.asDiagonal() * eigen.eigenvectors().transpose();
+    raised = true;
+  }
+  if (c(2, 2) < sigma_yaw * sigma_yaw) {
+    const double scale = sigma_yaw / std::sqrt(std::max(c(2, 2), 1e-300));
+    c.row(2) *= scale;
+    c.col(2) *= scale;
+    raised = true;
+  }
+  return raised;
+}
+
+}  // namespace rsu::fusion
