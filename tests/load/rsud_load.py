@@ -119,6 +119,12 @@ def report(h, args, samples, cpu_share, kernel_drops):
     print("announcements: sent %d (send failures %d), dropped by the kernel at rsud's full receive buffer %s, "
           "accepted %d, rejected %s" % (summary["sent"], summary["send_failed"], kernel_drops,
                                         s.get("datagram.accepted", 0), rejected or "none"))
+    # What rsud itself counted (stats file): the kernel's drops at both sockets (SO_MEMINFO), and the
+    # LiDAR packets it lost or shed.
+    def count(name):
+        return "%d" % s[name] if name in s else "n/a"
+    print("rsud counted: v2i.kernel_drops %s, lidar.kernel_drops %s, LiDAR packets lost %s, shed too late %s" % (
+        count("v2i.kernel_drops"), count("lidar.kernel_drops"), count("packet.lost"), count("packet.too_late")))
     sent_by_rsud = int(s.get("corrections_sent", 0))
     print("corrections: rsud sent %d, vehicles received %d (lost in transport %d), to vehicles not in view %d, "
           "naming another vehicle %d" % (sent_by_rsud, len(cs), sent_by_rsud - len(cs),
