@@ -6,9 +6,10 @@
 // An RSU is never let to make the vehicle worse (issue 18): beside the fused filter runs the vehicle's
 // own estimate, a filter over its NDT poses alone, and every correction is checked against it by the
 // IntegrityMonitor before it may be fused. The own estimate counts as failed only when the vehicle's
-// NDT says so (NdtQuality: the pose's covariance is then inflated in both filters, and RSU fixes may
-// re-anchor the fused filter) or when two RSUs agree against it; never because one RSU keeps
-// disagreeing.
+// NDT says so (NdtQuality: the pose's covariance is then inflated in the own estimate, and in the fused
+// filter while an admitted RSU can take over; RSU fixes may re-anchor the fused filter) or when two RSUs
+// agree against it; never because one RSU keeps disagreeing. The checks are only as sharp as the NDT
+// covariance is honest: a fixed 0.15 m hides an RSU 0.1-0.25 m off (README, issue 18).
 #pragma once
 
 #include <Eigen/Core>
