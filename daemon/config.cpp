@@ -1,11 +1,13 @@
 #include "daemon/config.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <sstream>
 
 #include "common/angles.h"
 #include "daemon/dds_config.h"
+#include "io/mount_calibration_file.h"
 #include "io/velodyne_calibration.h"
 #include "io/yaml_field.h"
 #include "lidar/lidar_decoder.h"
@@ -409,6 +411,16 @@ void read_metrics(const YamlField& f, DaemonConfig& c) {
   c.metrics.interval_s = f.positive_or("interval_s", c.metrics.interval_s);
 }
 
+void read_state(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
+  f.expect_map({"directory", "persist_background", "use_calibration"});
+  if (f.has("directory"))
+    c.state.directory = path_of(f.child("directory"), base);
+  if (f.has("persist_background"))
+    c.state.persist_background = bool_of(f.child("persist_background"));
+  if (f.has("use_calibration"))
+    c.state.use_calibration = bool_of(f.child("use_calibration"));
+}
+
 }  // namespace
 
 DaemonConfig parse_config(const std::string& yaml_text, const std::string& source_name) {
@@ -419,7 +431,7 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
     const YAML::Node root = io::parse_yaml(yaml_text, source_name);
     const YamlField f(root, "", c.source, 1);
     f.expect_map({"rsu_id", "lidar", "background", "perception", "v2i", "security", "registry", "flood_limit",
-                  "association", "dds", "logging", "metrics"});
+                  "association", "dds", "logging", "metrics", "state"});
     c.core.rsu_id = unsigned_of(f.required("rsu_id"), 9.007e15);
     if (c.core.rsu_id == 0)
       f.child("rsu_id").fail("must be non-zero");
@@ -453,6 +465,8 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
       read_logging(f.child("logging"), c);
     if (f.has("metrics"))
       read_metrics(f.child("metrics"), c);
+    if (f.has("state"))
+      read_state(f.child("state"), c, base);
   } catch (const io::YamlError& e) {
     throw ConfigError(e.what());
   } catch (const YAML::Exception& e) {
@@ -519,13 +533,47 @@ DaemonConfig load_config(const ConfigSource& source) {
     config.security.key_file = source.key_file;
   load_lidar_files(config);
   load_security(config);
+  load_state_calibration(config);
   return config;
+}
+
+void load_state_calibration(DaemonConfig& c) {
+  if (c.state.directory.empty()) {
+    // systemd's StateDirectory= (several are separated by ':'; the unit names one).
+    const char* env = std::getenv("STATE_DIRECTORY");
+    if (env != nullptr)
+      c.state.directory = std::string(env).substr(0, std::string(env).find(':'));
+  }
+  if (c.state.directory.empty() || !c.state.use_calibration)
+    return;
+  const std::string path = (std::filesystem::path(c.state.directory) / "calibration.yaml").string();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    return;
+  try {
+    const io::MountCalibrationFile file = io::read_mount_calibration(path);
+    if (file.verdict != "good") {
+      c.state_warnings.push_back(path + ": verdict " + file.verdict + " (" + file.reason +
+                                 "): not used, lidar.mount stays in effect");
+      return;
+    }
+    c.core.mount = file.mount;
+    c.mount_source = path;
+  } catch (const io::MountCalibrationError& e) {
+    c.state_warnings.push_back(std::string(e.what()) + ": not used, lidar.mount stays in effect");
+  }
 }
 
 std::string summarize(const DaemonConfig& c) {
   std::ostringstream out;
   const Pose3& m = c.core.mount;
   out << "rsu_id " << c.core.rsu_id << "\n";
+  out << "mount from " << c.mount_source << "\n";
+  out << "state directory "
+      << (c.state.directory.empty() ? std::string("none (nothing kept between runs)") : c.state.directory)
+      << (c.state.persist_background ? "" : " (background not kept)") << "\n";
+  for (const std::string& w : c.state_warnings)
+    out << "WARNING: " << w << "\n";
   out << "lidar " << c.core.sensor_model << " at (" << m.x << ", " << m.y << ", " << m.z << ") m, yaw "
       << rad_to_deg(m.yaw) << " deg, pitch " << rad_to_deg(m.pitch) << " deg, roll " << rad_to_deg(m.roll)
       << " deg\n";

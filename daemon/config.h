@@ -135,6 +135,19 @@ struct SecurityFiles {
   bool key_file_exposed = false;  // load_security(): the secret key is readable by group or others
 };
 
+// What rsud keeps between runs and finds there (README, "Calibrating the mount").
+struct StateConfig {
+  // Empty: $STATE_DIRECTORY (what systemd's StateDirectory= made: /var/lib/rsud), and without it
+  // nothing is kept (a restart learns the background again).
+  std::string directory;
+  // The learned background is saved there (io/background_state.h) and loaded at start, unless the
+  // configuration lists background.pcd_files.
+  bool persist_background = true;
+  // <directory>/calibration.yaml, rsu-calibrate's report (--out), replaces lidar.mount when its
+  // verdict is good.
+  bool use_calibration = true;
+};
+
 struct DaemonConfig {
   std::string source;  // the file it was read from
   core::RsuCoreConfig core;
@@ -153,6 +166,11 @@ struct DaemonConfig {
   // Where --stats-file style snapshots go: empty disables. Written on every stats interval and on exit.
   std::string stats_file;
   MetricsConfig metrics;
+  StateConfig state;
+  // Set by load_state_calibration: where core.mount came from (lidar.mount, or the calibration file),
+  // and what the operator should hear about the state directory's calibration (logged at start).
+  std::string mount_source = "lidar.mount";
+  std::vector<std::string> state_warnings;
 };
 
 class ConfigError : public std::runtime_error {
@@ -174,6 +192,11 @@ void load_security(DaemonConfig& config);
 // calibration is applied here). Throws ConfigError naming the file (and line) when one is missing or
 // malformed.
 void load_lidar_files(DaemonConfig& config);
+// Resolves state.directory ($STATE_DIRECTORY when empty) and, when state.use_calibration and
+// <directory>/calibration.yaml exists with verdict good, takes its mount as core.mount (mount_source
+// names the file). A calibration that is not good, or a file that cannot be read, leaves lidar.mount in
+// effect and says why in state_warnings: never fatal, never silent.
+void load_state_calibration(DaemonConfig& config);
 // Where rsud's configuration comes from: the file, and what the command line overrides in it.
 struct ConfigSource {
   std::string path;
@@ -182,7 +205,7 @@ struct ConfigSource {
   std::string key_file;
 };
 
-// parse_config + the overrides + load_lidar_files + load_security.
+// parse_config + the overrides + load_lidar_files + load_security + load_state_calibration.
 DaemonConfig load_config(const ConfigSource& source);
 
 // A few lines describing the configuration (for --check-config and the start-up log).

@@ -15,6 +15,7 @@
 #include "daemon/udp_socket.h"
 #include "edge/address_text.h"
 #include "edge/host_clock.h"
+#include "io/background_state.h"
 #include "io/pcd_io.h"
 #include "io/text_file.h"
 
@@ -77,8 +78,13 @@ void RsuDaemon::start() {
   spdlog::info("listening for V2I announcements on {}:{}", v2i.address().to_string(), v2i.port());
   warn_if_insecure();
 
+  spdlog::info("LiDAR mount from {}", config_.mount_source);
+  for (const std::string& warning : config_.state_warnings)
+    spdlog::warn("state directory: {}", warning);
   if (!config_.background_pcd_files.empty())
     load_background_pcd();
+  else
+    load_saved_background();
   start_dds();
   start_input();
 
@@ -381,6 +387,50 @@ void RsuDaemon::load_background_pcd() {
   spdlog::info("background loaded from {} PCD file(s)", frames.size());
 }
 
+void RsuDaemon::load_saved_background() {
+  if (config_.state.directory.empty() || !config_.state.persist_background)
+    return;
+  const auto refuse = [this](const std::string& why) {
+    ++state_counts_.background_refused;
+    spdlog::warn("saved background not used: {}; learning it again", why);
+  };
+  std::optional<io::PersistedBackground> saved;
+  try {
+    saved = io::load_background_state(config_.state.directory);
+  } catch (const io::BackgroundStateError& e) {
+    return refuse(e.what());
+  }
+  if (!saved) {
+    spdlog::info("no saved background in {}", config_.state.directory);
+    return;
+  }
+  if (saved->sensor_model != config_.core.sensor_model)
+    return refuse("learned with a " + saved->sensor_model + ", the LiDAR is a " + config_.core.sensor_model);
+  if (!(saved->mount == config_.core.mount))
+    return refuse("learned under another mount (the mount was changed or recalibrated since)");
+  core_.load_background(saved->frames);
+  ++state_counts_.background_loaded;
+  spdlog::info("background loaded from {} ({} rotations saved by an earlier run)", config_.state.directory,
+               saved->frames.size());
+}
+
+void RsuDaemon::save_learned_background() {
+  if (config_.state.directory.empty() || !config_.state.persist_background)
+    return;
+  const auto began = steady::now();
+  try {
+    io::save_background_state(
+        config_.state.directory,
+        io::PersistedBackground{config_.core.sensor_model, config_.core.mount, core_.background_frames()});
+    ++state_counts_.background_saved;
+    spdlog::info("background saved in {} ({:.0f} ms): a restart serves at once", config_.state.directory,
+                 std::chrono::duration<double, std::milli>(steady::now() - began).count());
+  } catch (const io::BackgroundStateError& e) {
+    ++state_counts_.background_save_failed;
+    spdlog::warn("background not saved (a restart will learn it again): {}", e.what());
+  }
+}
+
 void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
   for (const std::string& notice : core_.take_lidar_notices()) {
     spdlog::warn("LiDAR: {}", notice);
@@ -388,6 +438,7 @@ void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
   }
   if (result.background_became_ready) {
     spdlog::info("background learned from {} whole rotations", core_.lidar_stats().background_frames);
+    save_learned_background();
     become_ready_if_possible();
   }
   send_corrections(result.corrections);
@@ -607,6 +658,11 @@ CounterList RsuDaemon::stats() {
   out.add("", "corrections_sent", corrections_sent_);
   out.add("", "correction_sends_failed", correction_sends_failed_);
   out.add("", "lidar_packets_rejected", lidar_packets_rejected_);
+  out.add("state", "background_loaded", state_counts_.background_loaded);
+  out.add("state", "background_refused", state_counts_.background_refused);
+  out.add("state", "background_saved", state_counts_.background_saved);
+  out.add("state", "background_save_failed", state_counts_.background_save_failed);
+  out.add_level("state", "mount_from_calibration", config_.mount_source != "lidar.mount" ? 1 : 0);
   core_.report(out);
   // Datagrams the kernel dropped before rsud could read them (its socket buffer was full): what was
   // sent is what rsud counted plus these.
@@ -733,6 +789,12 @@ void RsuDaemon::reload() {
     warn_if_insecure();
     if (!summary.background_kept && !config_.background_pcd_files.empty())
       load_background_pcd();
+    else if (!summary.background_kept)
+      load_saved_background();
+    if (config_.mount_source != "lidar.mount")
+      spdlog::info("LiDAR mount from {}", config_.mount_source);
+    for (const std::string& warning : config_.state_warnings)
+      spdlog::warn("state directory: {}", warning);
     if (!core_.background_ready()) {
       ready_ = false;
       spdlog::info("learning the background again from {} whole rotations",

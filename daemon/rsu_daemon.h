@@ -77,6 +77,10 @@ class RsuDaemon {
   // on the host's timer, or on the capture's clock during a replay so that a replay stays the same.
   void housekeep(TimeNs now);
   void load_background_pcd();
+  // The state directory (io/background_state.h): the background an earlier run learned, loaded when it
+  // belongs to this sensor and mount; saved when learning ends.
+  void load_saved_background();
+  void save_learned_background();
   void on_signal(int signal_number);
   void reload();
   void drain_and_stop();
@@ -126,6 +130,14 @@ class RsuDaemon {
   std::unique_ptr<DdsEdge> dds_;                    // when dds.enabled (after bad_input_: it reports there)
   std::unique_ptr<PeerBus> peers_;  // when dds.peers.enabled (after dds_: it uses its participant)
   std::uint32_t peers_seen_ = 0;    // other RSUs on the peer bus at the last housekeeping
+
+  struct StateCounts {
+    std::uint64_t background_loaded = 0;
+    std::uint64_t background_refused = 0;  // unusable, or another sensor or mount: learned again
+    std::uint64_t background_saved = 0;
+    std::uint64_t background_save_failed = 0;
+  };
+  StateCounts state_counts_;
 
   // PCD replay
   std::vector<std::vector<lidar::LidarPoint>> pcd_frames_;

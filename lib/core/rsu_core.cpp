@@ -189,16 +189,16 @@ LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, 
 }
 
 LidarStepResult RsuCore::on_lidar_points(std::span<const lidar::LidarPoint> points, TimeNs now) {
-  mount_.to_map_frame(points, map_scratch_);
   if (!background_ready_)
-    return learn(map_scratch_, false);
+    return learn(points, false);
+  mount_.to_map_frame(points, map_scratch_);
   return process(map_scratch_, Release::passed, now);
 }
 
 LidarStepResult RsuCore::on_lidar_frame(std::span<const lidar::LidarPoint> points, TimeNs now) {
-  mount_.to_map_frame(points, map_scratch_);
   if (!background_ready_)
-    return learn(map_scratch_, true);
+    return learn(points, true);
+  mount_.to_map_frame(points, map_scratch_);
   return process(map_scratch_, Release::everything, now);  // a whole rotation: every vehicle swept
 }
 
@@ -223,17 +223,19 @@ void RsuCore::follow_geometry() {
   clusterer_.set_rotation_hz(g.rotation_hz);
 }
 
-void RsuCore::add_background_frame(std::span<const lidar::LidarPoint> map_points) {
-  background_.add_background_frame(map_points);
+void RsuCore::add_background_frame(std::span<const lidar::LidarPoint> sensor_points) {
+  background_frames_.emplace_back(sensor_points.begin(), sensor_points.end());
+  mount_.to_map_frame(sensor_points, map_scratch_);
+  background_.add_background_frame(map_scratch_);
   ++lidar_stats_.background_frames;
 }
 
-LidarStepResult RsuCore::learn(std::span<const lidar::LidarPoint> map_points, bool whole_frame) {
+LidarStepResult RsuCore::learn(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame) {
   LidarStepResult result;
   if (whole_frame) {
-    add_background_frame(map_points);
+    add_background_frame(sensor_points);
   } else {
-    for (const lidar::LidarFrame& frame : assembler_.add(map_points))
+    for (const lidar::LidarFrame& frame : assembler_.add(sensor_points))
       add_background_frame(frame.points);
   }
   if (static_cast<int>(lidar_stats_.background_frames) >= config_.background.learning_frames) {
@@ -244,10 +246,8 @@ LidarStepResult RsuCore::learn(std::span<const lidar::LidarPoint> map_points, bo
 }
 
 void RsuCore::load_background(const std::vector<std::vector<lidar::LidarPoint>>& frames) {
-  for (const auto& frame : frames) {
-    mount_.to_map_frame(frame, map_scratch_);
-    add_background_frame(map_scratch_);
-  }
+  for (const auto& frame : frames)
+    add_background_frame(frame);
   background_ready_ = true;
 }
 
@@ -267,6 +267,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
   if (summary.background_kept) {
     fresh.background_ = std::move(background_);
     fresh.background_ready_ = background_ready_;
+    fresh.background_frames_ = std::move(background_frames_);
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }
   fresh.packets_ = std::move(packets_).reloaded(next);

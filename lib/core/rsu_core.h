@@ -91,9 +91,13 @@ class RsuCore {
   // Releases every pending cluster (drain at shutdown).
   LidarStepResult flush(TimeNs now);
 
-  // Background frames recorded elsewhere (PCD files, sensor frame): the model is ready afterwards.
+  // Background frames recorded elsewhere (PCD files, or what an earlier run learned and the daemon
+  // persisted; sensor frame): the model is ready afterwards.
   void load_background(const std::vector<std::vector<lidar::LidarPoint>>& frames_in_sensor_frame);
   bool background_ready() const { return background_ready_; }
+  // The rotations the background was learned or loaded from, in the SENSOR frame (independent of the
+  // mount): what the daemon persists so that a restart serves at once.
+  const std::vector<std::vector<lidar::LidarPoint>>& background_frames() const { return background_frames_; }
 
   // Forgets silent vehicles (call about once a second); returns how many.
   std::size_t expire(TimeNs now);
@@ -143,8 +147,10 @@ class RsuCore {
       std::span<const perception::Detection> detections, TimeNs now);
   void correct(const HeldVehicle& held, TimeNs now, LidarStepResult& result);
 
-  LidarStepResult learn(std::span<const lidar::LidarPoint> map_points, bool whole_frame);
-  void add_background_frame(std::span<const lidar::LidarPoint> map_points);
+  // sensor_points: this batch in the sensor frame (the rotations are kept so); map_scratch_ holds them
+  // in the map frame.
+  LidarStepResult learn(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame);
+  void add_background_frame(std::span<const lidar::LidarPoint> sensor_points);
   // Passes a changed rotation rate or packet period measured by the decoder on to the stages.
   void follow_geometry();
 
@@ -156,6 +162,7 @@ class RsuCore {
   perception::SweepClusterer clusterer_;
   SweepPosition sweep_;
   bool background_ready_ = false;
+  std::vector<std::vector<lidar::LidarPoint>> background_frames_;  // sensor frame
   AnnouncementIntake announcements_;
   VehicleGatherer gatherer_;
   GatheredVehicleFixer fixer_;

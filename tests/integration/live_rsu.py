@@ -7,6 +7,7 @@ correction with its error against the truth of every vehicle).
     .record_background()          the scene without vehicles (rsu-sim simulate), loaded by rsud at start
     .write_config(**options)      rsud.yaml (VLP model from the scenario; options below)
     .start_rsud() / .kill_rsud()  start and wait for "ready: serving" / SIGKILL
+    .kill_and_restart()           SIGKILL and start again: when, and how soon ready and serving
     .stream(start_s, seconds, ..) rsu-sim stream on the shared epoch (loss / reorder options)
     .fleet(until_s, ..)           rsu-fleet on the shared epoch, announcing until scenario time until_s
     .corrections(path)            the fleet's correction lines as dicts
@@ -123,6 +124,20 @@ logging:
         rc = self.rsud.wait(timeout=20)
         assert rc == 0, "rsud exited with %d on SIGTERM:\n%s" % (rc, self.log()[-3000:])
 
+    def kill_and_restart(self):
+        """SIGKILL, 0.3 s, start again: (host ns of the restart, s until ready, s until the first correction
+        after it)."""
+        self.kill_rsud()
+        time.sleep(0.3)
+        t_restart = time.time_ns()
+        self.start_rsud(wait_ready=False)
+        self.wait_for(lambda: "ready: serving" in self.log(), 5, "rsud to become ready again")
+        ready_s = (time.time_ns() - t_restart) * 1e-9
+        self.wait_for(lambda: any(c["recv_ns"] > t_restart for c in self.corrections()), 3,
+                      "a correction after the restart")
+        first_s = (min(c["recv_ns"] for c in self.corrections() if c["recv_ns"] > t_restart) - t_restart) * 1e-9
+        return t_restart, ready_s, first_s
+
     def log(self):
         return read_text(self.log_path)
 
@@ -137,9 +152,10 @@ logging:
         return values
 
     # ---- the sensor and the vehicles -----------------------------------------------------------------
-    def stream(self, start_s, seconds, name="stream", loss=0.0, reorder=0.0, seed=1):
+    def stream(self, start_s, seconds, name="stream", loss=0.0, reorder=0.0, seed=1, options=()):
         cmd = [self.tools["rsu_sim"], "stream", self.scenario, "--to", "127.0.0.1:%d" % self.lidar_port,
                "--epoch-ns", str(self.epoch_ns), "--start", str(start_s), "--seconds", str(seconds)]
+        cmd += list(options)
         if loss or reorder:
             cmd += ["--loss", str(loss), "--reorder", str(reorder), "--impair-seed", str(seed)]
         return self.children.spawn(cmd, self.path(name + ".log"))

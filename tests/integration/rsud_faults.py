@@ -22,6 +22,10 @@
                        is rejected and counted by reason, and it gets nothing
   sigkill_restart      rsud killed with SIGKILL mid-run and started again, nothing else restarted: the
                        vehicle gets a correction within 1 s of the restart, within 0.10 m of the truth
+  persisted_restart    (issue 17) rsud learns the background from the empty street and saves it in its
+                       state directory; killed mid-run and started again, it loads it (no learning: its
+                       background counts the saved rotations only), is ready at once and serves the
+                       vehicle within 1 s of the restart, within 0.10 m of the truth; the stats count it
 
 Every wait is bounded in time; every child is killed on the way out.
 """
@@ -193,14 +197,7 @@ def case_sigkill_restart(h):
     fleet = h.fleet(7.3, connected=[1])
     h.wait_until_scenario(3.0)
     assert h.corrections(), "no corrections before the kill"
-    h.kill_rsud()
-    time.sleep(0.3)
-    t_restart = time.time_ns()
-    h.start_rsud(wait_ready=False)
-    h.wait_for(lambda: "ready: serving" in h.log(), 5, "rsud to become ready again")
-    ready_s = (time.time_ns() - t_restart) * 1e-9
-    h.wait_for(lambda: any(c["recv_ns"] > t_restart for c in h.corrections()), 3, "a correction after the restart")
-    first_s = (min(c["recv_ns"] for c in h.corrections() if c["recv_ns"] > t_restart) - t_restart) * 1e-9
+    t_restart, ready_s, first_s = h.kill_and_restart()
     assert first_s <= 1.0, "the vehicle was served again %.3f s after the restart" % first_s
     assert stream.poll() is None and fleet.poll() is None, "the stream or the vehicle stopped"
     finish(stream, 15, "rsu-sim stream")
@@ -213,9 +210,49 @@ def case_sigkill_restart(h):
           "after it, worst %.3f m" % (ready_s, first_s, len(after), worst))
 
 
+LEARNING_FRAMES = 10
+
+
+def start_learning(h, lead_s=0.5):
+    """rsud with a state directory, learning from an empty street streamed for 1.6 s."""
+    os.makedirs(h.path("state"))
+    h.write_config(learning_frames=LEARNING_FRAMES, extra="state: {directory: %s}\n" % h.path("state"))
+    h.start_rsud(wait_ready=False)
+    h.epoch_ns = time.time_ns() + int(lead_s * 1e9)
+    empty = h.stream(0.0, 1.6, name="empty", options=["--without-vehicles"])
+    h.wait_for(lambda: "background saved" in h.log(), 10, "rsud to learn and save the background")
+    finish(empty, 10, "rsu-sim stream (empty street)")
+
+
+def case_persisted_restart(h):
+    start_learning(h)
+    assert os.path.exists(h.path("state/background.yaml")) and os.path.exists(h.path("state/background.pcd"))
+    stream = h.stream(2.0, 6.0)
+    fleet = h.fleet(8.3, connected=[1])
+    h.wait_until_scenario(4.0)
+    assert h.corrections(), "no corrections before the kill"
+    t_restart, ready_s, first_s = h.kill_and_restart()
+    log = h.log()
+    assert "background loaded from" in log, "the restarted rsud did not load the saved background"
+    assert "learning the background" not in log, "the restarted rsud learned the background again"
+    assert first_s <= 1.0, "the vehicle was served again %.3f s after the restart" % first_s
+    finish(stream, 15, "rsu-sim stream")
+    finish(fleet, 15, "rsu-fleet")
+    h.stop_rsud()
+    s = h.stats()
+    assert s["state.background_loaded"] == 1 and s["state.background_refused"] == 0, s
+    assert s["lidar.background_frames"] == LEARNING_FRAMES, "background of %d rotations after the restart" % (
+        s["lidar.background_frames"])
+    after = [c for c in h.corrections() if c["recv_ns"] > t_restart]
+    worst = max(c["error"] for c in after)
+    assert worst < 0.10, "after the restart a correction is %.3f m from the truth" % worst
+    print("ok: restarted rsud ready after %.3f s with the saved background, first correction %.3f s after the "
+          "restart, %d corrections after it, worst %.3f m" % (ready_s, first_s, len(after), worst))
+
+
 CASES = {"packet_loss_reorder": case_packet_loss_reorder, "stream_restart": case_stream_restart,
          "size_change": case_size_change, "clock_offset": case_clock_offset,
-         "sigkill_restart": case_sigkill_restart}
+         "sigkill_restart": case_sigkill_restart, "persisted_restart": case_persisted_restart}
 
 
 def main():
