@@ -411,6 +411,18 @@ void read_metrics(const YamlField& f, DaemonConfig& c) {
   c.metrics.interval_s = f.positive_or("interval_s", c.metrics.interval_s);
 }
 
+void read_mount_integrity(const YamlField& f, DaemonConfig& c) {
+  f.expect_map({"enabled", "max_position_error_m", "resume_after_s"});
+  calibration::MountMonitorConfig& m = c.core.mount_monitor;
+  if (f.has("enabled"))
+    m.enabled = bool_of(f.child("enabled"));
+  m.max_position_error_m = f.positive_or("max_position_error_m", m.max_position_error_m);
+  const double resume_s = f.non_negative_or("resume_after_s", to_seconds(m.resume_after));
+  if (resume_s > 3600)
+    f.child("resume_after_s").fail("must be at most 3600 s");
+  m.resume_after = from_seconds(resume_s);
+}
+
 void read_state(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
   f.expect_map({"directory", "persist_background", "use_calibration"});
   if (f.has("directory"))
@@ -431,7 +443,7 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
     const YAML::Node root = io::parse_yaml(yaml_text, source_name);
     const YamlField f(root, "", c.source, 1);
     f.expect_map({"rsu_id", "lidar", "background", "perception", "v2i", "security", "registry", "flood_limit",
-                  "association", "dds", "logging", "metrics", "state"});
+                  "association", "dds", "logging", "metrics", "state", "mount_integrity"});
     c.core.rsu_id = unsigned_of(f.required("rsu_id"), 9.007e15);
     if (c.core.rsu_id == 0)
       f.child("rsu_id").fail("must be non-zero");
@@ -467,6 +479,8 @@ DaemonConfig parse_config(const std::string& yaml_text, const std::string& sourc
       read_metrics(f.child("metrics"), c);
     if (f.has("state"))
       read_state(f.child("state"), c, base);
+    if (f.has("mount_integrity"))
+      read_mount_integrity(f.child("mount_integrity"), c);
   } catch (const io::YamlError& e) {
     throw ConfigError(e.what());
   } catch (const YAML::Exception& e) {
@@ -569,6 +583,11 @@ std::string summarize(const DaemonConfig& c) {
   const Pose3& m = c.core.mount;
   out << "rsu_id " << c.core.rsu_id << "\n";
   out << "mount from " << c.mount_source << "\n";
+  if (c.core.mount_monitor.enabled)
+    out << "mount integrity: fixes stop when the LiDAR's motion moves a fix more than "
+        << c.core.mount_monitor.max_position_error_m << " m at " << c.core.coverage_radius_m << " m\n";
+  else
+    out << "mount integrity: off\n";
   out << "state directory "
       << (c.state.directory.empty() ? std::string("none (nothing kept between runs)") : c.state.directory)
       << (c.state.persist_background ? "" : " (background not kept)") << "\n";

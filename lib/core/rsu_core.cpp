@@ -74,7 +74,8 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       announcements_(config),
       gatherer_(config.gathering, config.association, mount_.xy()),
       fixer_(config, mount_),
-      corrections_(config) {}
+      corrections_(config),
+      monitor_assembler_(assembler_config(packets_.decoder().geometry())) {}
 
 // The map of the daemon: one batch of the sweep, through the paper's steps (docs/architecture.md).
 LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Release release, TimeNs now) {
@@ -151,6 +152,10 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
   count(fix, lidar_stats_);
   if (!fix.ok())
     return;
+  if (!mount_serving()) {
+    ++lidar_stats_.corrections_withheld_mount;  // the LiDAR moved: its fixes are off (rsu_core.h)
+    return;
+  }
   std::optional<OutgoingCorrection> out =
       corrections_.build(vehicle->announcement, fix.fix, fix.sweep_time, now);
   if (!out) {
@@ -192,6 +197,7 @@ LidarStepResult RsuCore::on_lidar_points(std::span<const lidar::LidarPoint> poin
   if (!background_ready_)
     return learn(points, false);
   mount_.to_map_frame(points, map_scratch_);
+  watch_mount(points, false);
   return process(map_scratch_, Release::passed, now);
 }
 
@@ -199,6 +205,7 @@ LidarStepResult RsuCore::on_lidar_frame(std::span<const lidar::LidarPoint> point
   if (!background_ready_)
     return learn(points, true);
   mount_.to_map_frame(points, map_scratch_);
+  watch_mount(points, true);
   return process(map_scratch_, Release::everything, now);  // a whole rotation: every vehicle swept
 }
 
@@ -220,7 +227,53 @@ void RsuCore::follow_geometry() {
     return;
   sweep_.set_rotation_hz(g.rotation_hz);
   assembler_.set_rotation_hz(g.rotation_hz);
+  monitor_assembler_.set_rotation_hz(g.rotation_hz);
   clusterer_.set_rotation_hz(g.rotation_hz);
+}
+
+void RsuCore::start_mount_monitor() {
+  if (!config_.mount_monitor.enabled || background_frames_.empty())
+    return;
+  // Fixes lie about a vehicle's half height above the road, below the sensor by its height over it.
+  const double fix_height = config_.mount.z - config_.perception.ground.ground_z;
+  monitor_.emplace(background_frames_, config_.mount, config_.coverage_radius_m, fix_height,
+                   config_.mount_monitor);
+}
+
+void RsuCore::watch_mount(std::span<const lidar::LidarPoint> points, bool whole_frame) {
+  if (!monitor_)
+    return;
+  // The static scene only: what the background model calls background (vehicles and passers-by would
+  // pull the registration). Every 4th point is plenty (the monitor takes at most sample_points of a
+  // rotation) and keeps the copies small. map_scratch_ holds `points` in the map frame.
+  constexpr std::size_t kEvery = 4;
+  monitor_scratch_.clear();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (++monitor_skip_ < kEvery)
+      continue;
+    monitor_skip_ = 0;
+    if (background_.classify(map_scratch_[i]) == perception::PointClass::background)
+      monitor_scratch_.push_back(points[i]);
+  }
+  if (whole_frame) {
+    check_mount(monitor_scratch_, points.empty() ? 0 : points.back().time_ns);
+    return;
+  }
+  for (const lidar::LidarFrame& rotation : monitor_assembler_.add(monitor_scratch_))
+    check_mount(rotation.points, rotation.end_ns);
+}
+
+void RsuCore::check_mount(std::span<const lidar::LidarPoint> rotation, TimeNs time) {
+  if (monitor_->check_rotation(rotation, time))
+    mount_notices_.push_back(monitor_->notice());
+}
+
+std::vector<std::string> RsuCore::take_lidar_notices() {
+  std::vector<std::string> notices = packets_.take_notices();
+  for (std::string& n : mount_notices_)
+    notices.push_back(std::move(n));
+  mount_notices_.clear();
+  return notices;
 }
 
 void RsuCore::add_background_frame(std::span<const lidar::LidarPoint> sensor_points) {
@@ -241,6 +294,7 @@ LidarStepResult RsuCore::learn(std::span<const lidar::LidarPoint> sensor_points,
   if (static_cast<int>(lidar_stats_.background_frames) >= config_.background.learning_frames) {
     background_ready_ = true;
     result.background_became_ready = true;
+    start_mount_monitor();
   }
   return result;
 }
@@ -249,6 +303,7 @@ void RsuCore::load_background(const std::vector<std::vector<lidar::LidarPoint>>&
   for (const auto& frame : frames)
     add_background_frame(frame);
   background_ready_ = true;
+  start_mount_monitor();
 }
 
 std::size_t RsuCore::expire(TimeNs now) {
@@ -268,6 +323,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
     fresh.background_ = std::move(background_);
     fresh.background_ready_ = background_ready_;
     fresh.background_frames_ = std::move(background_frames_);
+    fresh.monitor_ = std::move(monitor_);
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }
   fresh.packets_ = std::move(packets_).reloaded(next);
@@ -282,12 +338,38 @@ void RsuCore::report(CounterList& out) const {
   packets_.report(out);
   core::report(packets_.order_stats(), clusterer_.stats(), lidar_stats_, out);
   packets_.report_clock(out);
+  report_mount(out);
 }
 
 std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
   CounterList out;
   report(out);
   return out.entries();
+}
+
+void RsuCore::report_mount(CounterList& out) const {
+  const calibration::MountMonitorStats none;
+  const calibration::MountMonitorStats& m = monitor_ ? monitor_->stats() : none;
+  out.add("mount", "rotations_checked", m.rotations_checked);
+  out.add("mount", "rotations_beyond_tolerance", m.rotations_beyond_tolerance);
+  out.add("mount", "rotations_unobservable", m.rotations_unobservable);
+  out.add("mount", "rotations_mismatched", m.rotations_mismatched);
+  out.add("mount", "rotations_unverifiable", m.rotations_unverifiable);
+  out.add("mount", "stops", m.stops);
+  out.add("mount", "resumes", m.resumes);
+  out.add_level("mount", "fixes_stopped", mount_serving() ? 0 : 1);
+  if (!monitor_ || m.rotations_checked == 0)
+    return;
+  const calibration::MountDrift& d = monitor_->last();
+  out.add_measured("mount", "error_at_radius_m", d.error_at_radius_m);
+  out.add_measured("mount", "error_sigma_m", d.error_sigma_m);
+  out.add_measured("mount", "motion_x_m", d.motion.x);
+  out.add_measured("mount", "motion_y_m", d.motion.y);
+  out.add_measured("mount", "motion_z_m", d.motion.z);
+  out.add_measured("mount", "motion_roll_deg", rad_to_deg(d.motion.roll));
+  out.add_measured("mount", "motion_pitch_deg", rad_to_deg(d.motion.pitch));
+  out.add_measured("mount", "motion_yaw_deg", rad_to_deg(d.motion.yaw));
+  out.add_measured("mount", "matched_points", static_cast<double>(d.matches));
 }
 
 }  // namespace rsu::core

@@ -14,6 +14,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -21,6 +22,7 @@
 
 #include <Eigen/Core>
 
+#include "calibration/mount_monitor.h"
 #include "common/time.h"
 #include "core/announcement_intake.h"
 #include "core/correction_builder.h"
@@ -130,12 +132,19 @@ class RsuCore {
   const lidar::LidarDecoder& lidar_decoder() const { return packets_.decoder(); }
   // Notices for the operator (log them once each, as warnings): the decoder's, and the sensor clock
   // crossing the tolerance (and what RsuCore then does).
-  std::vector<std::string> take_lidar_notices() { return packets_.take_notices(); }
+  // The mount monitor's too: fixes stopped or resumed, and why.
+  std::vector<std::string> take_lidar_notices();
   SensorClockReport sensor_clock() const { return packets_.sensor_clock(); }
   const lidar::PacketOrderStats& packet_order_stats() const { return packets_.order_stats(); }
   const perception::SweepClustererStats& sweep_stats() const { return clusterer_.stats(); }
   const LidarStats& lidar_stats() const { return lidar_stats_; }
   const Eigen::Vector2d& lidar_xy() const { return mount_.xy(); }
+  // Whether fixes are sent: the background is ready and the LiDAR has not moved beyond the tolerance.
+  bool mount_serving() const { return !monitor_ || monitor_->serving(); }
+  // Why fixes are stopped (empty while serving), for the advertisement and the stats.
+  std::string mount_reason() const { return monitor_ ? monitor_->reason() : std::string(); }
+  // The mount monitor (nullopt before the background is ready or when disabled).
+  const std::optional<calibration::MountMonitor>& mount_monitor() const { return monitor_; }
 
  private:
   enum class Release { passed, everything };
@@ -151,6 +160,14 @@ class RsuCore {
   // in the map frame.
   LidarStepResult learn(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame);
   void add_background_frame(std::span<const lidar::LidarPoint> sensor_points);
+  // The mount monitor from the background's rotations (once the background is ready).
+  void start_mount_monitor();
+  // A sample of the sweep's static points (sensor frame; map_scratch_ holds them in the map frame) for
+  // the mount monitor, which checks each whole rotation.
+  void watch_mount(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame);
+  void check_mount(std::span<const lidar::LidarPoint> rotation, TimeNs time);
+  // mount.*: the monitor's counts, whether fixes are stopped, its latest estimate (measured).
+  void report_mount(CounterList& out) const;
   // Passes a changed rotation rate or packet period measured by the decoder on to the stages.
   void follow_geometry();
 
@@ -175,6 +192,11 @@ class RsuCore {
   std::uint64_t packets_lost_ = 0;
   TimeNs last_loss_ns_ = std::numeric_limits<TimeNs>::min();
   std::vector<lidar::LidarPoint> map_scratch_;
+  std::optional<calibration::MountMonitor> monitor_;
+  lidar::FrameAssembler monitor_assembler_;  // rotations of a sample of the points, for monitor_
+  std::vector<lidar::LidarPoint> monitor_scratch_;
+  std::size_t monitor_skip_ = 0;  // points since the last one sampled
+  std::vector<std::string> mount_notices_;
 };
 
 }  // namespace rsu::core

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "calibration/mount_monitor.h"
 #include "common/pose.h"
 #include "common/time.h"
 #include "lidar/lidar_decoder.h"
@@ -97,6 +98,10 @@ struct RsuCoreConfig {
   // Background, clustering and the per-vehicle fix (perception::fix_vehicle): the library's defaults,
   // the same the pilot experiment measures, unless the configuration file changes them.
   perception::PerceptionConfig perception;
+
+  // Is the LiDAR still where `mount` says? Each rotation registered against the background learned
+  // under the mount; beyond the tolerance no fixes are sent until it is back (calibration/mount_monitor.h).
+  calibration::MountMonitorConfig mount_monitor;
 
   // Clusters whose fitted centre is farther than this from the LiDAR get no correction: beyond it the
   // fit is too sparse to beat the vehicle's own estimate (paper Table 2: VLP-16 beyond 36 m).

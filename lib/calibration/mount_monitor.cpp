@@ -1,0 +1,240 @@
+#include "calibration/mount_monitor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <tuple>
+
+#include <Eigen/Eigenvalues>
+
+#include "calibration/coarse_search.h"
+#include "common/angles.h"
+
+namespace rsu::calibration {
+namespace {
+
+struct Scatter {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  int n = 0;
+};
+
+std::string drift_text(const MountDrift& d, double tolerance_m) {
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "moved by (%.3f, %.3f, %.3f) m, roll %.3f, pitch %.3f, yaw %.3f deg since its reference: "
+                "%.3f m at the coverage radius (tolerance %.3f m; %zu points matched, rms %.3f m)",
+                d.motion.x, d.motion.y, d.motion.z, rad_to_deg(d.motion.roll), rad_to_deg(d.motion.pitch),
+                rad_to_deg(d.motion.yaw), d.error_at_radius_m, tolerance_m, d.matches, d.rms_m);
+  return text;
+}
+
+}  // namespace
+
+MountMonitor::MountMonitor(const std::vector<std::vector<lidar::LidarPoint>>& reference, const Pose3& mount,
+                           double coverage_radius_m, double fix_height_m, const MountMonitorConfig& config)
+    : config_(config),
+      mount_rotation_(mount.to_isometry().linear()),
+      radius_m_(coverage_radius_m),
+      fix_height_m_(fix_height_m) {
+  std::unordered_map<std::int64_t, Scatter> cells;
+  for (const auto& frame : reference) {
+    for (const lidar::LidarPoint& p : frame) {
+      const Eigen::Vector3d q(p.x, p.y, p.z);
+      if (!has_voxel_key(q, config_.voxel_m) || q.norm() < config_.min_range_m)
+        continue;
+      Scatter& s = cells[voxel_key(q, config_.voxel_m)];
+      s.sum += q;
+      s.outer += q * q.transpose();
+      ++s.n;
+    }
+  }
+  for (const auto& [key, s] : cells) {
+    if (s.n < config_.min_plane_points)
+      continue;
+    const Eigen::Vector3d mean = s.sum / s.n;
+    const Eigen::Matrix3d scatter = s.outer / s.n - mean * mean.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+    const Eigen::Vector3d lambda = eigen.eigenvalues();  // ascending
+    if (!(lambda[1] > 1e-6) || lambda[0] > config_.max_plane_thickness * lambda[1])
+      continue;
+    planes_[key] = Plane{mean.cast<float>(), eigen.eigenvectors().col(0).normalized().cast<float>(),
+                         static_cast<float>(std::sqrt(std::max(0.0, lambda[0])))};
+  }
+}
+
+std::vector<PlaneMatch> MountMonitor::match(const std::vector<Eigen::Vector3d>& points, const Pose3& motion,
+                                            double max_residual_m) const {
+  const Eigen::Isometry3d t = motion.to_isometry();
+  std::vector<PlaneMatch> matches;
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector3d a = t * p;
+    if (!has_voxel_key(a, config_.voxel_m))
+      continue;
+    const auto it = planes_.find(voxel_key(a, config_.voxel_m));
+    if (it == planes_.end())
+      continue;
+    const Plane& plane = it->second;
+    const Eigen::Vector3d n = plane.normal.cast<double>();
+    const Eigen::Vector3d q = plane.point.cast<double>();
+    if (std::abs(n.dot(a - q)) > max_residual_m)
+      continue;
+    // The sensor's noise along the normal (as rsu-calibrate weighs it) and the plane's own thickness.
+    const Eigen::Vector3d beam = a - t.translation();
+    const double range = beam.norm();
+    const double cos_incidence = std::abs(n.dot(beam)) / range;
+    const double sin2 = 1.0 - cos_incidence * cos_incidence;
+    const double thickness = plane.thickness_m;
+    const double sigma = std::sqrt(
+        config_.range_sigma_m * config_.range_sigma_m * cos_incidence * cos_incidence +
+        range * range * config_.angle_sigma_rad * config_.angle_sigma_rad * sin2 + thickness * thickness);
+    matches.push_back(PlaneMatch{p, q, n, sigma});
+  }
+  return matches;
+}
+
+MountDrift MountMonitor::estimate(std::span<const lidar::LidarPoint> rotation, const Pose3& start) const {
+  std::vector<Eigen::Vector3d> points;
+  const std::size_t stride =
+      std::max<std::size_t>(1, rotation.size() / std::max<std::size_t>(1, config_.sample_points));
+  for (std::size_t i = 0; i < rotation.size(); i += stride) {
+    const lidar::LidarPoint& p = rotation[i];
+    const Eigen::Vector3d q(p.x, p.y, p.z);
+    if (q.allFinite() && q.norm() >= config_.min_range_m)
+      points.push_back(q);
+  }
+  MountDrift d;
+  Pose3 motion = start;
+  PlaneFit fit;
+  d.sampled = points.size();
+  d.observable = d.sampled >= config_.min_matches;
+  const auto enough = [&](std::size_t matches) {
+    return matches >= std::max<double>(static_cast<double>(config_.min_matches),
+                                       config_.min_match_fraction * static_cast<double>(d.sampled));
+  };
+  for (int i = 0; i < config_.iterations && d.observable; ++i) {
+    // The gate narrows as the estimate settles: wide enough at first for a bump of a few decimetres.
+    const double gate = i == 0 ? config_.max_residual_m : std::min(config_.max_residual_m, 0.25);
+    fit = fit_planes(match(points, motion, gate), motion, config_.huber_sigmas);
+    if (!enough(fit.matches))
+      break;
+    motion = apply_step(motion, fit.step);
+  }
+  d.matches = fit.matches;
+  d.rms_m = fit.rms_m;
+  d.matches_reference = d.observable && enough(fit.matches);
+  d.motion = motion;
+  d.covariance = Matrix6d::Identity();  // unknown: metres and radians
+  if (d.matches_reference) {
+    // Residuals smaller than the sensor's stated noise (a simulator without noise) must not make the
+    // estimate look more certain than the sensor is: the scale is floored at 1.
+    const Matrix6d information = fit.information * std::min(1.0, fit.scale * fit.scale);
+    const Eigen::FullPivLU<Matrix6d> lu(information);
+    if (lu.isInvertible())
+      d.covariance = lu.inverse();
+  }
+  std::tie(d.error_at_radius_m, d.error_sigma_m) = error_at_radius(motion, d.covariance);
+  return d;
+}
+
+// A fix is a point at the radius, fix_height_m below the sensor, anywhere around it: the mount's motion
+// (t, R) moves it by R p + t - p in the sensor frame, placed in the map by the mount's rotation; the
+// largest horizontal part over the azimuths (every 5 deg), and its sigma there: to first order the
+// displacement is dt + w x p (point_to_plane.h's perturbation), so its covariance is J C J^T with
+// J = [I, -[p]x].
+std::pair<double, double> MountMonitor::error_at_radius(const Pose3& motion,
+                                                        const Matrix6d& covariance) const {
+  const Eigen::Isometry3d t = motion.to_isometry();
+  double worst = 0.0;
+  double worst_sigma = 0.0;
+  for (int k = 0; k < 72; ++k) {
+    const double phi = deg_to_rad(5.0 * k);
+    const Eigen::Vector3d map_offset(radius_m_ * std::cos(phi), radius_m_ * std::sin(phi), -fix_height_m_);
+    const Eigen::Vector3d p = mount_rotation_.transpose() * map_offset;
+    const Eigen::Vector3d moved = mount_rotation_ * (t * p - p);
+    const double error = moved.head<2>().norm();
+    if (error < worst && k > 0)
+      continue;
+    Eigen::Matrix<double, 3, 6> j;
+    j.leftCols<3>() = Eigen::Matrix3d::Identity();
+    j.rightCols<3>() << 0.0, p.z(), -p.y(), -p.z(), 0.0, p.x(), p.y(), -p.x(), 0.0;
+    const Eigen::Matrix3d c = mount_rotation_ * j * covariance * j.transpose() * mount_rotation_.transpose();
+    const Eigen::Vector2d along =
+        error > 1e-12 ? Eigen::Vector2d(moved.head<2>() / error) : Eigen::Vector2d(1, 0);
+    worst = error;
+    // Along the error where there is one; with none, the larger horizontal variance.
+    worst_sigma =
+        std::sqrt(std::max(0.0, error > 1e-12 ? along.dot(c.topLeftCorner<2, 2>() * along)
+                                              : c.topLeftCorner<2, 2>().eigenvalues().real().maxCoeff()));
+  }
+  return {worst, worst_sigma};
+}
+
+bool MountMonitor::check_rotation(std::span<const lidar::LidarPoint> rotation, TimeNs time) {
+  if (!config_.enabled)
+    return false;
+  ++stats_.rotations_checked;
+  const MountDrift drift = estimate(rotation, start_);
+  if (!drift.observable) {
+    ++stats_.rotations_unobservable;  // too few static points to tell: nothing decided
+    return false;
+  }
+  last_ = drift;
+  const double tolerance = config_.max_position_error_m;
+  const double margin = config_.significance_sigmas * last_.error_sigma_m;
+  const bool beyond = !last_.matches_reference || last_.error_at_radius_m - margin > tolerance;
+  if (!last_.matches_reference)
+    ++stats_.rotations_mismatched;
+  else
+    start_ = last_.motion;
+  if (last_.matches_reference && margin > tolerance) {
+    ++stats_.rotations_unverifiable;
+    if (!warned_unverifiable_) {
+      warned_unverifiable_ = true;
+      char text[256];
+      std::snprintf(
+          text, sizeof text,
+          "the scene holds the LiDAR too weakly to verify its mount to %.3f m at the coverage radius "
+          "(sigma %.3f m there): a bump in the weak direction may go unnoticed",
+          tolerance, last_.error_sigma_m);
+      notice_ = text;
+      if (state_ == MountState::kServing && !beyond)
+        return true;
+    }
+  }
+  if (beyond)
+    ++stats_.rotations_beyond_tolerance;
+  if (state_ == MountState::kServing) {
+    if (!beyond)
+      return false;
+    state_ = MountState::kMoved;
+    calm_ = false;
+    ++stats_.stops;
+    reason_ = last_.matches_reference
+                  ? "the LiDAR " + drift_text(last_, tolerance)
+                  : "the LiDAR's view no longer matches its reference (" + std::to_string(last_.matches) +
+                        " of " + std::to_string(last_.sampled) + " static points matched): moved far";
+    notice_ = "fixes stopped: " + reason_ + ". Recalibrate (rsu-calibrate) and give rsud the new mount";
+    start_ = Pose3{};  // a remount by more than the gate: look from the reference again
+    return true;
+  }
+  const bool calm =
+      last_.matches_reference && last_.error_at_radius_m + margin <= config_.resume_fraction * tolerance;
+  if (!calm) {
+    calm_ = false;
+    return false;
+  }
+  if (!calm_) {
+    calm_ = true;
+    calm_since_ = time;
+  }
+  if (time - calm_since_ < config_.resume_after)
+    return false;
+  state_ = MountState::kServing;
+  ++stats_.resumes;
+  notice_ = "fixes resumed: the LiDAR is back within tolerance (" + drift_text(last_, tolerance) + ")";
+  reason_.clear();
+  return true;
+}
+
+}  // namespace rsu::calibration

@@ -1,0 +1,141 @@
+// Mount integrity (issue 17): is the LiDAR still where its mount says? Each rotation's static scene is
+// registered against the reference the mount belongs to (the background learned under it, sensor frame)
+// by the calibration's point-to-plane Gauss-Newton (point_to_plane.h) on a subsample of points; the
+// result is the sensor's motion since (a bump, a leaning pole), and what it does to a fix: the largest
+// horizontal displacement it causes at the coverage radius. Beyond a tolerance the fixes stop; they
+// resume once the motion has stayed back within it (hysteresis) for a while, or when a new mount and
+// reference replace this monitor (a recalibration).
+//
+// Pure: the caller gives it rotations (sensor frame) and their time; no clock, no files.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "calibration/point_to_plane.h"
+#include "common/pose.h"
+#include "common/time.h"
+#include "lidar/point.h"
+
+namespace rsu::calibration {
+
+struct MountMonitorConfig {
+  bool enabled = true;
+  // The largest horizontal position error the mount's motion may cause to a fix at the coverage radius
+  // before fixes stop (m): 5 cm, half the accuracy target, is 0.057 deg of yaw at 50 m.
+  double max_position_error_m = 0.05;
+  // Fixes resume once every rotation for this long has had its error below resume_fraction of the
+  // tolerance (and was observable).
+  TimeNs resume_after = 1'000'000'000;
+  double resume_fraction = 0.8;
+  // The reference: voxels of this size whose points lie on one plane (smallest scatter eigenvalue below
+  // max_plane_thickness of the middle one), at least min_plane_points of them.
+  double voxel_m = 0.5;
+  int min_plane_points = 8;
+  double max_plane_thickness = 0.05;
+  // Each rotation: at most this many points, evenly spaced, from min_range_m out (nearer ones are the
+  // pole and cabinet); residuals beyond max_residual_m are not the static scene (vehicles, passers-by).
+  std::size_t sample_points = 3000;
+  double min_range_m = 1.5;
+  double max_residual_m = 0.5;
+  int iterations = 8;
+  double huber_sigmas = 3.0;
+  double range_sigma_m = 0.02;  // the sensor's noise (as rsu-calibrate's)
+  double angle_sigma_rad = 0.001;
+  // A rotation with fewer static points than this cannot say (a part of one, a blocked view): counted
+  // as unobservable, nothing decided. With enough points but fewer than min_match_fraction of them on
+  // the reference's planes, the scene is no longer the reference's (moved far beyond what the
+  // registration follows: a remount by metres): the fixes stop as for a drift.
+  std::size_t min_matches = 300;
+  double min_match_fraction = 0.3;
+  // Fixes stop when the error exceeds the tolerance by this many of its standard deviations (0: the
+  // estimate alone): a scene that holds the sensor weakly in some direction gives a noisy estimate
+  // there, which must not stop the fixes by itself (it is counted and warned about instead).
+  double significance_sigmas = 3.0;
+};
+
+// The sensor's motion since the reference: the reference frame -> the current sensor frame's pose in it.
+struct MountDrift {
+  Pose3 motion;                            // in the reference sensor frame (roll, pitch, yaw as Pose3)
+  Matrix6d covariance = Matrix6d::Zero();  // of (dt, w) (point_to_plane.h)
+  double error_at_radius_m = 0.0;          // largest horizontal displacement of a fix at the radius
+  double error_sigma_m = 0.0;              // its standard deviation, from the covariance
+  double rms_m = 0.0;
+  std::size_t matches = 0;
+  std::size_t sampled = 0;         // static points of the rotation used
+  bool observable = false;         // enough points sampled to tell
+  bool matches_reference = false;  // and enough of them matched
+};
+
+enum class MountState { kServing, kMoved };
+
+struct MountMonitorStats {
+  std::uint64_t rotations_checked = 0;
+  std::uint64_t rotations_beyond_tolerance = 0;
+  std::uint64_t rotations_unobservable = 0;  // too few static points to tell (nothing decided)
+  std::uint64_t rotations_mismatched = 0;    // enough, but too few on the reference's planes
+  // the estimate too uncertain to tell (3 sigma of the error beyond the tolerance): the scene holds the
+  // sensor too weakly in some direction (a street of flat walls along it)
+  std::uint64_t rotations_unverifiable = 0;
+  std::uint64_t stops = 0;    // serving -> moved
+  std::uint64_t resumes = 0;  // moved -> serving
+};
+
+class MountMonitor {
+ public:
+  // reference: the static scene the mount belongs to, sensor frame (the learned background's
+  // rotations). mount: sensor -> map (the error is horizontal in the map frame). coverage_radius_m and
+  // fix_height_m (how far below the sensor a fix's points are: the mount's height above the road, about)
+  // place the fixes the error is measured at.
+  MountMonitor(const std::vector<std::vector<lidar::LidarPoint>>& reference, const Pose3& mount,
+               double coverage_radius_m, double fix_height_m, const MountMonitorConfig& config);
+
+  // One rotation (sensor frame), swept by `time`. Returns true when the state changed (take_notice()).
+  bool check_rotation(std::span<const lidar::LidarPoint> rotation, TimeNs time);
+
+  MountState state() const { return state_; }
+  bool serving() const { return state_ == MountState::kServing; }
+  const MountDrift& last() const { return last_; }
+  const MountMonitorStats& stats() const { return stats_; }
+  std::size_t reference_planes() const { return planes_.size(); }
+  // Why the fixes stopped or resumed, for the log (set when check_rotation() returns true).
+  const std::string& notice() const { return notice_; }
+  // Why the fixes are stopped now (empty while serving): for the advertisement and the stats.
+  const std::string& reason() const { return reason_; }
+
+  // The registration alone (for tests and the benchmark): the drift of `rotation` from `start`.
+  MountDrift estimate(std::span<const lidar::LidarPoint> rotation, const Pose3& start) const;
+
+ private:
+  struct Plane {
+    Eigen::Vector3f point;
+    Eigen::Vector3f normal;
+    float thickness_m = 0.0F;  // rms of its points along the normal
+  };
+  std::vector<PlaneMatch> match(const std::vector<Eigen::Vector3d>& points, const Pose3& motion,
+                                double max_residual_m) const;
+  // The error at the radius (the worst azimuth) and its standard deviation under `covariance`.
+  std::pair<double, double> error_at_radius(const Pose3& motion, const Matrix6d& covariance) const;
+
+  MountMonitorConfig config_;
+  Eigen::Matrix3d mount_rotation_;
+  double radius_m_;
+  double fix_height_m_;
+  std::unordered_map<std::int64_t, Plane> planes_;
+  MountState state_ = MountState::kServing;
+  TimeNs calm_since_ = 0;  // the first of the rotations in a row within resume_fraction (while moved)
+  bool calm_ = false;
+  Pose3 start_;  // where the next registration starts: the last observable estimate
+  MountDrift last_;
+  MountMonitorStats stats_;
+  std::string notice_;
+  std::string reason_;
+  bool warned_unverifiable_ = false;
+};
+
+}  // namespace rsu::calibration
