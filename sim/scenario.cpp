@@ -26,7 +26,7 @@ Pose3 read_mount(const YamlField& f) {
 }
 
 LidarConfig read_lidar(const YamlField& f) {
-  f.expect_map({"model", "rpm", "mount", "noise", "start_azimuth_deg"});
+  f.expect_map({"model", "rpm", "mount", "noise", "start_azimuth_deg", "mount_motion"});
   LidarConfig lidar;
   const YamlField model = f.required("model");
   lidar.model_name = model.text();
@@ -239,6 +239,12 @@ Scenario read_scenario(const YAML::Node& root, const std::string& source_name) {
   s.source = source_name;
   s.name = doc.has("name") ? doc.child("name").text() : source_name;
   s.lidar = read_lidar(doc.required("lidar"));
+  if (doc.child("lidar").has("mount_motion")) {
+    const YamlField motion = doc.child("lidar").child("mount_motion");
+    s.lidar.mount_motion = read_trajectory(motion);
+    if (std::holds_alternative<Spin>(*s.lidar.mount_motion))
+      motion.fail("a mount does not spin: static or waypoints");
+  }
   if (doc.has("scene"))
     s.scene = read_scene(doc.child("scene"));
   if (doc.has("vehicles")) {
@@ -271,6 +277,29 @@ Scenario read_scenario(const YAML::Node& root, const std::string& source_name) {
 }
 
 }  // namespace
+
+MovingMount moving_mount(const LidarConfig& lidar) {
+  MovingMount out;
+  const Pose3& m = lidar.mount;
+  // The carrier stands at the sensor's x, y (so that its yaw turns the sensor about its own vertical);
+  // the sensor sits on it at its height, tilt and heading.
+  out.mount_on_carrier = Pose3{0.0, 0.0, m.z, m.roll, m.pitch, m.yaw};
+  Waypoints w;
+  if (const auto* given = lidar.mount_motion ? std::get_if<Waypoints>(&*lidar.mount_motion) : nullptr) {
+    w = *given;
+  } else if (const auto* still =
+                 lidar.mount_motion ? std::get_if<StaticPose>(&*lidar.mount_motion) : nullptr) {
+    w.points.push_back({0, still->pose});
+  } else {
+    w.points.push_back({0, Pose2{}});
+  }
+  for (TimedPose& p : w.points) {
+    p.pose.x += m.x;
+    p.pose.y += m.y;
+  }
+  out.carrier = w;
+  return out;
+}
 
 Scenario parse_scenario(std::string_view yaml_text, const std::string& source_name) {
   try {

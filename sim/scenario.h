@@ -3,6 +3,7 @@
 //   scenarios/pilot.yaml:12: lidar.mount.z: expected a number, got "two"
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -20,7 +21,20 @@ struct LidarConfig {
   Pose3 mount;               // sensor pose in the map frame
   NoiseModel noise;
   double start_azimuth_deg = 0.0;
+  // lidar.mount_motion: the sensor moved mid-run about where `mount` puts it (a bumped or leaning
+  // pole): a trajectory (the vehicles' syntax) of its displacement x, y (m) and turn yaw_deg about the
+  // vertical through it, in the map frame; nullopt: it stays. `rsu-sim stream` follows it; the
+  // simulate command (backgrounds) does not.
+  std::optional<Trajectory> mount_motion;
 };
+
+// The carrier trajectory and the mount on it (sim/lidar_simulator.h) that move the sensor by
+// `lidar.mount_motion` about `lidar.mount`.
+struct MovingMount {
+  Trajectory carrier;
+  Pose3 mount_on_carrier;
+};
+MovingMount moving_mount(const LidarConfig& lidar);
 
 struct Scenario {
   std::string name;

@@ -11,7 +11,8 @@
 // or not), so the tests can count corrections sent to the wrong vehicle:
 //   correction <recv ns> <socket's vehicle> <correction's vehicle> <rsu id> <sequence> <sweep ns>
 //              <x> <y> <yaw> <points> <error to own truth m> <yaw error rad> <nearest other id>
-//              <error to nearest other m>
+//              <error to nearest other m> <the position error in sigmas of the stated covariance:
+//              sqrt(e^T S^-1 e) over x, y>
 // (errors -1 and other id 0 where there is no truth, i.e. for synthetic vehicles); and one line
 //   size_change <vehicle> <send ns>
 // when a vehicle first announces its changed size. At the end, on stdout:
@@ -245,22 +246,26 @@ void receive(FleetVehicle& v, const Truth& truth, const FleetOptions& o, std::FI
     ++counts.corrections;
     if (c->vehicle_id != v.id)
       ++counts.foreign;
-    double error = -1.0, yaw_error = 0.0, other_error = -1.0;
+    double error = -1.0, yaw_error = 0.0, other_error = -1.0, sigmas = -1.0;
     std::uint64_t other = 0;
     if (v.truth != nullptr) {
       const TimeNs t = c->sweep_time - o.epoch_ns;
       const Pose2 p = truth.pose(*v.truth, t);
       error = std::hypot(c->pose.x - p.x, c->pose.y - p.y);
+      const Eigen::Vector2d e(c->pose.x - p.x, c->pose.y - p.y);
+      const Eigen::Matrix2d stated = c->pose_covariance.topLeftCorner<2, 2>();
+      if (stated.determinant() > 0.0)
+        sigmas = std::sqrt(e.dot(stated.ldlt().solve(e)));
       yaw_error = wrap_angle(c->pose.yaw - p.yaw);
       std::tie(other, other_error) = truth.nearest_other(v.id, c->pose.x, c->pose.y, t);
     }
     if (out != nullptr) {
-      std::fprintf(out, "correction %lld %llu %llu %llu %u %lld %.4f %.4f %.5f %u %.4f %.5f %llu %.4f\n",
+      std::fprintf(out, "correction %lld %llu %llu %llu %u %lld %.4f %.4f %.5f %u %.4f %.5f %llu %.4f %.3f\n",
                    static_cast<long long>(received), static_cast<unsigned long long>(v.id),
                    static_cast<unsigned long long>(c->vehicle_id), static_cast<unsigned long long>(c->rsu_id),
                    c->sequence, static_cast<long long>(c->sweep_time), c->pose.x, c->pose.y, c->pose.yaw,
                    c->quality.points_used, error, yaw_error, static_cast<unsigned long long>(other),
-                   other_error);
+                   other_error, sigmas);
       std::fflush(out);
     }
   }

@@ -190,11 +190,12 @@ logging:
         out = []
         for line in read_text(self.path(name + ".corrections")).splitlines():
             w = line.split()
-            if len(w) == 15 and w[0] == "correction":
+            if len(w) == 16 and w[0] == "correction":
                 out.append({"recv_ns": int(w[1]), "vehicle": int(w[2]), "named": int(w[3]), "rsu": int(w[4]),
                             "seq": int(w[5]), "sweep_ns": int(w[6]), "x": float(w[7]), "y": float(w[8]),
                             "yaw": float(w[9]), "points": int(w[10]), "error": float(w[11]),
-                            "yaw_error": float(w[12]), "other": int(w[13]), "other_error": float(w[14])})
+                            "yaw_error": float(w[12]), "other": int(w[13]), "other_error": float(w[14]),
+                            "sigmas": float(w[15])})
         return out
 
     def events(self, name="fleet"):

@@ -87,8 +87,13 @@ int run_stream(const std::vector<std::string>& args) {
     throw std::runtime_error("stream: LiDAR model " + scenario.lidar.model_name +
                              " has no Velodyne packet format");
   const TimeNs sim_start = vm.count("start") ? from_seconds(vm["start"].as<double>()) : scenario.start_ns;
-  const sim::LidarSimulator simulator(scenario.lidar.model, scenario.lidar.mount, scenario.lidar.noise,
-                                      scenario.scene, 0, scenario.lidar.start_azimuth_deg);
+  // A scenario whose LiDAR moves mid-run (lidar.mount_motion: a bumped pole) rides it on a carrier.
+  const sim::Raycaster raycaster(scenario.scene);
+  const sim::MovingMount moving = sim::moving_mount(scenario.lidar);
+  const bool moves = scenario.lidar.mount_motion.has_value();
+  const sim::LidarSimulator simulator(
+      scenario.lidar.model, moves ? moving.mount_on_carrier : scenario.lidar.mount, scenario.lidar.noise,
+      raycaster, 0, scenario.lidar.start_azimuth_deg, moves ? &moving.carrier : nullptr);
 
   asio::io_context io;
   asio::ip::udp::socket socket(io);
