@@ -77,10 +77,13 @@ class RangeImageBackground {
  private:
   std::size_t cell_index(std::uint16_t ring, float azimuth_rad) const {
     // azimuth_rad is in [0, 2 pi) by contract; anything else is wrapped into a valid bin.
+    // Wrapped only when out of range: a 64-bit division for every point cost 6-15 % of the test's time.
     auto bin = static_cast<std::int64_t>(std::floor(azimuth_rad * bins_per_rad_));
-    bin %= bins_;
-    if (bin < 0) {
-      bin += bins_;
+    if (bin < 0 || bin >= bins_) {
+      bin %= bins_;
+      if (bin < 0) {
+        bin += bins_;
+      }
     }
     return static_cast<std::size_t>(ring) * static_cast<std::size_t>(bins_) + static_cast<std::size_t>(bin);
   }
