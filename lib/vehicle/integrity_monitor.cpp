@@ -202,7 +202,17 @@ bool IntegrityMonitor::compare_with_peers(std::uint64_t rsu_id, SourceRecord& se
 }
 
 void IntegrityMonitor::update_cusum(SourceRecord& s, double nis, TimeNs t) const {
-  const double step = std::min(nis, config_.cusum_cap) - config_.cusum_drift;
+  // A fix counts at most cusum_cap, so that one gross fix alone never excludes a source; right after a
+  // suspicious fix (the one before it, within max_fix_gap) it counts up to cusum_continuing_cap, so that
+  // a gross one completes the exclusion: two bad fixes in a row, even where both covariances were wide
+  // enough to keep the first one's NIS moderate. Not while excluded: there the CUSUM only paces
+  // readmission.
+  const bool after_suspicious = s.state != SourceState::kExcluded && !s.run.empty() &&
+                                t - s.run.back().first <= config_.max_fix_gap &&
+                                s.run.back().second > config_.suspicious_fix_chi2;
+  const double cap =
+      after_suspicious ? std::max(config_.cusum_cap, config_.cusum_continuing_cap) : config_.cusum_cap;
+  const double step = std::min(nis, cap) - config_.cusum_drift;
   if (s.cusum <= 0.0 && step > 0.0) {
     s.excursion_start = t;
   }

@@ -501,6 +501,76 @@ TEST(IntegrityMonitor, AnAdmittedRsuVouchesForANewOne) {
   EXPECT_GT(both.fixes.size(), 0U);
 }
 
+// Two gross fixes in a row exclude a source even where both covariances are wide: the LiDAR at 5 m (the
+// fault table) sent fixes 1.5 m and 3.6 m off along the road, 0.2 s apart, claiming 0.34 m there while
+// the own estimate was degraded (0.32 m along, 0.26 m across). The test computes each fix's NIS itself
+// (3 dof, diagonal: the residual over both variances): the first stays within the per-fix gate, the
+// second is far beyond it. One gross fix alone, or after a fix only mildly off, still costs the RSU
+// nothing.
+TEST(IntegrityMonitor, TwoGrossFixesInARowExcludeEvenWithWideCovariances) {
+  const IntegrityConfig config;
+  const double own_along = 0.32, own_across = 0.26, own_yaw = 0.02;
+  const double fix_along = 0.34, fix_across = 0.15, fix_yaw = 0.02;
+  const auto expected_nis = [&](double along_m) {
+    return along_m * along_m / (own_along * own_along + fix_along * fix_along);
+  };
+  const auto run = [&](const std::vector<double>& offsets_along_m) {
+    IntegrityMonitor monitor(config);
+    std::vector<FixCheck> checks;
+    for (std::size_t k = 0; k < offsets_along_m.size(); ++k) {
+      const TimeNs t = kStart + static_cast<TimeNs>(k) * 2 * kStep;  // 0.2 s apart, as measured
+      fusion::StateEstimate own;
+      own.time = t;
+      own.state(fusion::kX) = truth_at(t).x();
+      own.state(fusion::kY) = truth_at(t).y();
+      own.covariance.topLeftCorner<3, 3>() =
+          Eigen::Vector3d(own_along * own_along, own_across * own_across, own_yaw * own_yaw).asDiagonal();
+      v2i::Correction fix;
+      fix.rsu_id = 1;
+      fix.sweep_time = t;
+      fix.pose = {truth_at(t).x() + offsets_along_m[k], truth_at(t).y(), 0.0};
+      fix.pose_covariance =
+          Eigen::Vector3d(fix_along * fix_along, fix_across * fix_across, fix_yaw * fix_yaw).asDiagonal();
+      checks.push_back(monitor.check(fix, own, OwnEstimate::kDegraded, Eigen::Vector2d::Zero()));
+      EXPECT_NEAR(checks.back().nis, expected_nis(offsets_along_m[k]), 1e-9) << k;
+    }
+    return checks;
+  };
+  const auto excluded_at = [](const std::vector<FixCheck>& checks) {
+    for (std::size_t k = 0; k < checks.size(); ++k) {
+      if (checks[k].excluded_now)
+        return static_cast<int>(k);
+    }
+    return -1;
+  };
+  const std::vector<double> honest(6, 0.0);  // admitted after five consistent fixes
+  auto sequence = [&](std::vector<double> tail) {
+    std::vector<double> all = honest;
+    all.insert(all.end(), tail.begin(), tail.end());
+    all.insert(all.end(), 4, 0.0);
+    return all;
+  };
+  // The measured pair: its first fix within the per-fix gate, so the fused filter's own gate (not the
+  // monitor) refused it; the second far beyond; with each counted at most cusum_cap, short of the
+  // threshold.
+  ASSERT_LT(expected_nis(1.5), config.fix_gate_chi2);
+  ASSERT_GT(expected_nis(1.5), config.suspicious_fix_chi2);
+  ASSERT_GT(expected_nis(3.6), config.fix_gate_chi2);
+  ASSERT_LT(expected_nis(1.5) - config.cusum_drift + config.cusum_cap - config.cusum_drift,
+            config.cusum_threshold);
+  const auto pair = run(sequence({1.5, 3.6}));
+  EXPECT_EQ(excluded_at(pair), 7);  // at the second of the two
+  EXPECT_EQ(pair[6].verdict, FixVerdict::kUseOwnFailed);
+  EXPECT_EQ(pair[7].verdict, FixVerdict::kExcluded);
+  // One gross fix alone (an L-shape failure), or after one only mildly off (0.9 m: NIS below the
+  // 97.5 % quantile), is refused without excluding the RSU.
+  ASSERT_LT(expected_nis(0.9), config.suspicious_fix_chi2);
+  EXPECT_EQ(excluded_at(run(sequence({3.6}))), -1);
+  EXPECT_EQ(excluded_at(run(sequence({0.9, 3.6}))), -1);
+  // Two fixes both 1.5 m off are suspicious, not gross: not excluded by this pair.
+  EXPECT_EQ(excluded_at(run(sequence({1.5, 1.5}))), -1);
+}
+
 // A flood of RSU ids (each a new source) keeps at most max_sources records.
 TEST(IntegrityMonitor, RemembersAtMostMaxSources) {
   IntegrityConfig config;
