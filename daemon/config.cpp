@@ -282,29 +282,39 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
 
 void read_v2i(const YamlField& f, DaemonConfig& c) {
   f.expect_map(
-      {"listen_address", "port", "require_reply_to_source_address", "advertisement", "receive_buffer_bytes"});
+      {"listen_address", "port", "reply_to", "refusal_notices", "advertisement", "receive_buffer_bytes"});
   if (f.has("listen_address"))
     c.v2i_listen_address = address_of(f.child("listen_address"));
   if (f.has("port"))
     c.v2i_port = port_of(f.child("port"));
   if (f.has("receive_buffer_bytes"))
     c.v2i_receive_buffer_bytes = receive_buffer_of(f.child("receive_buffer_bytes"));
-  if (f.has("require_reply_to_source_address")) {
-    const YamlField b = f.child("require_reply_to_source_address");
-    const std::string v = b.text();
-    if (v != "true" && v != "false")
-      b.fail("expected true or false");
-    c.core.require_reply_to_source_address = v == "true";
+  if (f.has("reply_to")) {
+    const YamlField r = f.child("reply_to");
+    const std::string v = r.text();
+    if (v == "match_address_and_port")
+      c.core.reply_to = core::ReplyToPolicy::kMatchAddressAndPort;
+    else if (v == "match_address")
+      c.core.reply_to = core::ReplyToPolicy::kMatchAddress;
+    else if (v == "use_source")
+      c.core.reply_to = core::ReplyToPolicy::kUseSource;
+    else
+      r.fail("expected match_address_and_port, match_address or use_source, got \"" + v + "\"");
+  }
+  if (f.has("refusal_notices")) {
+    const YamlField n = f.child("refusal_notices");
+    n.expect_map({"enabled", "per_vehicle_interval_s", "rate_per_s"});
+    core::RefusalNoticeConfig& r = c.core.refusal_notices;
+    if (n.has("enabled"))
+      r.enabled = bool_of(n.child("enabled"));
+    r.per_vehicle_interval_s = n.positive_or("per_vehicle_interval_s", r.per_vehicle_interval_s);
+    r.rate_per_s = n.positive_or("rate_per_s", r.rate_per_s);
   }
   if (f.has("advertisement")) {
     const YamlField a = f.child("advertisement");
     a.expect_map({"enabled", "address", "port", "interval_s"});
-    if (a.has("enabled")) {
-      const std::string v = a.child("enabled").text();
-      if (v != "true" && v != "false")
-        a.child("enabled").fail("expected true or false");
-      c.advertisement.enabled = v == "true";
-    }
+    if (a.has("enabled"))
+      c.advertisement.enabled = bool_of(a.child("enabled"));
     if (a.has("address"))
       c.advertisement.address = address_of(a.child("address"));
     if (a.has("port"))

@@ -496,6 +496,16 @@ void RsuDaemon::on_v2i_datagram(std::size_t bytes) {
   const std::span<const std::uint8_t> datagram(v2i_buffer_.data(), bytes);
   const TimeNs now = clock_now();
   const core::DatagramOutcome outcome = core_.on_datagram(datagram, source, now);
+  if (!outcome.refusal_notice.empty()) {
+    // Back to where the datagram came from (never to its reply_to: docs/v2i.md).
+    boost::system::error_code ec;
+    v2i_socket_.send_to(asio::buffer(outcome.refusal_notice), v2i_sender_, 0, ec);
+    if (ec) {
+      ++refusal_sends_failed_;
+      bad_input_.report("refusal_send",
+                        "to " + source.address + ":" + std::to_string(source.port) + ": " + ec.message());
+    }
+  }
   if (outcome.accepted()) {
     if (outcome.upsert == v2i::UpsertOutcome::kAdded) {
       spdlog::info("vehicle {} registered from {}:{}", outcome.vehicle_id, source.address, source.port);
@@ -663,6 +673,7 @@ CounterList RsuDaemon::stats() {
   out.add("state", "background_saved", state_counts_.background_saved);
   out.add("state", "background_save_failed", state_counts_.background_save_failed);
   out.add_level("state", "mount_from_calibration", config_.mount_source != "lidar.mount" ? 1 : 0);
+  out.add("", "refusal_sends_failed", refusal_sends_failed_);
   core_.report(out);
   // Datagrams the kernel dropped before rsud could read them (its socket buffer was full): what was
   // sent is what rsud counted plus these.

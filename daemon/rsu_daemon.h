@@ -168,6 +168,7 @@ class RsuDaemon {
   std::uint64_t corrections_sent_ = 0;
   std::uint64_t correction_sends_failed_ = 0;
   std::uint64_t lidar_packets_rejected_ = 0;
+  std::uint64_t refusal_sends_failed_ = 0;
   // The metrics' histograms (seconds). Bounds: a packet takes microseconds, a batch that fits vehicles
   // milliseconds; a correction leaves well within a rotation (0.1 s) of its sweep; a sensor on the
   // host's clock is behind by its transit (sub-millisecond), one that is not by anything.

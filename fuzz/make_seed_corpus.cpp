@@ -95,6 +95,14 @@ void write_v2i(const fs::path& dir) {
   ad.correction_port = 4500;
   ad.announcement_port = 4500;
   write_file(dir / "advertisement", rsu_signer.encode(ad, kNow));
+
+  rsu::v2i::AnnouncementRefusal refusal;
+  refusal.rsu_id = 3;
+  refusal.vehicle_id = 7;
+  refusal.announcement_sequence = 1;
+  refusal.reason = rsu::v2i::RefusalReason::kReplyToMismatch;
+  refusal.detail = "port";
+  write_file(dir / "refusal", rsu_signer.encode(refusal, kNow));
 }
 
 // rsu_datagram framing: { u8 source, u16 ms since the previous, u16 length, bytes }.

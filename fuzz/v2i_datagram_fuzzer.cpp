@@ -64,6 +64,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check_reencodes(*c, decoded.body.index());
   } else if (const auto* r = std::get_if<RsuAdvertisement>(&decoded.body)) {
     check_reencodes(*r, decoded.body.index());
+  } else if (const auto* f = std::get_if<AnnouncementRefusal>(&decoded.body)) {
+    check_reencodes(*f, decoded.body.index());
   }
   return 0;
 }

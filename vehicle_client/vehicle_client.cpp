@@ -270,7 +270,12 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
       } else {
         ++stats_.datagrams_received;
         v2i::Correction correction;
-        if (filter_.check({buffer_.data(), bytes}, clock_(), correction) == CorrectionVerdict::kAccepted) {
+        const CorrectionVerdict verdict = filter_.check({buffer_.data(), bytes}, clock_(), correction);
+        if (verdict == CorrectionVerdict::kRefusal) {
+          stats_.refusals.add(filter_.last_refusal().reason);
+          stats_.last_refusal = ReceivedRefusal{filter_.last_refusal(), clock_(), edge::to_text(sender_)};
+        }
+        if (verdict == CorrectionVerdict::kAccepted) {
           received = ReceivedCorrection{std::move(correction), clock_(), edge::to_text(sender_)};
           pending_.push_back(*received);
           while (pending_.size() > std::max<std::size_t>(config_.max_pending_corrections, 1)) {

@@ -38,6 +38,14 @@ struct ReceivedCorrection {
   std::string sender;        // "ADDR:PORT" of the datagram's source
 };
 
+// An RSU's notice that it refused one of this vehicle's announcements (proto/v2i.proto
+// AnnouncementRefusal), authenticated like a correction.
+struct ReceivedRefusal {
+  v2i::AnnouncementRefusal refusal;
+  TimeNs received_time = 0;  // client clock
+  std::string sender;        // "ADDR:PORT" of the datagram's source
+};
+
 struct VehicleClientStats {
   std::uint64_t announcements_sent = 0;  // datagrams, one per RSU per announcement
   std::uint64_t keepalive_announcements = 0;
@@ -45,13 +53,17 @@ struct VehicleClientStats {
   std::uint64_t announcements_refused = 0;  // announce() refused the state (see announce())
   std::uint64_t datagrams_received = 0;
   std::uint64_t receive_errors = 0;
-  EnumCounter<CorrectionVerdict> corrections;    // accepted, and rejected by reason
+  EnumCounter<CorrectionVerdict> corrections;  // accepted, and rejected by reason (and refusal notices)
+  EnumCounter<v2i::RefusalReason> refusals;    // refusal notices received, by the RSU's reason
+  std::optional<ReceivedRefusal> last_refusal;
   EnumCounter<v2i::AuthVerdict> authentication;  // every datagram's signature/replay verdict
   std::uint64_t sequence_restarts = 0;           // an RSU restarted (CorrectionFilter)
   std::uint64_t dropped_unpolled = 0;            // over max_pending_corrections
 
   std::uint64_t accepted() const { return corrections.count(CorrectionVerdict::kAccepted); }
-  std::uint64_t rejected() const { return corrections.total() - accepted(); }
+  std::uint64_t rejected() const {
+    return corrections.total() - accepted() - corrections.count(CorrectionVerdict::kRefusal);
+  }
 };
 
 class VehicleClient {

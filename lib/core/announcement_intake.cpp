@@ -11,16 +11,35 @@ namespace rsu::core {
 
 AnnouncementIntake::AnnouncementIntake(const RsuCoreConfig& config)
     : rsu_id_(config.rsu_id),
-      require_reply_to_source_address_(config.require_reply_to_source_address),
+      reply_to_policy_(config.reply_to),
       flood_limiter_(config.datagram_flood),
       peer_flood_limiter_(config.peers.flood),
       authenticator_(config.security, config.trust_list),
       validator_(config.announcement_limits),
       registry_(config.registry) {}
 
+ReplyToCheck AnnouncementIntake::check_reply_to(v2i::VehicleAnnouncement& a,
+                                                const SourceEndpoint& sender) const {
+  const bool same_address = v2i::same_host(a.reply_to.address, sender.address);
+  const bool same_port = a.reply_to.port == sender.port;
+  if (same_address && same_port)
+    return ReplyToCheck::kMatches;
+  switch (reply_to_policy_) {
+    case ReplyToPolicy::kMatchAddressAndPort:
+      return same_address ? ReplyToCheck::kPort : ReplyToCheck::kAddress;
+    case ReplyToPolicy::kMatchAddress:
+      return same_address ? ReplyToCheck::kMatches : ReplyToCheck::kAddress;
+    case ReplyToPolicy::kUseSource:
+      break;
+  }
+  // Behind NAT the vehicle cannot know the address and port the RSU sees; replies to those reach it.
+  a.reply_to = {sender.address, sender.port};
+  return ReplyToCheck::kReplaced;
+}
+
 std::optional<v2i::VehicleAnnouncement> AnnouncementIntake::screen(std::span<const std::uint8_t> bytes,
-                                                                   const std::string& sender_address,
-                                                                   TimeNs now, DatagramOutcome& out) {
+                                                                   const SourceEndpoint& sender, TimeNs now,
+                                                                   DatagramOutcome& out) {
   v2i::AuthenticatedMessage authenticated = authenticator_.authenticate(bytes, now);
   out.auth = authenticated.verdict;
   if (authenticated.verdict == v2i::AuthVerdict::kMalformed) {
@@ -39,12 +58,16 @@ std::optional<v2i::VehicleAnnouncement> AnnouncementIntake::screen(std::span<con
     return std::nullopt;
   }
   out.vehicle_id = announcement->vehicle_id;
+  out.announcement_sequence = announcement->sequence;
   out.validation = validator_.check(*announcement, now);
   if (out.validation != v2i::AnnouncementReason::kValid) {
     out.stage = DatagramStage::kValidation;
     return std::nullopt;
   }
-  if (require_reply_to_source_address_ && !v2i::same_host(announcement->reply_to.address, sender_address)) {
+  out.reply_to = check_reply_to(*announcement, sender);
+  if (out.reply_to != ReplyToCheck::kMatches)
+    reply_to_counts_.add(out.reply_to);
+  if (out.reply_to == ReplyToCheck::kAddress || out.reply_to == ReplyToCheck::kPort) {
     out.stage = DatagramStage::kReplyToMismatch;
     return std::nullopt;
   }
@@ -64,7 +87,7 @@ DatagramOutcome AnnouncementIntake::on_datagram(std::span<const std::uint8_t> by
   DatagramOutcome out;
   if (flood_limiter_.admit(source.address, now) != v2i::RateDecision::kAllowed) {
     out.stage = DatagramStage::kFloodLimited;
-  } else if (const auto announcement = screen(bytes, source.address, now, out)) {
+  } else if (const auto announcement = screen(bytes, source, now, out)) {
     out = register_announcement(*announcement, source.address, now, out);
   }
   datagram_stages_.add(out.stage);
@@ -85,7 +108,7 @@ DatagramOutcome AnnouncementIntake::on_peer_announcement(std::span<const std::ui
       v2i::RateDecision::kAllowed) {
     return finish(DatagramStage::kFloodLimited);
   }
-  const auto announcement = screen(datagram, from.sender.address, now, out);
+  const auto announcement = screen(datagram, from.sender, now, out);
   if (out.stage == DatagramStage::kAuthentication && out.auth == v2i::AuthVerdict::kDuplicate) {
     // A signed datagram this RSU verified already: the vehicle announced here too, or another peer
     // shared it first. Not news, not an attack (the bytes are the vehicle's own, signature and all).
@@ -130,6 +153,7 @@ AnnouncementIntake AnnouncementIntake::reloaded(const RsuCoreConfig& next, TimeN
   fresh.datagram_stages_ = datagram_stages_;
   fresh.peer_stages_ = peer_stages_;
   fresh.decode_counts_ = decode_counts_;
+  fresh.reply_to_counts_ = reply_to_counts_;
   return fresh;
 }
 
@@ -150,7 +174,8 @@ void AnnouncementIntake::report(CounterList& out) const {
   // 1 while running without signatures: local development only (the daemon also warns).
   out.add_level("security", "insecure_mode", authenticator_.mode() == v2i::SecurityMode::kInsecure ? 1 : 0);
   out.add_all("validation", validator_.counts(),
-              v2i::AnnouncementReason::kUnsupportedVersion);  // after kValid
+              v2i::AnnouncementReason::kUnsupportedVersion);          // after kValid
+  out.add_all("reply_to", reply_to_counts_, ReplyToCheck::kAddress);  // kMatches is no event
   out.add_all("registry", registry_.stats().outcomes);
   out.add("registry", "expired", registry_.stats().expired);
   out.add_level("registry", "vehicles", registry_.size());

@@ -63,20 +63,22 @@ class AnnouncementIntake {
   const v2i::AnnouncementValidator& validator() const { return validator_; }
   const v2i::MessageAuthenticator& authenticator() const { return authenticator_; }
 
-  // datagram.*, peer.*, decode.*, auth.*, security.insecure_mode, validation.*, registry.*
+  // datagram.*, peer.*, decode.*, auth.*, security.insecure_mode, validation.*, reply_to.*, registry.*
   void report(CounterList& out) const;
 
  private:
   // Authentication, decoding, validation and the reply_to check, whatever carried the datagram: the
   // announcement, or empty with `out` saying which stage refused it.
   std::optional<v2i::VehicleAnnouncement> screen(std::span<const std::uint8_t> bytes,
-                                                 const std::string& sender_address, TimeNs now,
+                                                 const SourceEndpoint& sender, TimeNs now,
                                                  DatagramOutcome& out);
+  // reply_to against the sender under the policy (RsuCoreConfig::reply_to); kReplaced rewrites it.
+  ReplyToCheck check_reply_to(v2i::VehicleAnnouncement& announcement, const SourceEndpoint& sender) const;
   DatagramOutcome register_announcement(const v2i::VehicleAnnouncement& a, const std::string& source,
                                         TimeNs now, DatagramOutcome out);
 
   std::uint64_t rsu_id_;
-  bool require_reply_to_source_address_;
+  ReplyToPolicy reply_to_policy_;
   v2i::SourceRateLimiter flood_limiter_;
   v2i::SourceRateLimiter peer_flood_limiter_;  // keyed by origin RSU
   v2i::MessageAuthenticator authenticator_;
@@ -85,6 +87,7 @@ class AnnouncementIntake {
   EnumCounter<DatagramStage> datagram_stages_;
   EnumCounter<DatagramStage> peer_stages_;
   EnumCounter<v2i::DecodeStatus> decode_counts_;
+  EnumCounter<ReplyToCheck> reply_to_counts_;
 };
 
 }  // namespace rsu::core

@@ -64,6 +64,10 @@ class CorrectionBuilder {
   bool corrected_this_rotation(std::uint64_t vehicle_id, TimeNs batch_time, TimeNs rotation_period_ns) const;
   // The encoded RsuAdvertisement, signed in signed mode (empty if encoding failed).
   std::vector<std::uint8_t> advertisement(TimeNs now);
+  // The encoded refusal notice, signed in signed mode (empty if encoding failed).
+  std::vector<std::uint8_t> refusal(const v2i::AnnouncementRefusal& notice, TimeNs now) {
+    return signer_.encode(notice, now);
+  }
 
   // Forgets the channels of vehicles the registry no longer holds.
   void forget_unregistered(const v2i::VehicleRegistry& registry, TimeNs now);

@@ -30,6 +30,22 @@ const char* to_string(DatagramStage stage) {
   return "unknown";
 }
 
+const char* to_string(ReplyToCheck check) {
+  switch (check) {
+    case ReplyToCheck::kMatches:
+      return "matches";
+    case ReplyToCheck::kAddress:
+      return "address";
+    case ReplyToCheck::kPort:
+      return "port";
+    case ReplyToCheck::kReplaced:
+      return "replaced";
+    case ReplyToCheck::kCount:
+      break;
+  }
+  return "unknown";
+}
+
 std::string DatagramOutcome::reason() const {
   std::string out = to_string(stage);
   switch (stage) {
@@ -39,6 +55,8 @@ std::string DatagramOutcome::reason() const {
       return out + ":" + v2i::to_string(auth);
     case DatagramStage::kValidation:
       return out + ":" + v2i::to_string(validation);
+    case DatagramStage::kReplyToMismatch:
+      return out + ":" + to_string(reply_to);
     case DatagramStage::kAccepted:
     case DatagramStage::kRegistry:
       return out + ":" + v2i::to_string(upsert);

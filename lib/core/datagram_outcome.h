@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "v2i/announcement_validation.h"
 #include "v2i/message_authenticator.h"
@@ -21,7 +22,7 @@ enum class DatagramStage : std::uint8_t {
   kAuthentication,   // unsigned, unknown signer, bad signature, not its to sign, stale, replayed (`auth`)
   kNotAnnouncement,  // a well-formed correction or advertisement sent to the announcement port
   kValidation,       // an announcement with implausible content (see `validation`)
-  kReplyToMismatch,  // reply_to is not the sender's address (RsuCoreConfig::require_reply_to_source_address)
+  kReplyToMismatch,  // reply_to is not the sender's address and port (RsuCoreConfig::reply_to, `reply_to`)
   kRegistry,         // refused by the registry: rate limit, stale sequence, full (see `upsert`)
   // Only for announcements shared by other RSUs (RsuCore::on_peer_announcement):
   kFromSelf,    // carries this RSU's own id: its own share echoed back, or another RSU with the same id
@@ -31,6 +32,17 @@ enum class DatagramStage : std::uint8_t {
 
 const char* to_string(DatagramStage stage);
 
+// reply_to against the datagram's source (RsuCoreConfig::reply_to), counted as reply_to.<detail>.
+enum class ReplyToCheck : std::uint8_t {
+  kMatches,   // the source's address and port, or not checked that far (a refusal before it)
+  kAddress,   // refused: another address than the source's
+  kPort,      // refused: the source's address, another port
+  kReplaced,  // ReplyToPolicy::kUseSource: it differed, the source's endpoint is used instead
+  kCount,
+};
+
+const char* to_string(ReplyToCheck check);
+
 struct DatagramOutcome {
   DatagramStage stage = DatagramStage::kDecode;
   v2i::DecodeStatus decode = v2i::DecodeStatus::kOk;
@@ -38,10 +50,16 @@ struct DatagramOutcome {
   v2i::AnnouncementReason validation = v2i::AnnouncementReason::kValid;
   v2i::UpsertOutcome upsert = v2i::UpsertOutcome::kCount;  // kCount: the registry was not reached
   std::uint64_t vehicle_id = 0;                            // when decoded as an announcement
+  std::uint32_t announcement_sequence = 0;                 // when decoded as an announcement
+  ReplyToCheck reply_to = ReplyToCheck::kMatches;
+  // RsuCore::on_datagram: the encoded AnnouncementRefusal to send to the datagram's source (signed in
+  // signed mode), when the refusal deserves one and the limits allow it (rsu/refusal_notices.h).
+  std::vector<std::uint8_t> refusal_notice;
 
   bool accepted() const { return stage == DatagramStage::kAccepted; }
   // "stage" or "stage:detail", e.g. "decode:parse_error", "auth:bad_signature",
-  // "validation:length_out_of_range": a stable key for counting and rate-limited logging.
+  // "validation:length_out_of_range", "reply_to_mismatch:port": a stable key for counting and
+  // rate-limited logging.
   std::string reason() const;
 };
 

@@ -75,7 +75,16 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       gatherer_(config.gathering, config.association, mount_.xy()),
       fixer_(config, mount_),
       corrections_(config),
+      refusals_(config.refusal_notices),
       monitor_assembler_(assembler_config(packets_.decoder().geometry())) {}
+
+DatagramOutcome RsuCore::on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source,
+                                     TimeNs now) {
+  DatagramOutcome out = announcements_.on_datagram(bytes, source, now);
+  if (const auto notice = refusals_.consider(out, config_.rsu_id, now))
+    out.refusal_notice = corrections_.refusal(*notice, now);
+  return out;
+}
 
 // The map of the daemon: one batch of the sweep, through the paper's steps (docs/architecture.md).
 LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Release release, TimeNs now) {
@@ -309,6 +318,7 @@ void RsuCore::load_background(const std::vector<std::vector<lidar::LidarPoint>>&
 std::size_t RsuCore::expire(TimeNs now) {
   const std::size_t n = announcements_.expire(now);
   corrections_.forget_unregistered(announcements_.registry(), now);
+  refusals_.prune(now);
   return n;
 }
 
@@ -329,12 +339,14 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
   fresh.packets_ = std::move(packets_).reloaded(next);
   fresh.sweep_.follow(fresh.packets_.decoder().geometry());
   fresh.corrections_ = std::move(corrections_).reloaded(next);
+  fresh.refusals_ = refusals_.reloaded(next.refusal_notices);
   *this = std::move(fresh);
   return summary;
 }
 
 void RsuCore::report(CounterList& out) const {
   announcements_.report(out);
+  refusals_.report(out);
   packets_.report(out);
   core::report(packets_.order_stats(), clusterer_.stats(), lidar_stats_, out);
   packets_.report_clock(out);

@@ -31,6 +31,7 @@
 #include "core/lidar_mount.h"
 #include "core/lidar_stats.h"
 #include "core/packet_intake.h"
+#include "core/refusal_notices.h"
 #include "core/rsu_core_config.h"
 #include "core/sweep_position.h"
 #include "core/vehicle_gatherer.h"
@@ -68,12 +69,12 @@ class RsuCore {
   // One datagram from the announcement port, received at `now`. Never throws on content. In signed mode
   // it is authenticated first (v2i/message_authenticator.h): dropped and counted unless a trusted
   // vehicle key signed it for that vehicle id, fresh and not replayed.
-  DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now) {
-    return announcements_.on_datagram(bytes, source, now);
-  }
+  // A refused announcement that passed authentication may get a refusal notice for its source
+  // (DatagramOutcome::refusal_notice; rsu/refusal_notices.h).
+  DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now);
   // An announcement another RSU accepted from a vehicle and shared on the data bus, received at `now`.
   // It takes the datagram path (authentication: the vehicle's own signature over its original bytes,
-  // fresh, not replayed; decode, validation, reply_to against the vehicle's address, registry),
+  // fresh, not replayed; decode, validation, reply_to against the vehicle as that RSU saw it, registry),
   // is rate-limited per origin RSU, and is skipped when the registry already holds that announcement
   // or a newer one (the vehicle also announced here, or another peer shared it first). The caller must
   // not share it again: only what on_datagram() accepted is shared, so nothing loops. Never throws.
@@ -184,6 +185,7 @@ class RsuCore {
   VehicleGatherer gatherer_;
   GatheredVehicleFixer fixer_;
   CorrectionBuilder corrections_;
+  RefusalNotices refusals_;
   LidarStats lidar_stats_;
 
   std::vector<lidar::LidarPoint> ordered_scratch_;  // a packet released by the reorder stage

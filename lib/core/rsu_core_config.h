@@ -68,6 +68,21 @@ enum class TimeSource {
   kHostReceive,  // arrival on the host clock minus the packet's known duration (an unsynchronised sensor)
 };
 
+// What reply_to must be (docs/v2i.md): the datagram's source address and port (the default), its
+// address only (vehicles that receive on another port than they send from), or ignored with the
+// corrections sent to the datagram's source address and port (vehicles behind NAT, whose own idea of
+// their address is not what the RSU sees).
+enum class ReplyToPolicy : std::uint8_t { kMatchAddressAndPort, kMatchAddress, kUseSource };
+
+// Refusal notices (rsu/refusal_notices.h): at most one per vehicle per interval, and rate_per_s in all.
+struct RefusalNoticeConfig {
+  bool enabled = true;
+  double per_vehicle_interval_s = 1.0;
+  double rate_per_s = 50.0;
+
+  bool operator==(const RefusalNoticeConfig&) const = default;
+};
+
 struct RsuCoreConfig {
   std::uint64_t rsu_id = 1;
 
@@ -115,9 +130,12 @@ struct RsuCoreConfig {
   // A cheap per-source-host limit applied to every datagram BEFORE decoding, so a flood of garbage
   // costs one table lookup per datagram. Looser than the registry's per-source announcement limit.
   v2i::RateLimitConfig datagram_flood{.bucket = {.rate_per_s = 200.0, .burst = 100.0}, .max_sources = 4096};
-  // Corrections go only to the address the announcement came from: otherwise anyone could aim the
-  // RSU's corrections at a third party (a reflection attack).
-  bool require_reply_to_source_address = true;
+  // Where corrections go. By default only to the address and port the announcement came from:
+  // otherwise anyone could aim the RSU's corrections at a third party (a reflection attack), or a
+  // vehicle announcing from one port would miss corrections sent to another.
+  ReplyToPolicy reply_to = ReplyToPolicy::kMatchAddressAndPort;
+  // Telling a vehicle why its announcement was refused (rsu/refusal_notices.h).
+  RefusalNoticeConfig refusal_notices;
   PeerConfig peers;
 
   // Message security (proto/v2i.proto): signed mode verifies every announcement against the trust list

@@ -35,6 +35,8 @@ AuthVerdict check_rights(const security::TrustEntry& entry, const MessageBody& b
     rsu_id = c->rsu_id;
   } else if (const auto* r = std::get_if<RsuAdvertisement>(&body)) {
     rsu_id = r->rsu_id;
+  } else if (const auto* f = std::get_if<AnnouncementRefusal>(&body)) {
+    rsu_id = f->rsu_id;
   }
   if (entry.role != security::SignerRole::kRsu)
     return AuthVerdict::kWrongRole;

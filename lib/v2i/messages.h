@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -75,6 +76,43 @@ struct RsuAdvertisement {
   double coverage_radius_m = 0.0;
   std::uint32_t correction_port = 0;
   std::uint32_t announcement_port = 0;
+};
+
+// Why an RSU refused an announcement (proto/v2i.proto RefusalReason).
+enum class RefusalReason : std::uint8_t {
+  kUnspecified = 0,
+  kValidation = 1,       // detail: the validation reason (announcement_validation.h)
+  kReplyToMismatch = 2,  // detail: "address" or "port"
+  kRegistry = 3,         // detail: the registry's outcome (vehicle_registry.h)
+  kCount,
+};
+
+inline const char* to_string(RefusalReason r) {
+  switch (r) {
+    case RefusalReason::kValidation:
+      return "validation";
+    case RefusalReason::kReplyToMismatch:
+      return "reply_to_mismatch";
+    case RefusalReason::kRegistry:
+      return "registry";
+    case RefusalReason::kUnspecified:
+    case RefusalReason::kCount:
+      break;
+  }
+  return "unspecified";
+}
+
+// At most this many bytes of printable ASCII in AnnouncementRefusal::detail.
+inline constexpr std::size_t kMaxRefusalDetailBytes = 32;
+
+// RSU -> vehicle: an announcement the RSU refused, and why.
+struct AnnouncementRefusal {
+  std::uint32_t protocol_version = kProtocolVersion;
+  std::uint64_t rsu_id = 0;
+  std::uint64_t vehicle_id = 0;
+  std::uint32_t announcement_sequence = 0;
+  RefusalReason reason = RefusalReason::kUnspecified;
+  std::string detail;
 };
 
 }  // namespace rsu::v2i

@@ -113,6 +113,25 @@ void read_advertisement(const pb::RsuAdvertisement& in, RsuAdvertisement& out) {
   out.announcement_port = in.announcement_port();
 }
 
+// A detail the vehicle may print: printable ASCII, short (proto/v2i.proto AnnouncementRefusal).
+DecodeStatus read_refusal(const pb::AnnouncementRefusal& in, AnnouncementRefusal& out) {
+  out.rsu_id = in.rsu_id();
+  out.vehicle_id = in.vehicle_id();
+  out.announcement_sequence = in.announcement_sequence();
+  const int reason = static_cast<int>(in.reason());
+  out.reason = reason > 0 && reason < static_cast<int>(RefusalReason::kCount)
+                   ? static_cast<RefusalReason>(reason)
+                   : RefusalReason::kUnspecified;
+  if (in.detail().size() > kMaxRefusalDetailBytes)
+    return DecodeStatus::kParseError;
+  for (const char c : in.detail()) {
+    if (c < 0x20 || c > 0x7E)
+      return DecodeStatus::kParseError;
+  }
+  out.detail = in.detail();
+  return DecodeStatus::kOk;
+}
+
 void write_announcement(const VehicleAnnouncement& a, pb::VehicleAnnouncement& out) {
   out.set_vehicle_id(a.vehicle_id);
   out.set_sequence(a.sequence);
@@ -162,6 +181,14 @@ void write_advertisement(const RsuAdvertisement& r, pb::RsuAdvertisement& out) {
   out.set_coverage_radius_m(r.coverage_radius_m);
   out.set_correction_port(r.correction_port);
   out.set_announcement_port(r.announcement_port);
+}
+
+void write_refusal(const AnnouncementRefusal& r, pb::AnnouncementRefusal& out) {
+  out.set_rsu_id(r.rsu_id);
+  out.set_vehicle_id(r.vehicle_id);
+  out.set_announcement_sequence(r.announcement_sequence);
+  out.set_reason(static_cast<pb::RefusalReason>(r.reason));
+  out.set_detail(r.detail.substr(0, kMaxRefusalDetailBytes));
 }
 
 // Wraps a filled payload in the envelope, signing the payload's serialized bytes as they go out.
@@ -273,6 +300,13 @@ DecodedMessage decode_payload(const Envelope& envelope) {
       out.body = std::move(r);
       break;
     }
+    case pb::V2iPayload::kRefusal: {
+      AnnouncementRefusal r;
+      r.protocol_version = envelope.protocol_version;
+      out.status = read_refusal(message.refusal(), r);
+      out.body = std::move(r);
+      break;
+    }
     default:
       out.status = DecodeStatus::kNoBody;
       break;
@@ -325,6 +359,13 @@ std::vector<std::uint8_t> encode_v2i_message(const RsuAdvertisement& r, const Me
   return seal(payload, r.protocol_version, header, signer);
 }
 
+std::vector<std::uint8_t> encode_v2i_message(const AnnouncementRefusal& r, const MessageHeader& header,
+                                             const security::SigningKey* signer) {
+  pb::V2iPayload payload;
+  write_refusal(r, *payload.mutable_refusal());
+  return seal(payload, r.protocol_version, header, signer);
+}
+
 std::vector<std::uint8_t> encode_v2i_message(const VehicleAnnouncement& a) {
   return encode_v2i_message(a, {a.generation_time, a.sequence}, nullptr);
 }
@@ -334,6 +375,10 @@ std::vector<std::uint8_t> encode_v2i_message(const Correction& c) {
 }
 
 std::vector<std::uint8_t> encode_v2i_message(const RsuAdvertisement& r) {
+  return encode_v2i_message(r, {}, nullptr);
+}
+
+std::vector<std::uint8_t> encode_v2i_message(const AnnouncementRefusal& r) {
   return encode_v2i_message(r, {}, nullptr);
 }
 

@@ -28,6 +28,8 @@ const char* to_string(CorrectionVerdict verdict) {
       return "duplicate";
     case CorrectionVerdict::kStale:
       return "stale";
+    case CorrectionVerdict::kRefusal:
+      return "refusal";
     case CorrectionVerdict::kCount:
       break;
   }
@@ -55,6 +57,12 @@ CorrectionVerdict CorrectionFilter::classify(std::span<const std::uint8_t> datag
   }
   if (!authenticated.accepted()) {
     return CorrectionVerdict::kNotAuthentic;
+  }
+  if (auto* refusal = std::get_if<v2i::AnnouncementRefusal>(&authenticated.message.body)) {
+    if (refusal->vehicle_id != config_.vehicle_id)
+      return CorrectionVerdict::kWrongVehicleId;
+    last_refusal_ = std::move(*refusal);
+    return CorrectionVerdict::kRefusal;
   }
   auto* correction = std::get_if<v2i::Correction>(&authenticated.message.body);
   if (correction == nullptr) {

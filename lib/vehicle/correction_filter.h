@@ -29,6 +29,8 @@ enum class CorrectionVerdict : std::uint8_t {
   kInvalidContent,  // NaN/inf pose, or a covariance that is not symmetric positive definite
   kDuplicate,       // the same RSU sequence and sweep time as the last one accepted from that RSU
   kStale,           // a sweep no newer than the last one accepted from that RSU (reordered or replayed)
+  kRefusal,         // not a correction: an RSU's notice that it refused this vehicle's announcement
+                    // (authenticated like a correction; last_refusal() says why)
   kCount,
 };
 
@@ -54,6 +56,8 @@ class CorrectionFilter {
   CorrectionVerdict check(std::span<const std::uint8_t> datagram, TimeNs now, v2i::Correction& out);
 
   const EnumCounter<CorrectionVerdict>& counts() const { return counts_; }
+  // The refusal notice of the last check() that returned kRefusal.
+  const v2i::AnnouncementRefusal& last_refusal() const { return last_refusal_; }
   // Every datagram's authentication verdict (accepted, or refused by reason).
   const EnumCounter<v2i::AuthVerdict>& authentication_counts() const { return authenticator_.counts(); }
   // Forgets silent RSUs' replay state (call now and then).
@@ -75,6 +79,7 @@ class CorrectionFilter {
   CorrectionFilterConfig config_;
   v2i::MessageAuthenticator authenticator_;
   EnumCounter<CorrectionVerdict> counts_;
+  v2i::AnnouncementRefusal last_refusal_;
   std::map<std::uint64_t, RsuOrder> order_by_rsu_;
   std::uint64_t checks_ = 0;
   std::uint64_t sequence_restarts_ = 0;

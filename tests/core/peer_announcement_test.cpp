@@ -115,7 +115,7 @@ TEST(PeerAnnouncement, BadSharedContentIsRefusedByReason) {
   // reply_to must be the address the origin RSU heard the vehicle from (no reflection through a peer).
   EXPECT_EQ(east.on_peer_announcement(datagram(9, 1, now, "198.51.100.1"), shared_by(kWest, "192.0.2.9"), now)
                 .reason(),
-            "reply_to_mismatch");
+            "reply_to_mismatch:address");
   v2i::Correction not_an_announcement;
   not_an_announcement.vehicle_id = 3;
   EXPECT_EQ(east.on_peer_announcement(v2i::encode_v2i_message(not_an_announcement),

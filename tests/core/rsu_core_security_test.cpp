@@ -187,6 +187,42 @@ TEST(RsuCoreSecurity, CorrectionsAndAdvertisementsVerifyAtTheVehicle) {
   EXPECT_EQ(vehicle.authenticate(core.advertisement(later), later).verdict, v2i::AuthVerdict::kAccepted);
 }
 
+// A genuine announcement refused after authentication (here: reply_to on another port than the one it
+// came from) gets a signed refusal notice that verifies at the vehicle with the RSU's key and says why;
+// nothing refused before authentication gets one (a forged source cannot aim notices at a third party).
+TEST(RsuCoreSecurity, RefusalNoticesOnlyForAuthenticatedAnnouncementsAndSigned) {
+  Keys keys;
+  RsuCore core(signed_config(keys));
+  v2i::MessageSigner car1(keys.car1);
+  v2i::MessageSigner stranger(keys.stranger);
+  const std::string host = "192.0.2.10";
+  auto other_port = announce(1, 1, kNow, {10.0, 2.0, 0.5}, host);
+  other_port.reply_to.port = testing::kVehiclePort + 1;
+  const DatagramOutcome refused = core.on_datagram(car1.encode(other_port, kNow), from(host), kNow);
+  EXPECT_EQ(refused.reason(), "reply_to_mismatch:port");
+  ASSERT_FALSE(refused.refusal_notice.empty());
+
+  v2i::MessageAuthenticator vehicle(v2i::SecurityConfig{}, keys.rsus());
+  const v2i::AuthenticatedMessage m = vehicle.authenticate(refused.refusal_notice, kNow);
+  ASSERT_EQ(m.verdict, v2i::AuthVerdict::kAccepted);
+  const auto& notice = std::get<v2i::AnnouncementRefusal>(m.message.body);
+  EXPECT_EQ(notice.rsu_id, kRsuId);
+  EXPECT_EQ(notice.vehicle_id, 1U);
+  EXPECT_EQ(notice.announcement_sequence, 1U);
+  EXPECT_EQ(notice.reason, v2i::RefusalReason::kReplyToMismatch);
+  EXPECT_EQ(notice.detail, "port");
+
+  // Refused before authentication, a second later (past the per-vehicle interval): no notice.
+  const TimeNs later = kNow + 2 * kNsPerSecond;
+  const auto a = announce(1, 2, later, {10.0, 2.0, 0.5}, host);
+  for (const auto& bytes :
+       {v2i::encode_v2i_message(a), stranger.encode(a, later), car1.encode(a, later - 3 * kNsPerSecond)}) {
+    const DatagramOutcome out = core.on_datagram(bytes, from(host), later);
+    EXPECT_EQ(out.stage, DatagramStage::kAuthentication) << out.reason();
+    EXPECT_TRUE(out.refusal_notice.empty()) << out.reason();
+  }
+}
+
 TEST(RsuCoreSecurity, ReloadKeepsReplayStateAndAppliesTheNewTrustList) {
   Keys keys;
   RsuCoreConfig config = signed_config(keys);

@@ -123,7 +123,7 @@ TEST(RsuCore, BadDatagramsAreCountedByReason) {
       {v2i::encode_v2i_message(nan_size), "validation:non_finite"},
       {v2i::encode_v2i_message(zero), "validation:length_out_of_range"},
       {v2i::encode_v2i_message(huge), "validation:length_out_of_range"},
-      {v2i::encode_v2i_message(spoofed), "reply_to_mismatch"},
+      {v2i::encode_v2i_message(spoofed), "reply_to_mismatch:address"},
       {v2i::encode_v2i_message(not_an_announcement), "not_announcement"},
   };
   for (const Case& c : cases) {
@@ -157,6 +157,81 @@ TEST(RsuCore, BadDatagramsAreCountedByReason) {
     }
   }
   EXPECT_TRUE(found);
+}
+
+// reply_to must be the datagram's source address AND port by default (a correction sent to another
+// port is lost to a vehicle that listens on the one it announced from); match_address lets the port
+// differ; use_source (NAT) takes the source instead. Each case counted as reply_to.<detail>.
+TEST(RsuCore, ReplyToMustBeTheSourcesAddressAndPortUnlessConfigured) {
+  const TimeNs now = 10 * kNsPerSecond;
+  const std::string host = "192.0.2.10";
+  auto other_port = announce(1, 1, now, {10.0, 2.0, 0.5}, host);
+  other_port.reply_to.port = testing::kVehiclePort + 1;
+  auto other_host = announce(2, 1, now, {20.0, 2.0, 0.5}, "10.0.0.5");
+
+  RsuCore strict(test_config());
+  EXPECT_EQ(strict.on_datagram(v2i::encode_v2i_message(other_port), from(host), now).reason(),
+            "reply_to_mismatch:port");
+  EXPECT_EQ(strict.on_datagram(v2i::encode_v2i_message(other_host), from(host), now).reason(),
+            "reply_to_mismatch:address");
+  EXPECT_EQ(counter(strict, "reply_to.port"), 1U);
+  EXPECT_EQ(counter(strict, "reply_to.address"), 1U);
+  EXPECT_EQ(counter(strict, "datagram.reply_to_mismatch"), 2U);
+  EXPECT_EQ(strict.registry().size(), 0U);
+
+  RsuCoreConfig loose = test_config();
+  loose.reply_to = ReplyToPolicy::kMatchAddress;
+  RsuCore address_only(loose);
+  EXPECT_TRUE(address_only.on_datagram(v2i::encode_v2i_message(other_port), from(host), now).accepted());
+  EXPECT_EQ(address_only.on_datagram(v2i::encode_v2i_message(other_host), from(host), now).reason(),
+            "reply_to_mismatch:address");
+
+  RsuCoreConfig nat = test_config();
+  nat.reply_to = ReplyToPolicy::kUseSource;
+  RsuCore behind_nat(nat);
+  const SourceEndpoint mapped{"198.51.100.7", 61000};  // what the NAT made of the vehicle's address
+  EXPECT_TRUE(behind_nat.on_datagram(v2i::encode_v2i_message(other_host), mapped, now).accepted());
+  const v2i::RegisteredVehicle* v = behind_nat.registry().find(2, now);
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(v->announcement.reply_to.address, mapped.address);
+  EXPECT_EQ(v->announcement.reply_to.port, mapped.port);
+  EXPECT_EQ(counter(behind_nat, "reply_to.replaced"), 1U);
+}
+
+// A vehicle whose announcements keep being refused learns why, at most once per vehicle per interval;
+// a retransmission (the same sequence again) gets nothing.
+TEST(RsuCore, RefusalNoticesAreRateLimitedPerVehicle) {
+  const TimeNs now = 10 * kNsPerSecond;
+  const std::string host = "192.0.2.10";
+  RsuCore core(test_config());
+  int notices = 0;
+  for (int i = 0; i < 25; ++i) {  // 10 Hz for 2.5 s
+    const TimeNs t = now + i * 100 * kNsPerMs;
+    auto a = announce(1, static_cast<std::uint32_t>(i + 1), t, {10.0, 2.0, 0.5}, host);
+    a.size.length_m = 40.0;
+    const DatagramOutcome out = core.on_datagram(v2i::encode_v2i_message(a), from(host), t);
+    EXPECT_EQ(out.reason(), "validation:length_out_of_range");
+    if (out.refusal_notice.empty())
+      continue;
+    ++notices;
+    const v2i::DecodedMessage m = v2i::decode_v2i_message(out.refusal_notice);
+    ASSERT_EQ(m.status, v2i::DecodeStatus::kOk);
+    const auto& notice = std::get<v2i::AnnouncementRefusal>(m.body);
+    EXPECT_EQ(notice.reason, v2i::RefusalReason::kValidation);
+    EXPECT_EQ(notice.detail, "length_out_of_range");
+    EXPECT_EQ(notice.announcement_sequence, a.sequence);
+    EXPECT_LT(out.refusal_notice.size(), v2i::encode_v2i_message(a).size());  // never an amplifier
+  }
+  EXPECT_EQ(notices, 3);  // at 0 s, about 1 s and about 2 s (one interval after the last)
+  EXPECT_EQ(counter(core, "refusal.notices"), 3U);
+  EXPECT_EQ(counter(core, "refusal.rate_limited"), 22U);
+
+  // Accepted, then the same sequence again: a retransmission, no notice.
+  const auto good = announce(2, 1, now, {20.0, 2.0, 0.5}, host);
+  EXPECT_TRUE(core.on_datagram(v2i::encode_v2i_message(good), from(host), now).accepted());
+  const DatagramOutcome again = core.on_datagram(v2i::encode_v2i_message(good), from(host), now);
+  EXPECT_EQ(again.reason(), "registry:duplicate_sequence");
+  EXPECT_TRUE(again.refusal_notice.empty());
 }
 
 TEST(RsuCore, LearnsTheBackgroundFromWholeRotationsThenReportsReady) {
@@ -202,7 +277,7 @@ TEST(RsuCore, RegisteredVehicleGetsCorrectionsNearTheTruth) {
     EXPECT_EQ(c.rsu_id, 77U);
     EXPECT_EQ(c.sequence, expected_sequence++);
     EXPECT_EQ(out.destination.address, "192.0.2.10");
-    EXPECT_EQ(out.destination.port, 47001U);
+    EXPECT_EQ(out.destination.port, testing::kVehiclePort);
     EXPECT_LT(distance(c, truth), 0.10) << c.pose.x << ", " << c.pose.y;
     EXPECT_LT(angle_distance(c.pose.yaw, truth.yaw), deg_to_rad(2.0));
     // Swept in the last rotation before it was sent, and sent at most a few ms after.

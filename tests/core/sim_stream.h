@@ -104,6 +104,9 @@ class SimStream {
   std::vector<Received> corrections_;
 };
 
+// The port every test vehicle announces from and receives on (reply_to must be the source's).
+inline constexpr std::uint16_t kVehiclePort = 40000;
+
 // An announcement of a Lexus-sized vehicle (docs/design.md §2) that reports its box centre.
 inline v2i::VehicleAnnouncement announce(std::uint64_t id, std::uint32_t sequence, TimeNs now,
                                          const Pose2& pose, const std::string& address) {
@@ -116,7 +119,7 @@ inline v2i::VehicleAnnouncement announce(std::uint64_t id, std::uint32_t sequenc
   a.pose_covariance = Eigen::Vector3d(0.25, 0.25, 0.01).asDiagonal();
   a.speed_mps = 0.0;
   a.yaw_rate_rps = 0.0;
-  a.reply_to = {address, 47000U + static_cast<std::uint32_t>(id)};
+  a.reply_to = {address, kVehiclePort};
   return a;
 }
 

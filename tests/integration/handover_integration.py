@@ -317,7 +317,7 @@ def bad_peers(run):
     assert s["peer.flood_limited"] > 0, s["peer.flood_limited"]
     assert s["peer.decode"] + s["peer.flood_limited"] <= 3 + 5000, s
     log = read_text(r["log"])
-    for reason in ("peer:decode:parse_error", "peer:reply_to_mismatch", "peer:from_self"):
+    for reason in ("peer:decode:parse_error", "peer:reply_to_mismatch:address", "peer:from_self"):
         n = log.count("bad input (%s)" % reason)
         assert 1 <= n <= 3, "%d log lines for %s (at most 3 one by one)" % (n, reason)
     assert "rsu_id must be unique" in log, log[-3000:]

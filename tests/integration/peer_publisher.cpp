@@ -34,6 +34,9 @@ using Sample = rsu_msgs_msg_dds__PeerAnnouncement_;
   std::exit(2);
 }
 
+// The port the shared vehicles announced from, and named in their reply_to (which must match it).
+constexpr std::uint16_t kVehiclePort = 40000;
+
 std::vector<std::uint8_t> announcement(std::uint64_t vehicle, std::uint32_t sequence,
                                        const std::string& reply) {
   rsu::v2i::VehicleAnnouncement a;
@@ -43,7 +46,7 @@ std::vector<std::uint8_t> announcement(std::uint64_t vehicle, std::uint32_t sequ
   a.size = {4.89, 1.92, 1.70};
   a.pose = {10.0, 2.0, 0.0};
   a.pose_covariance = Eigen::Vector3d(0.25, 0.25, 0.01).asDiagonal();
-  a.reply_to = {reply, 9};
+  a.reply_to = {reply, kVehiclePort};
   return rsu::v2i::encode_v2i_message(a);
 }
 
@@ -52,7 +55,7 @@ void publish(rsu::dds::Writer<Sample>& writer, std::uint64_t origin, const char*
   Sample s{};
   s.origin_rsu_id = origin;
   s.sender_address = const_cast<char*>(sender);
-  s.sender_port = sender != nullptr ? 40000 : 0;
+  s.sender_port = sender != nullptr ? kVehiclePort : 0;
   s.datagram._buffer = datagram.data();
   s.datagram._length = static_cast<std::uint32_t>(datagram.size());
   s.datagram._maximum = s.datagram._length;

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "common/random.h"
@@ -120,6 +121,40 @@ TEST(WireCodec, AdvertisementRoundTrip) {
   EXPECT_EQ(r.coverage_radius_m, 40.0);
   EXPECT_EQ(r.correction_port, 47100U);
   EXPECT_EQ(r.announcement_port, 47000U);
+}
+
+// A refusal notice keeps its fields; a detail the vehicle could not print safely (over 32 bytes, or not
+// printable ASCII) makes the datagram unreadable, and a reason this code does not know is unspecified.
+TEST(WireCodec, RefusalRoundTripAndItsDetailChecked) {
+  AnnouncementRefusal r;
+  r.rsu_id = 3;
+  r.vehicle_id = 7;
+  r.announcement_sequence = 41;
+  r.reason = RefusalReason::kReplyToMismatch;
+  r.detail = "port";
+  const DecodedMessage m = decode_v2i_message(encode_v2i_message(r));
+  ASSERT_EQ(m.status, DecodeStatus::kOk);
+  const auto& back = std::get<AnnouncementRefusal>(m.body);
+  EXPECT_EQ(back.rsu_id, 3U);
+  EXPECT_EQ(back.vehicle_id, 7U);
+  EXPECT_EQ(back.announcement_sequence, 41U);
+  EXPECT_EQ(back.reason, RefusalReason::kReplyToMismatch);
+  EXPECT_EQ(back.detail, "port");
+
+  const auto with_detail = [](const std::string& detail, int reason) {
+    v2::V2iPayload p;
+    p.mutable_refusal()->set_vehicle_id(7);
+    p.mutable_refusal()->set_reason(static_cast<v2::RefusalReason>(reason));
+    p.mutable_refusal()->set_detail(detail);
+    return decode_v2i_message(wrap(p));
+  };
+  EXPECT_EQ(with_detail(std::string(32, 'a'), 1).status, DecodeStatus::kOk);
+  EXPECT_EQ(with_detail(std::string(33, 'a'), 1).status, DecodeStatus::kParseError);
+  EXPECT_EQ(with_detail("port\n", 1).status, DecodeStatus::kParseError);
+  EXPECT_EQ(with_detail(std::string("p\0rt", 4), 1).status, DecodeStatus::kParseError);
+  const DecodedMessage unknown = with_detail("x", 9);
+  ASSERT_EQ(unknown.status, DecodeStatus::kOk);
+  EXPECT_EQ(std::get<AnnouncementRefusal>(unknown.body).reason, RefusalReason::kUnspecified);
 }
 
 TEST(WireCodec, EmptyAndOversizedInputsAreRefused) {

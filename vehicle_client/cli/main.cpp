@@ -268,8 +268,29 @@ class Session {
     std::fflush(stdout);
   }
 
+  // An RSU said why it refused an announcement: logged when the reason changes, else once a minute.
+  void log_refusals() {
+    const VehicleClientStats stats = threaded_.client().stats();
+    if (!stats.last_refusal || stats.refusals.total() == refusals_seen_)
+      return;
+    refusals_seen_ = stats.refusals.total();
+    const v2i::AnnouncementRefusal& r = stats.last_refusal->refusal;
+    const std::string what = std::to_string(r.rsu_id) + " " + v2i::to_string(r.reason) + ":" + r.detail;
+    const auto now = Steady::now();
+    if (what == last_refusal_logged_ && now - last_refusal_log_ < std::chrono::minutes(1))
+      return;
+    last_refusal_logged_ = what;
+    last_refusal_log_ = now;
+    std::fprintf(stderr,
+                 "rsu-vehicle: RSU %llu (%s) refused announcement %u: %s (%s); %llu refusal(s) so far\n",
+                 static_cast<unsigned long long>(r.rsu_id), stats.last_refusal->sender.c_str(),
+                 r.announcement_sequence, v2i::to_string(r.reason), r.detail.c_str(),
+                 static_cast<unsigned long long>(refusals_seen_));
+  }
+
   // Fuses and records whatever corrections arrived.
   void handle_corrections() {
+    log_refusals();
     for (const ReceivedCorrection& r : threaded_.client().poll()) {
       const vehicle::CorrectionStep step = core_.on_correction(r.correction);
       if (step.check && events_logged_ < kMaxEventsLogged) {
@@ -324,6 +345,9 @@ class Session {
   std::unique_ptr<std::FILE, FileCloser> corrections_;
   int refusals_logged_ = 0;
   int events_logged_ = 0;
+  std::uint64_t refusals_seen_ = 0;
+  std::string last_refusal_logged_;
+  Steady::time_point last_refusal_log_{};
   Steady::time_point last_insecure_warning_{};
 };
 

@@ -38,6 +38,16 @@ void print_summary(std::FILE* out, const VehicleClientStats& c, const vehicle::V
   for_each_count(c.corrections, 1, [&](CorrectionVerdict v, std::uint64_t n) {
     std::fprintf(out, " %s=%llu", vehicle::to_string(v), ull(n));
   });
+  if (c.refusals.total() > 0) {
+    std::fprintf(out, "; announcements refused by RSUs");
+    for_each_count(c.refusals, 0, [&](v2i::RefusalReason r, std::uint64_t n) {
+      std::fprintf(out, " %s=%llu", v2i::to_string(r), ull(n));
+    });
+    if (c.last_refusal) {
+      std::fprintf(out, " (latest: RSU %llu, %s: %s)", ull(c.last_refusal->refusal.rsu_id),
+                   v2i::to_string(c.last_refusal->refusal.reason), c.last_refusal->refusal.detail.c_str());
+    }
+  }
   std::fprintf(out, "; authentication (%s)", v2i::to_string(mode));
   for_each_count(c.authentication, 0, [&](v2i::AuthVerdict v, std::uint64_t n) {
     std::fprintf(out, " %s=%llu", v2i::to_string(v), ull(n));
@@ -76,6 +86,15 @@ void write_stats_file(const std::string& path, const VehicleClientStats& c,
   }
   out << "announcements.sent " << c.announcements_sent << "\ncorrections.accepted " << c.accepted()
       << "\ncorrections.rejected " << c.rejected() << "\n";
+  // Announcements the RSUs refused and told the vehicle about (refusal notices), by their reason.
+  for (std::size_t i = 1; i < static_cast<std::size_t>(v2i::RefusalReason::kCount); ++i) {
+    const auto r = static_cast<v2i::RefusalReason>(i);
+    out << "refusal." << v2i::to_string(r) << ' ' << c.refusals.count(r) << "\n";
+  }
+  if (c.last_refusal) {
+    out << "refusal.last " << v2i::to_string(c.last_refusal->refusal.reason) << ':'
+        << c.last_refusal->refusal.detail << "\n";
+  }
   const vehicle::PoseFuserStats f = core.fuser_stats();
   out << "fuser.ndt_accepted " << f.ndt_accepted << "\nfuser.ndt_rejected " << f.ndt_rejected
       << "\nfuser.rsu_accepted " << f.rsu_accepted << "\nfuser.rsu_rejected_gate " << f.rsu_rejected_gate
