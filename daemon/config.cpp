@@ -281,6 +281,13 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
 }
 
 void read_v2i(const YamlField& f, DaemonConfig& c) {
+  // The key before v2i.reply_to: a configuration written for it names its replacement instead of
+  // "unknown field" (true checked the address only; false trusted any reply_to, which no policy does now).
+  if (f.has("require_reply_to_source_address"))
+    f.child("require_reply_to_source_address")
+        .fail(
+            "replaced by reply_to: write `reply_to: match_address` for true, `reply_to: use_source` for "
+            "false (vehicles behind NAT), or leave it out for the default match_address_and_port");
   f.expect_map(
       {"listen_address", "port", "reply_to", "refusal_notices", "advertisement", "receive_buffer_bytes"});
   if (f.has("listen_address"))

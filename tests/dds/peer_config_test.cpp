@@ -1,4 +1,5 @@
-// rsud.yaml's dds.peers section (announcements shared between RSUs): defaults, every key, located errors.
+// rsud.yaml's dds.peers section (announcements shared between RSUs): defaults, every key, located errors;
+// and v2i.reply_to, which says where rsud answers the announcements it accepts (or shares).
 #include <gtest/gtest.h>
 
 #include <string>
@@ -74,6 +75,20 @@ TEST(PeerConfig, ErrorsNameFileLineAndField) {
       std::string::npos);
   EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {qos: {history_depth: many}}\n").find("dds.peers.qos"),
             std::string::npos);
+}
+
+TEST(V2iReplyToConfig, PoliciesAndTheReplacedKeyNamed) {
+  EXPECT_EQ(parse("").core.reply_to, core::ReplyToPolicy::kMatchAddressAndPort);
+  EXPECT_EQ(parse("v2i: {reply_to: match_address}\n").core.reply_to, core::ReplyToPolicy::kMatchAddress);
+  EXPECT_EQ(parse("v2i: {reply_to: use_source}\n").core.reply_to, core::ReplyToPolicy::kUseSource);
+  EXPECT_NE(refusal("v2i: {reply_to: anywhere}\n").find("v2i.reply_to: expected match_address_and_port"),
+            std::string::npos);
+  // A configuration written before v2i.reply_to existed is told what to write instead.
+  const std::string old_key = refusal("v2i:\n  require_reply_to_source_address: true\n");
+  EXPECT_NE(old_key.find("/etc/rsud/rsud.yaml:7: v2i.require_reply_to_source_address: replaced by reply_to"),
+            std::string::npos)
+      << old_key;
+  EXPECT_NE(old_key.find("`reply_to: match_address` for true"), std::string::npos) << old_key;
 }
 
 }  // namespace
