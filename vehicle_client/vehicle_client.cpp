@@ -123,8 +123,11 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
         ++stats_.announcements_refused;
         return reason;
       }
+      // Queued while the sequence numbers are still ours alone: a keep-alive built after this
+      // announcement must not reach the strand, and the RSU, before it (the RSU would refuse this one
+      // as stale).
+      send(std::move(outgoing), false);
     }
-    send(std::move(outgoing), false);
     return v2i::AnnouncementReason::kValid;
   }
 
@@ -193,6 +196,8 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
     return reason;
   }
 
+  // Posts the datagrams to the strand (never runs them inline, so callers may hold mutex_: they do, so
+  // that datagrams leave in the order their sequence numbers were taken).
   void send(std::vector<Outgoing> outgoing, bool keepalive) {
     asio::post(strand_, [self = shared_from_this(), outgoing = std::move(outgoing), keepalive] {
       if (!self->socket_.is_open()) {
@@ -239,9 +244,9 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
         if (const auto due = self->announcer_.keepalive_due(quiet, self->clock_())) {
           self->build(*due, outgoing);
         }
-      }
-      if (!outgoing.empty()) {
-        self->send(std::move(outgoing), true);
+        if (!outgoing.empty()) {
+          self->send(std::move(outgoing), true);  // in sequence order, as announce()
+        }
       }
       self->arm_keepalive();
     });
