@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "daemon/dds_config.h"
+#include "dds/pose_messages.h"
 #include "edge/host_clock.h"
 #include "ros/correction_pose.h"
 #include "ros/ros_time.h"
@@ -14,16 +15,10 @@ namespace rsu::daemon {
 
 namespace {
 
-builtin_interfaces_msg_dds__Time_ to_msg_time(TimeNs t) {
-  const ros::RosTime r = ros::to_ros_time(t);
-  return {r.sec, r.nanosec};
-}
+using dds::to_msg_time;
 
 void fill_pose(const v2i::Correction& c, geometry_msgs_msg_dds__PoseWithCovariance_& out) {
-  const ros::RosPoseWithCovariance p = ros::to_ros_pose(c);
-  out.pose.position = {p.position[0], p.position[1], p.position[2]};
-  out.pose.orientation = {p.orientation[0], p.orientation[1], p.orientation[2], p.orientation[3]};
-  std::copy(p.covariance.begin(), p.covariance.end(), std::begin(out.covariance));
+  dds::to_msg_pose(ros::to_ros_pose(c), out);
 }
 
 // Percentile (0..1) of `values` by nearest rank; 0 when empty.
@@ -95,7 +90,7 @@ void DdsEdge::on_cloud(const PointCloud2& cloud, const dds_sample_info_t& info) 
   else
     take_latency_ns_[next_latency_++ % kLatencyWindow] = taken - info.source_timestamp;
 
-  const auto stamp = ros::from_ros_time({cloud.header.stamp.sec, cloud.header.stamp.nanosec});
+  const auto stamp = dds::from_msg_time(cloud.header.stamp);
   if (!stamp) {
     ++clouds_bad_stamp_;
     bad_input_.report("dds_pointcloud2.bad_stamp",

@@ -5,6 +5,10 @@
  * It publishes sensor_msgs/msg/PointCloud2 on --cloud-topic at --rate-hz for --seconds, cycling
  * through the cloud files given (prepared by the test driver, format below), stamped one rotation
  * (--rotation-s) before the moment of publication, as a LiDAR driver stamps a rotation with its start.
+ * With --publish-poses FILE --pose-out-topic T it publishes geometry_msgs/msg/PoseWithCovarianceStamped
+ * on T instead (no cloud files then): FILE has one pose a line, "<publish at, wall ns> <header stamp ns>
+ * <frame_id> <x> <y> <z> <qx> <qy> <qz> <qw> <36 covariance values>", published in order, each not before
+ * its time (rsu-autoware-sidecar's test: the RSU's fixes, and the vehicle's own poses).
  * Meanwhile it reads geometry_msgs/msg/PoseWithCovarianceStamped on --pose-topic and, with
  * --fixes-topic, rsud's object list (rsu_msgs/msg/VehicleFixArray, IDL from its .msg). It prints, flushed:
  *   published <index> <header stamp ns> <publication time ns>
@@ -26,6 +30,7 @@
 #include "ros2_messages.h"
 
 #define MAX_CLOUDS 64
+#define MAX_POSES 4096
 
 typedef struct {
   uint32_t width, height, point_step, row_step;
@@ -89,6 +94,41 @@ static int load_cloud(const char* path, cloud_file* c) {
   if (!ok)
     fprintf(stderr, "ros2_participant: cannot read cloud file %s\n", path);
   return ok;
+}
+
+typedef struct {
+  int64_t publish_at, stamp;
+  char frame_id[64];
+  geometry_msgs_msg_dds__PoseWithCovariance_ pose;
+} pose_line;
+
+/* Reads up to MAX_POSES pose lines (format in the file comment); returns how many, -1 on a bad line. */
+static int load_poses(const char* path, pose_line* poses) {
+  FILE* f = fopen(path, "r");
+  if (f == NULL) {
+    fprintf(stderr, "ros2_participant: cannot open %s\n", path);
+    return -1;
+  }
+  int n = 0;
+  long long at, stamp;
+  while (n < MAX_POSES && fscanf(f, "%lld %lld %63s", &at, &stamp, poses[n].frame_id) == 3) {
+    geometry_msgs_msg_dds__PoseWithCovariance_* p = &poses[n].pose;
+    int ok = fscanf(f, "%lf %lf %lf %lf %lf %lf %lf", &p->pose.position.x, &p->pose.position.y,
+                    &p->pose.position.z, &p->pose.orientation.x, &p->pose.orientation.y,
+                    &p->pose.orientation.z, &p->pose.orientation.w) == 7;
+    for (int k = 0; ok && k < 36; ++k)
+      ok = fscanf(f, "%lf", &p->covariance[k]) == 1;
+    if (!ok) {
+      fprintf(stderr, "ros2_participant: %s: bad pose line %d\n", path, n + 1);
+      fclose(f);
+      return -1;
+    }
+    poses[n].publish_at = at;
+    poses[n].stamp = stamp;
+    ++n;
+  }
+  fclose(f);
+  return n;
 }
 
 static dds_qos_t* reliable_qos(void) {
@@ -155,8 +195,87 @@ static void print_all(dds_entity_t reader, void (*print)(const void*, int64_t)) 
   }
 }
 
+/* A participant on `domain` (-1: Cyclone's default domain, 0 or what CYCLONEDDS_URI says). */
+static dds_entity_t create_participant(int domain) {
+  const dds_entity_t participant =
+      dds_create_participant(domain < 0 ? DDS_DOMAIN_DEFAULT : (dds_domainid_t)domain, NULL, NULL);
+  check(participant, "creating the participant");
+  return participant;
+}
+
+/* A reader of PoseWithCovarianceStamped on `topic`, or 0 when `topic` is NULL. */
+static dds_entity_t create_pose_reader(dds_entity_t participant, const char* topic, const dds_qos_t* qos) {
+  if (topic == NULL)
+    return 0;
+  const dds_entity_t t = dds_create_topic(
+      participant, &geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc, topic, NULL, NULL);
+  check(t, "creating the pose topic");
+  const dds_entity_t reader = dds_create_reader(participant, t, qos, NULL);
+  check(reader, "creating the pose reader");
+  return reader;
+}
+
+/* Waits (bounded, 10 s) until `writer` has a matched reader; prints "matched <count>". */
+static uint32_t wait_for_reader(dds_entity_t writer) {
+  dds_publication_matched_status_t matched = {0};
+  const int64_t match_deadline = wall_ns() + 10000000000LL;
+  while (matched.current_count == 0 && wall_ns() < match_deadline) {
+    check(dds_get_publication_matched_status(writer, &matched), "reading the match status");
+    if (matched.current_count == 0)
+      sleep_until(wall_ns() + 10000000LL);
+  }
+  printf("matched %u\n", matched.current_count);
+  fflush(stdout);
+  return matched.current_count;
+}
+
+/* --publish-poses: the poses of `path` on `out_topic`, printing what arrives on `in_topic` meanwhile. */
+static int publish_poses(const char* path, const char* out_topic, const char* in_topic, int domain,
+                         double linger_s) {
+  static pose_line poses[MAX_POSES];
+  const int count = load_poses(path, poses);
+  if (count <= 0)
+    return 2;
+  const dds_entity_t participant = create_participant(domain);
+  dds_qos_t* qos = reliable_qos();
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 64);
+  const dds_entity_t ot = dds_create_topic(
+      participant, &geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc, out_topic, NULL, NULL);
+  check(ot, "creating the pose output topic");
+  const dds_entity_t writer = dds_create_writer(participant, ot, qos, NULL);
+  check(writer, "creating the pose writer");
+  const dds_entity_t reader = create_pose_reader(participant, in_topic, qos);
+  dds_delete_qos(qos);
+  if (wait_for_reader(writer) == 0) {
+    dds_delete(participant);
+    return 3;
+  }
+  for (int i = 0; i < count; ++i) {
+    sleep_until(poses[i].publish_at);
+    geometry_msgs_msg_dds__PoseWithCovarianceStamped_ msg;
+    memset(&msg, 0, sizeof msg);
+    msg.header.stamp.sec = (int32_t)(poses[i].stamp / 1000000000LL);
+    msg.header.stamp.nanosec = (uint32_t)(poses[i].stamp % 1000000000LL);
+    msg.header.frame_id = poses[i].frame_id;
+    msg.pose = poses[i].pose;
+    check(dds_write(writer, &msg), "writing a pose");
+    printf("published %d %lld %lld\n", i, (long long)poses[i].stamp, (long long)wall_ns());
+    fflush(stdout);
+    if (reader)
+      print_all(reader, print_pose);
+  }
+  const int64_t linger_end = wall_ns() + (int64_t)(linger_s * 1e9);
+  while (reader && wall_ns() < linger_end) {
+    print_all(reader, print_pose);
+    sleep_until(wall_ns() + 10000000LL);
+  }
+  dds_delete(participant);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const char *cloud_topic = "rt/points", *pose_topic = NULL, *fixes_topic = NULL, *frame_id = "lidar";
+  const char *poses_file = NULL, *pose_out_topic = NULL;
   int domain = -1; /* -1: Cyclone's default domain (0, or what CYCLONEDDS_URI says) */
   double rate_hz = 10.0, seconds = 3.0, rotation_s = 0.1, linger_s = 1.0;
   const char* files[MAX_CLOUDS];
@@ -169,6 +288,10 @@ int main(int argc, char** argv) {
       pose_topic = argv[++i];
     else if (!strcmp(argv[i], "--fixes-topic") && more)
       fixes_topic = argv[++i];
+    else if (!strcmp(argv[i], "--publish-poses") && more)
+      poses_file = argv[++i];
+    else if (!strcmp(argv[i], "--pose-out-topic") && more)
+      pose_out_topic = argv[++i];
     else if (!strcmp(argv[i], "--frame-id") && more)
       frame_id = argv[++i];
     else if (!strcmp(argv[i], "--domain") && more)
@@ -186,11 +309,17 @@ int main(int argc, char** argv) {
     else {
       fprintf(stderr,
               "usage: ros2_participant [--domain N] [--cloud-topic rt/points] [--pose-topic rt/...] "
-              "[--frame-id lidar] "
+              "[--frame-id lidar] [--publish-poses FILE --pose-out-topic rt/...] "
               "[--rate-hz 10] [--seconds 3] [--rotation-s 0.1] [--linger-s 1] CLOUD_FILE...\n");
       return 2;
     }
   }
+  if ((poses_file == NULL) != (pose_out_topic == NULL)) {
+    fprintf(stderr, "ros2_participant: --publish-poses and --pose-out-topic go together\n");
+    return 2;
+  }
+  if (poses_file != NULL)
+    return publish_poses(poses_file, pose_out_topic, pose_topic, domain, linger_s);
   if (nfiles == 0 || !(rate_hz > 0 && rate_hz <= 100) || !(seconds > 0 && seconds <= 600)) {
     fprintf(stderr, "ros2_participant: need cloud files, 0 < rate <= 100 Hz, 0 < seconds <= 600\n");
     return 2;
@@ -201,23 +330,14 @@ int main(int argc, char** argv) {
     if (!load_cloud(files[i], &clouds[i]))
       return 2;
 
-  const dds_entity_t participant =
-      dds_create_participant(domain < 0 ? DDS_DOMAIN_DEFAULT : (dds_domainid_t)domain, NULL, NULL);
-  check(participant, "creating the participant");
+  const dds_entity_t participant = create_participant(domain);
   dds_qos_t* qos = reliable_qos();
   const dds_entity_t ct =
       dds_create_topic(participant, &sensor_msgs_msg_dds__PointCloud2__desc, cloud_topic, NULL, NULL);
   check(ct, "creating the cloud topic");
   const dds_entity_t writer = dds_create_writer(participant, ct, qos, NULL);
   check(writer, "creating the cloud writer");
-  dds_entity_t pose_reader = 0;
-  if (pose_topic != NULL) {
-    const dds_entity_t pt = dds_create_topic(
-        participant, &geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc, pose_topic, NULL, NULL);
-    check(pt, "creating the pose topic");
-    pose_reader = dds_create_reader(participant, pt, qos, NULL);
-    check(pose_reader, "creating the pose reader");
-  }
+  const dds_entity_t pose_reader = create_pose_reader(participant, pose_topic, qos);
   dds_entity_t fixes_reader = 0;
   if (fixes_topic != NULL) {
     const dds_entity_t ft =
@@ -229,16 +349,7 @@ int main(int argc, char** argv) {
   dds_delete_qos(qos);
 
   /* Discovery is asynchronous: wait (bounded) until the cloud reader is matched. */
-  dds_publication_matched_status_t matched = {0};
-  const int64_t match_deadline = wall_ns() + 10000000000LL;
-  while (matched.current_count == 0 && wall_ns() < match_deadline) {
-    check(dds_get_publication_matched_status(writer, &matched), "reading the match status");
-    if (matched.current_count == 0)
-      sleep_until(wall_ns() + 10000000LL);
-  }
-  printf("matched %u\n", matched.current_count);
-  fflush(stdout);
-  if (matched.current_count == 0) {
+  if (wait_for_reader(writer) == 0) {
     dds_delete(participant);
     return 3;
   }
