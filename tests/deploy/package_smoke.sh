@@ -36,9 +36,10 @@ for p in $packages; do
   [ "$status" = "install ok installed $version" ] || fail "$p: '$status'"
 done
 for f in usr/sbin/rsud usr/lib/systemd/system/rsud.service etc/rsud/rsud.yaml etc/rsud/cyclonedds-loopback.xml \
-         usr/lib/sysctl.d/60-rsud.conf usr/bin/rsu-keygen usr/bin/rsu-vehicle usr/bin/rsu-sim usr/bin/rsu-calibrate \
+         usr/lib/sysctl.d/60-rsud.conf usr/bin/rsu-keygen usr/bin/rsu-vehicle usr/bin/rsu-sim usr/bin/rsu-calibrate usr/bin/rsu-autoware-sidecar \
          usr/lib/librsu-vehicle-client.so.0 usr/lib/librsu-vehicle-client.so include/rsu/vehicle_client/vehicle_client.h \
-         usr/lib/cmake/RsuVehicleClient/RsuVehicleClientConfig.cmake usr/lib/pkgconfig/rsu-vehicle-client.pc; do
+         usr/lib/cmake/RsuVehicleClient/RsuVehicleClientConfig.cmake usr/lib/pkgconfig/rsu-vehicle-client.pc \
+         usr/share/man/man8/rsud.8 usr/share/man/man1/rsu-autoware-sidecar.1 usr/share/man/man1/rsu-sim.1; do
   case $f in include/*) f=usr/$f ;; esac
   [ -e "$root/$f" ] || fail "/$f not installed"
 done
