@@ -258,8 +258,8 @@ def case_corrections(h):
 
 def case_bad_input(h):
     h.start_rsud()
-    h.start_stream(7.0)
-    h.start_vehicle(6.5)
+    h.start_stream(30.0)  # killed at the end; long enough for a slow rsud
+    h.start_vehicle(29.5)
     h.wait_for(lambda: len(h.corrections()) >= 3, 5, "first corrections")
     rsu = ("127.0.0.1", h.v2i_port)
     bad = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -281,10 +281,21 @@ def case_bad_input(h):
     # A flood from one more source.
     flood = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     flood.bind(("127.0.0.3", 0))
+    flood_start = time.monotonic()
     for i in range(5000):
         flood.sendto(b"\xff" * 40, rsu)
     flood_end_ns = time.time_ns()
-    time.sleep(1.6)  # a summary interval, and a stats file written after the flood
+
+    # A sanitized rsud on busy cores reads the queued flood for seconds: wait (bounded) until its stats
+    # file accounts for every flood datagram, then for a summary interval (the "not logged" line).
+    def flood_accounted(s):
+        return (s.get("decode.parse_error", 0) - 6 + s.get("datagram.flood_limited", 0) +
+                s.get("v2i.kernel_drops", 0))
+
+    h.wait_for(lambda: os.path.exists(h.path("stats")) and flood_accounted(h.stats()) >= 5000, 30,
+               "rsud to account for the 5000 flood datagrams")
+    flood_read_s = time.monotonic() - flood_start  # at most this long between rsud's first and last read
+    time.sleep(1.6)
     assert h.rsud.poll() is None, "rsud died:\n" + h.log()
     served_after = [c for c in h.corrections() if c["recv_ns"] > flood_end_ns]
     assert len(served_after) >= 5, "the vehicle was not served after the flood: %d" % len(served_after)
@@ -304,9 +315,11 @@ def case_bad_input(h):
     assert 5000 <= flood_accounted <= 5000 + 20, (flood_parsed, s["datagram.flood_limited"], drops)
     received = 5000 - drops
     assert received >= 1000, "the kernel dropped %d of the 5000 flood datagrams" % drops
-    # The flood's first ~100 (the burst) are parsed before the limit cuts in, then it refuses the rest.
-    assert 100 <= flood_parsed <= 1000, flood_parsed
-    assert s["datagram.flood_limited"] >= received - 1000, (s["datagram.flood_limited"], received)
+    # The flood's first 100 (the burst) are parsed before the limit cuts in, then 200/s refill while rsud
+    # reads the queue (the default v2i.datagram_flood), and it refuses the rest.
+    most_parsed = 100 + 200 * flood_read_s + 10
+    assert 100 <= flood_parsed <= most_parsed, (flood_parsed, most_parsed, flood_read_s)
+    assert s["datagram.flood_limited"] >= received - most_parsed, (s["datagram.flood_limited"], received)
     log = h.log()
     for reason in ("decode:parse_error", "decode:too_large", "validation:non_finite"):
         n = log.count("bad input (%s)" % reason)
