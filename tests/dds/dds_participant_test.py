@@ -14,7 +14,11 @@ input set to whole_rotation: false). Checks:
     once per rotation with the vehicle at the same place;
   - two broken layouts among the clouds are refused, counted by reason and logged, an empty cloud is
     counted and skipped, the rest served; another sensor's clouds (other header.frame_id) are refused;
-  - rsud drains and exits 0 on SIGTERM.
+  - rsud drains and exits 0 on SIGTERM;
+  - with --sidecar: rsu-autoware-sidecar turns rsud's poses into the vehicle's base_link pose for a second
+    participant playing Autoware (publishing the vehicle's own pose, 2 deg off in heading, reading the
+    sidecar's output): one base_link pose per rsud pose, in the map frame, stamped with rsud's sweep
+    time, within 0.15 m and 3 deg of the truth's base_link, z from the own pose.
 Every wait is bounded; every child is killed on the way out.
 """
 import argparse
@@ -25,6 +29,7 @@ import signal
 import struct
 import subprocess
 import sys
+import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "tools", "python"))
@@ -35,6 +40,8 @@ TRUTH = (14.0, -5.0, math.radians(25.0))  # footprint centre x, y (m), yaw (rad)
 FRAME_ID = "test_map"
 TOLERANCE_M = 0.10
 TOLERANCE_YAW = math.radians(2.0)
+BASE_LINK_OFFSET = (-1.4, 0.0)  # base_link minus box centre, vehicle frame (the sidecar's --ref-offset-*-m)
+OWN_Z = 0.37
 ROTATION_S = 0.1
 BROKEN = {"short": "data_too_short", "overlap": "overlapping_fields"}  # cloud file kind -> rsud's reason
 
@@ -212,6 +219,62 @@ def parse_participant(text):
     return published, poses, lists
 
 
+def truth_base_link():
+    c, s = math.cos(TRUTH[2]), math.sin(TRUTH[2])
+    return (TRUTH[0] + c * BASE_LINK_OFFSET[0] - s * BASE_LINK_OFFSET[1],
+            TRUTH[1] + s * BASE_LINK_OFFSET[0] + c * BASE_LINK_OFFSET[1])
+
+
+def start_sidecar(h, domain, env):
+    """rsu-autoware-sidecar on rsud's pose topic, and a participant playing Autoware: the vehicle's own
+    pose at 20 Hz (live stamps, heading 2 deg off, z = OWN_Z), reading the sidecar's output."""
+    x, y = truth_base_link()
+    yaw = TRUTH[2] + math.radians(2.0)
+    start = time.time_ns()
+    cov = " ".join(["0.01"] + ["0"] * 13 + ["0.04"] + ["0"] * 20 + ["0.001"])
+    with open(h.path("own_poses.txt"), "w") as f:
+        for i in range(600):  # 30 s; the participant is stopped long before
+            t = start + i * 50_000_000
+            f.write("%d %d %s %.6f %.6f %.3f 0 0 %.12f %.12f %s\n" % (t, t, FRAME_ID, x + 0.2, y, OWN_Z,
+                                                                      math.sin(yaw / 2), math.cos(yaw / 2), cov))
+    sidecar = h.spawn([h.args.sidecar, "--vehicle-id", "1", "--rsu-topic", "test/vehicles/{vehicle_id}/pose",
+                       "--rsu-domain", str(domain), "--vehicle-domain", str(domain), "--cyclone-config",
+                       h.args.cyclone_config, "--map-frame", FRAME_ID, "--own-pose-topic", "test/autoware/ndt_pose",
+                       "--output-topic", "test/autoware/rsu_pose", "--ref-offset-x-m", str(BASE_LINK_OFFSET[0]),
+                       "--ref-offset-y-m", str(BASE_LINK_OFFSET[1])], "sidecar.out")
+    h.autoware = h.spawn([h.args.participant, "--domain", str(domain), "--publish-poses", h.path("own_poses.txt"),
+                          "--pose-out-topic", "rt/test/autoware/ndt_pose", "--pose-topic", "rt/test/autoware/rsu_pose"],
+                         "autoware.out", env)
+    return sidecar
+
+
+def check_sidecar(h, sidecar, rsud_poses):
+    sidecar.send_signal(signal.SIGTERM)
+    rc = sidecar.wait(timeout=10)
+    assert rc == 0, "sidecar exited with %d:\n%s" % (rc, h.read("sidecar.out"))
+    time.sleep(0.3)
+    h.autoware.kill()
+    h.autoware.wait(timeout=5)
+    stats = dict((w[0], int(w[1])) for w in (l.split() for l in h.read("sidecar.out").splitlines()) if len(w) == 2)
+    base = parse_participant(h.read("autoware.out"))[1]
+    assert stats.get("published", 0) >= len(rsud_poses) - 2 and len(base) >= stats["published"] - 1, (stats, len(base))
+    assert len(base) >= 10, "only %d base_link poses:\n%s" % (len(base), h.read("sidecar.out"))
+    x, y = truth_base_link()
+    rsud_stamps = set(p["stamp"] for p in rsud_poses)
+    worst = 0.0
+    for p in base:
+        worst = max(worst, math.hypot(p["x"] - x, p["y"] - y))
+        assert p["frame_id"] == FRAME_ID and p["z"] == OWN_Z, p
+        assert math.hypot(p["x"] - x, p["y"] - y) < 0.15, "base_link %s vs truth %.3f %.3f" % (p, x, y)
+        yaw = 2.0 * math.atan2(p["q"][2], p["q"][3])
+        assert abs(math.remainder(yaw - TRUTH[2], 2 * math.pi)) < math.radians(3.0), (yaw, TRUTH[2])
+        assert p["cov"][0] > 0 and p["cov"][7] > 0 and p["cov"][14] == 0.04, p["cov"]
+    # rsud's poses and the sidecar's were read by two participants: compare where both saw one.
+    assert sum(p["stamp"] in rsud_stamps for p in base) >= min(len(base), len(rsud_stamps)) - 2
+    print("ok: %d base_link poses from the sidecar, worst %.3f m from the truth's base_link (%s)" % (
+        len(base), worst, ", ".join("%s %d" % kv for kv in stats.items())))
+
+
 def run(h):
     h.simulate()
     v2i_port = free_udp_port()
@@ -225,6 +288,7 @@ def run(h):
     h.spawn([h.args.announcer, "--rsu", "127.0.0.1:%d" % v2i_port, "--bind", "127.0.0.1", "--id", "1", "--pose",
              pose, "--seconds", str(seconds + 3), "--insecure", "1"], "vehicle.out")
     env = dict(os.environ, CYCLONEDDS_URI="file://" + os.path.abspath(h.args.cyclone_config))
+    sidecar = start_sidecar(h, domain, env) if h.args.sidecar else None
     participant = h.spawn([h.args.participant, "--domain", str(domain), "--cloud-topic", "rt/test/points",
                            "--pose-topic", "rt/test/vehicles/1/pose", "--fixes-topic", "rt/test/fixes",
                            "--rate-hz", str(10 * h.args.parts), "--rotation-s", str(ROTATION_S / h.args.parts),
@@ -275,6 +339,9 @@ def run(h):
             assert 0 <= l["stamp"] - f["sweep"] <= 0.3e9 + 1e6, (l["stamp"], f)  # object_list_max_age_s
             assert 0.0 < f["yaw_var"] < 1.0 and f["points"] > 0, f
 
+    if sidecar:
+        check_sidecar(h, sidecar, poses)
+
     # Another sensor's clouds on the topic (header.frame_id "camera", not the configured "lidar"): refused.
     other = h.spawn([h.args.participant, "--domain", str(domain), "--cloud-topic", "rt/test/points", "--frame-id",
                      "camera", "--rate-hz", "10", "--seconds", "0.3", "--linger-s", "0.5", h.clouds[0]],
@@ -314,6 +381,7 @@ def main():
     ap.add_argument("--cyclone-config", required=True)
     ap.add_argument("--work", required=True)
     ap.add_argument("--parts", type=int, default=1, help="publish each rotation in this many messages")
+    ap.add_argument("--sidecar", help="rsu-autoware-sidecar: also check its base_link poses")
     args = ap.parse_args()
     h = Harness(args)
     try:
