@@ -288,14 +288,16 @@ void read_v2i(const YamlField& f, DaemonConfig& c) {
         .fail(
             "replaced by reply_to: write `reply_to: match_address` for true, `reply_to: use_source` for "
             "false (vehicles behind NAT), or leave it out for the default match_address_and_port");
-  f.expect_map(
-      {"listen_address", "port", "reply_to", "refusal_notices", "advertisement", "receive_buffer_bytes"});
+  f.expect_map({"listen_address", "port", "reply_to", "refusal_notices", "advertisement",
+                "receive_buffer_bytes", "verifier_thread"});
   if (f.has("listen_address"))
     c.v2i_listen_address = address_of(f.child("listen_address"));
   if (f.has("port"))
     c.v2i_port = port_of(f.child("port"));
   if (f.has("receive_buffer_bytes"))
     c.v2i_receive_buffer_bytes = receive_buffer_of(f.child("receive_buffer_bytes"));
+  if (f.has("verifier_thread"))
+    c.v2i_verifier_thread = bool_of(f.child("verifier_thread"));
   if (f.has("reply_to")) {
     const YamlField r = f.child("reply_to");
     const std::string v = r.text();

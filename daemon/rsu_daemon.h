@@ -1,8 +1,9 @@
-// rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One thread, one
-// io_context: sockets (V2I announcements in / corrections out, Velodyne packets in), timers (registry
-// expiry, watchdog, advertisement, log summaries, PCD replay pacing) and signals (SIGHUP
-// reload, SIGTERM / SIGINT drain). Everything it decides is RsuCore's; this file only moves bytes,
-// reads the clock and logs.
+// rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One io_context on one
+// thread, which alone touches RsuCore, plus the V2I receiver thread (v2i_receiver.h: it reads the
+// announcement socket and checks signatures ahead, v2i.verifier_thread). The io_context has: sockets (V2I
+// announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog, advertisement,
+// log summaries, PCD replay pacing) and signals (SIGHUP reload, SIGTERM / SIGINT drain). Everything it
+// decides is RsuCore's; this file only moves bytes, reads the clock and logs.
 #pragma once
 
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
@@ -30,6 +31,7 @@ namespace rsu::daemon {
 
 class DdsEdge;
 class PeerBus;
+class V2iReceiver;
 
 class RsuDaemon {
  public:
@@ -47,11 +49,16 @@ class RsuDaemon {
   using steady = std::chrono::steady_clock;
 
   void receive_v2i();
+  // The announcement socket read by the receiver thread (v2i.verifier_thread) or by receive_v2i().
+  void start_v2i_reception();
+  // Datagrams the receiver thread handed over: a bounded batch per turn, so that LiDAR packets interleave.
+  void on_v2i_arrival();
   // Receives the LiDAR's datagrams on `socket` (the data port, or the auxiliary one) into `buffer`.
   void receive_lidar(udp::socket& socket, std::array<std::uint8_t, 65536>& buffer, udp::endpoint& sender);
   // One datagram of the LiDAR, live or replayed, arrived at `arrival` (the run's clock).
   void on_lidar_payload(std::span<const std::uint8_t> payload, TimeNs arrival, const std::string& from);
-  void on_v2i_datagram(std::size_t bytes);
+  void on_v2i_datagram(std::span<const std::uint8_t> datagram, const udp::endpoint& sender,
+                       const v2i::SignatureCheck* checked);
   void on_peer_announcement(std::span<const std::uint8_t> datagram, const core::PeerProvenance& from);
   void handle_lidar_result(const core::LidarStepResult& result);
   void send_corrections(const std::vector<core::OutgoingCorrection>& corrections);
@@ -127,6 +134,7 @@ class RsuDaemon {
   boost::asio::steady_timer metrics_timer_;
 
   std::optional<lidar::SensorModel> sensor_model_;  // the Velodyne tables in use (none for other sensors)
+  std::unique_ptr<V2iReceiver> v2i_receiver_;       // when v2i.verifier_thread (after the socket it reads)
   std::unique_ptr<DdsEdge> dds_;                    // when dds.enabled (after bad_input_: it reports there)
   std::unique_ptr<PeerBus> peers_;  // when dds.peers.enabled (after dds_: it uses its participant)
   std::uint32_t peers_seen_ = 0;    // other RSUs on the peer bus at the last housekeeping

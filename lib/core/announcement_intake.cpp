@@ -39,8 +39,9 @@ ReplyToCheck AnnouncementIntake::check_reply_to(v2i::VehicleAnnouncement& a,
 
 std::optional<v2i::VehicleAnnouncement> AnnouncementIntake::screen(std::span<const std::uint8_t> bytes,
                                                                    const SourceEndpoint& sender, TimeNs now,
+                                                                   const v2i::SignatureCheck* checked,
                                                                    DatagramOutcome& out) {
-  v2i::AuthenticatedMessage authenticated = authenticator_.authenticate(bytes, now);
+  v2i::AuthenticatedMessage authenticated = authenticator_.authenticate(bytes, now, checked);
   out.auth = authenticated.verdict;
   if (authenticated.verdict == v2i::AuthVerdict::kMalformed) {
     decode_counts_.add(authenticated.message.status);
@@ -83,11 +84,12 @@ DatagramOutcome AnnouncementIntake::register_announcement(const v2i::VehicleAnno
 }
 
 DatagramOutcome AnnouncementIntake::on_datagram(std::span<const std::uint8_t> bytes,
-                                                const SourceEndpoint& source, TimeNs now) {
+                                                const SourceEndpoint& source, TimeNs now,
+                                                const v2i::SignatureCheck* checked) {
   DatagramOutcome out;
   if (flood_limiter_.admit(source.address, now) != v2i::RateDecision::kAllowed) {
     out.stage = DatagramStage::kFloodLimited;
-  } else if (const auto announcement = screen(bytes, source, now, out)) {
+  } else if (const auto announcement = screen(bytes, source, now, checked, out)) {
     out = register_announcement(*announcement, source.address, now, out);
   }
   datagram_stages_.add(out.stage);
@@ -108,7 +110,7 @@ DatagramOutcome AnnouncementIntake::on_peer_announcement(std::span<const std::ui
       v2i::RateDecision::kAllowed) {
     return finish(DatagramStage::kFloodLimited);
   }
-  const auto announcement = screen(datagram, from.sender, now, out);
+  const auto announcement = screen(datagram, from.sender, now, nullptr, out);
   if (out.stage == DatagramStage::kAuthentication && out.auth == v2i::AuthVerdict::kDuplicate) {
     // A signed datagram this RSU verified already: the vehicle announced here too, or another peer
     // shared it first. Not news, not an attack (the bytes are the vehicle's own, signature and all).
@@ -171,6 +173,9 @@ void AnnouncementIntake::report(CounterList& out) const {
   out.add("auth", "sequence_restarts", authenticator_.replay().stats().restarts);
   out.add("auth", "signers_evicted", authenticator_.replay().stats().evictions);
   out.add_level("auth", "trusted_keys", authenticator_.trust_list().size());
+  // Where the Ed25519 checks ran: here, or ahead on the receiver's thread (rsud's v2i.verifier_thread).
+  out.add("auth", "signatures_verified", authenticator_.signatures_verified());
+  out.add("auth", "signatures_checked_ahead", authenticator_.signatures_checked_ahead());
   // 1 while running without signatures: local development only (the daemon also warns).
   out.add_level("security", "insecure_mode", authenticator_.mode() == v2i::SecurityMode::kInsecure ? 1 : 0);
   out.add_all("validation", validator_.counts(),

@@ -44,7 +44,8 @@ class AnnouncementIntake {
   explicit AnnouncementIntake(const RsuCoreConfig& config);
 
   // RsuCore::on_datagram and RsuCore::on_peer_announcement (rsu_core.h).
-  DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now);
+  DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now,
+                              const v2i::SignatureCheck* checked = nullptr);
   DatagramOutcome on_peer_announcement(std::span<const std::uint8_t> datagram, const PeerProvenance& from,
                                        TimeNs now);
 
@@ -71,7 +72,7 @@ class AnnouncementIntake {
   // announcement, or empty with `out` saying which stage refused it.
   std::optional<v2i::VehicleAnnouncement> screen(std::span<const std::uint8_t> bytes,
                                                  const SourceEndpoint& sender, TimeNs now,
-                                                 DatagramOutcome& out);
+                                                 const v2i::SignatureCheck* checked, DatagramOutcome& out);
   // reply_to against the sender under the policy (RsuCoreConfig::reply_to); kReplaced rewrites it.
   ReplyToCheck check_reply_to(v2i::VehicleAnnouncement& announcement, const SourceEndpoint& sender) const;
   DatagramOutcome register_announcement(const v2i::VehicleAnnouncement& a, const std::string& source,

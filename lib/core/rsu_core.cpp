@@ -79,8 +79,8 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       monitor_assembler_(assembler_config(packets_.decoder().geometry())) {}
 
 DatagramOutcome RsuCore::on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source,
-                                     TimeNs now) {
-  DatagramOutcome out = announcements_.on_datagram(bytes, source, now);
+                                     TimeNs now, const v2i::SignatureCheck* checked) {
+  DatagramOutcome out = announcements_.on_datagram(bytes, source, now, checked);
   if (const auto notice = refusals_.consider(out, config_.rsu_id, now))
     out.refusal_notice = corrections_.refusal(*notice, now);
   return out;

@@ -70,8 +70,10 @@ class RsuCore {
   // it is authenticated first (v2i/message_authenticator.h): dropped and counted unless a trusted
   // vehicle key signed it for that vehicle id, fresh and not replayed.
   // A refused announcement that passed authentication may get a refusal notice for its source
-  // (DatagramOutcome::refusal_notice; rsu/refusal_notices.h).
-  DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now);
+  // (DatagramOutcome::refusal_notice; rsu/refusal_notices.h). `checked`: its signature checked ahead
+  // (v2i::check_signature_ahead, on the daemon's receiver thread), taken instead of verifying it here.
+  DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now,
+                              const v2i::SignatureCheck* checked = nullptr);
   // An announcement another RSU accepted from a vehicle and shared on the data bus, received at `now`.
   // It takes the datagram path (authentication: the vehicle's own signature over its original bytes,
   // fresh, not replayed; decode, validation, reply_to against the vehicle as that RSU saw it, registry),

@@ -43,7 +43,40 @@ AuthVerdict check_rights(const security::TrustEntry& entry, const MessageBody& b
   return entry.may_sign_for(rsu_id) ? AuthVerdict::kAccepted : AuthVerdict::kWrongSubject;
 }
 
+// The signature fields of a signed envelope and the trust entry of its signer, or the verdict that
+// refuses it before any signature is checked.
+AuthVerdict find_signer(const Envelope& envelope, const security::TrustList& trust, security::KeyId& signer,
+                        const security::TrustEntry*& entry) {
+  if (envelope.signer_key_id.empty() && envelope.signature.empty())
+    return AuthVerdict::kUnsigned;
+  if (envelope.signer_key_id.size() != security::kKeyIdBytes ||
+      envelope.signature.size() != security::kSignatureBytes) {
+    return AuthVerdict::kMalformedSignature;
+  }
+  std::memcpy(signer.data(), envelope.signer_key_id.data(), signer.size());
+  entry = trust.find(signer);
+  return entry == nullptr ? AuthVerdict::kUnknownSigner : AuthVerdict::kAccepted;
+}
+
+bool signature_verifies(const Envelope& envelope, const security::PublicKey& key) {
+  const std::span<const std::uint8_t> signature(
+      reinterpret_cast<const std::uint8_t*>(envelope.signature.data()), envelope.signature.size());
+  return security::verify_signature(key, signing_input(envelope.payload), signature);
+}
+
 }  // namespace
+
+std::optional<SignatureCheck> check_signature_ahead(std::span<const std::uint8_t> bytes,
+                                                    const security::TrustList& trust) {
+  const DecodedEnvelope decoded = decode_envelope(bytes);
+  if (decoded.status != DecodeStatus::kOk)
+    return std::nullopt;
+  security::KeyId signer{};
+  const security::TrustEntry* entry = nullptr;
+  if (find_signer(decoded.envelope, trust, signer, entry) != AuthVerdict::kAccepted)
+    return std::nullopt;
+  return SignatureCheck{entry->public_key, signature_verifies(decoded.envelope, entry->public_key)};
+}
 
 const char* to_string(SecurityMode mode) {
   return mode == SecurityMode::kSigned ? "signed" : "insecure";
@@ -94,15 +127,16 @@ void MessageAuthenticator::reconfigure(const SecurityConfig& config, security::T
   replay_.set_config(config.replay);
 }
 
-AuthenticatedMessage MessageAuthenticator::authenticate(std::span<const std::uint8_t> bytes, TimeNs now) {
+AuthenticatedMessage MessageAuthenticator::authenticate(std::span<const std::uint8_t> bytes, TimeNs now,
+                                                        const SignatureCheck* checked) {
   AuthenticatedMessage out;
-  out.verdict = check(bytes, now, out);
+  out.verdict = check(bytes, now, checked, out);
   counts_.add(out.verdict);
   return out;
 }
 
 AuthVerdict MessageAuthenticator::check(std::span<const std::uint8_t> bytes, TimeNs now,
-                                        AuthenticatedMessage& out) {
+                                        const SignatureCheck* checked, AuthenticatedMessage& out) {
   DecodedEnvelope decoded = decode_envelope(bytes);
   if (decoded.status != DecodeStatus::kOk) {
     out.message.status = decoded.status;
@@ -114,23 +148,20 @@ AuthVerdict MessageAuthenticator::check(std::span<const std::uint8_t> bytes, Tim
     return out.message.status == DecodeStatus::kOk ? AuthVerdict::kAcceptedUnverified
                                                    : AuthVerdict::kMalformed;
   }
-  if (envelope.signer_key_id.empty() && envelope.signature.empty()) {
-    return AuthVerdict::kUnsigned;
+  const security::TrustEntry* entry = nullptr;
+  if (const AuthVerdict found = find_signer(envelope, trust_, out.signer, entry);
+      found != AuthVerdict::kAccepted)
+    return found;
+  bool valid = false;
+  if (checked != nullptr && checked->public_key == entry->public_key) {
+    valid = checked->valid;
+    ++signatures_checked_ahead_;
+  } else {
+    valid = signature_verifies(envelope, entry->public_key);
+    ++signatures_verified_;
   }
-  if (envelope.signer_key_id.size() != security::kKeyIdBytes ||
-      envelope.signature.size() != security::kSignatureBytes) {
-    return AuthVerdict::kMalformedSignature;
-  }
-  std::memcpy(out.signer.data(), envelope.signer_key_id.data(), out.signer.size());
-  const security::TrustEntry* entry = trust_.find(out.signer);
-  if (entry == nullptr) {
-    return AuthVerdict::kUnknownSigner;
-  }
-  const std::span<const std::uint8_t> signature(
-      reinterpret_cast<const std::uint8_t*>(envelope.signature.data()), envelope.signature.size());
-  if (!security::verify_signature(entry->public_key, signing_input(envelope.payload), signature)) {
+  if (!valid)
     return AuthVerdict::kBadSignature;
-  }
   out.message = decode_payload(envelope);
   if (out.message.status != DecodeStatus::kOk) {
     return AuthVerdict::kMalformed;  // signed garbage: a broken signer, not an attacker

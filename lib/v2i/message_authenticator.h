@@ -11,12 +11,17 @@
 // Insecure mode (local development only; the daemon and client warn loudly): any well-formed message
 // is taken without checking signature, time or sequence, and counted as accepted_unverified.
 //
+// The Ed25519 check, the one costly step (~40 us), needs only the bytes and the trust list: a receiver may
+// run it ahead on another thread (check_signature_ahead, rsud's V2I receiver thread) and hand its result
+// in; the checks that need the receiver's state (rights, time, replay) stay here, in arrival order.
+//
 // Forwarded datagrams (a peer RSU relaying a vehicle's original bytes) verify the same way: the
 // signature is the vehicle's, over the bytes as the vehicle sent them; a copy that arrives both
 // directly and forwarded is accepted once and then refused as a duplicate.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 
 #include "common/enum_counter.h"
@@ -69,11 +74,27 @@ struct AuthenticatedMessage {
   }
 };
 
+// A datagram's signature checked ahead of authenticate(), and the key it was checked against: it is
+// used only when that is still the signer's key in the authenticator's trust list (a list reloaded in
+// between makes authenticate() verify again).
+struct SignatureCheck {
+  security::PublicKey public_key{};
+  bool valid = false;
+};
+
+// The Ed25519 check of `bytes` against its signer's key in `trust`, or nothing when there is no
+// signature to check (not a version-2 envelope, unsigned, malformed signature fields, signer not
+// listed): authenticate() refuses those cheaply itself.
+std::optional<SignatureCheck> check_signature_ahead(std::span<const std::uint8_t> bytes,
+                                                    const security::TrustList& trust);
+
 class MessageAuthenticator {
  public:
   MessageAuthenticator(const SecurityConfig& config, security::TrustList trust);
 
-  AuthenticatedMessage authenticate(std::span<const std::uint8_t> bytes, TimeNs now);
+  // `checked`: the result of check_signature_ahead() on these same bytes, if it was run.
+  AuthenticatedMessage authenticate(std::span<const std::uint8_t> bytes, TimeNs now,
+                                    const SignatureCheck* checked = nullptr);
 
   // A new configuration and trust list (SIGHUP): the signers' replay state and the counts are kept, so
   // nothing accepted before can be replayed after a reload.
@@ -86,14 +107,20 @@ class MessageAuthenticator {
   const security::TrustList& trust_list() const { return trust_; }
   const security::ReplayGuard& replay() const { return replay_; }
   const EnumCounter<AuthVerdict>& counts() const { return counts_; }
+  // Ed25519 checks done here, and results of check_signature_ahead() taken instead.
+  std::uint64_t signatures_verified() const { return signatures_verified_; }
+  std::uint64_t signatures_checked_ahead() const { return signatures_checked_ahead_; }
 
  private:
-  AuthVerdict check(std::span<const std::uint8_t> bytes, TimeNs now, AuthenticatedMessage& out);
+  AuthVerdict check(std::span<const std::uint8_t> bytes, TimeNs now, const SignatureCheck* checked,
+                    AuthenticatedMessage& out);
 
   SecurityConfig config_;
   security::TrustList trust_;
   security::ReplayGuard replay_;
   EnumCounter<AuthVerdict> counts_;
+  std::uint64_t signatures_verified_ = 0;
+  std::uint64_t signatures_checked_ahead_ = 0;
 };
 
 }  // namespace rsu::v2i

@@ -73,9 +73,11 @@ class LiveRsu:
         assert r.returncode == 0, r.stdout + r.stderr
         self.trust_list = self.path("fleet.trust")
 
-    def write_config(self, reorder_packets=0, capacity=256, learning_frames=None, extra="", signed=False):
+    def write_config(self, reorder_packets=0, capacity=256, learning_frames=None, extra="", signed=False,
+                     verifier_thread=True):
         """rsud.yaml; signed: verify the fleet's signatures (call make_keys() and write the fleet's trust
-        list first, fleet(write_trust_list=...)), else insecure mode."""
+        list first, fleet(write_trust_list=...)), else insecure mode; verifier_thread: rsud's
+        v2i.verifier_thread (False: announcements read and verified on its event loop's thread)."""
         mount = self.scene["lidar"].get("mount", {})
         lidar_input = "velodyne_udp: {bind_address: 127.0.0.1, port: %d%s}" % (
             self.lidar_port, ", reorder_packets: %d" % reorder_packets if reorder_packets else "")
@@ -92,6 +94,7 @@ background:
 v2i:
   listen_address: 127.0.0.1
   port: %d
+  verifier_thread: %s
 security:
   %s
 registry:
@@ -102,6 +105,7 @@ logging:
   stats_file: %s
 %s""" % (self.model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
          mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_input, background, self.v2i_port,
+         "true" if verifier_thread else "false",
          "{mode: signed, key_file: %s, trust_list_file: %s}" % (self.path("rsu.key"), self.trust_list) if signed
          else "mode: insecure", capacity, self.path("stats"), extra)
         with open(self.path("rsud.yaml"), "w") as f:

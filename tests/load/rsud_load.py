@@ -11,6 +11,8 @@ core, from /proc/<pid>/stat).
 
   tests/load/rsud_load.py --build build                      # the full run: 1000 vehicles, 30 s
   tests/load/rsud_load.py --build build --signed             # the same, every announcement signed
+  tests/load/rsud_load.py --build build --signed --verify-inline   # baseline: rsud verifies on its one
+                                                             # event loop thread (v2i.verifier_thread: false)
   tests/load/rsud_load.py --build build --smoke [--signed]   # ctest: 200 vehicles, 5 s, with assertions
 
 With --smoke (or --check) it asserts: nothing rejected, no correction lost in transport, every vehicle in
@@ -82,7 +84,7 @@ def run(args):
         if args.signed:
             h.make_keys()
             h.write_trust_list(extra=args.vehicles - len(IN_VIEW))
-        h.write_config(capacity=args.vehicles + 64, signed=args.signed)
+        h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=not args.verify_inline)
         rsud = h.start_rsud()
         h.epoch_ns = time.time_ns() + 1_000_000_000
         stream = h.stream(0.0, args.seconds)
@@ -109,13 +111,16 @@ def report(h, args, samples, cpu_share, kernel_drops):
     summary = h.fleet_summary()
     cs = h.corrections()
     not_rejections = ("datagram.accepted", "auth.accepted", "auth.accepted_unverified", "auth.signers_tracked",
-                      "auth.sequence_restarts", "auth.signers_evicted", "auth.trusted_keys")
+                      "auth.sequence_restarts", "auth.signers_evicted", "auth.trusted_keys",
+                      "auth.signatures_verified", "auth.signatures_checked_ahead")
     rejected = {k: int(v) for k, v in s.items() if v > 0 and k not in not_rejections and k.startswith(
         ("datagram.", "auth.", "validation.", "decode.", "registry.rate_limited", "registry.registry_full",
          "registry.too_many_sources", "registry.stale_sequence", "registry.duplicate_sequence"))}
-    print("load: %d vehicles at 10 Hz for %.0f s, %s, VLP-32C stream, %d vehicles in view" % (
-        args.vehicles, args.seconds, "signed (Ed25519, each vehicle its own key)" if args.signed else "unsigned (insecure mode)",
-        len(IN_VIEW)))
+    print("load: %d vehicles at 10 Hz for %.0f s, %s, VLP-32C stream, %d vehicles in view; rsud reads and "
+          "verifies on %s" % (
+              args.vehicles, args.seconds,
+              "signed (Ed25519, each vehicle its own key)" if args.signed else "unsigned (insecure mode)",
+              len(IN_VIEW), "its event loop's thread" if args.verify_inline else "its receiver thread"))
     print("announcements: sent %d (send failures %d), dropped by the kernel at rsud's full receive buffer %s, "
           "accepted %d, rejected %s" % (summary["sent"], summary["send_failed"], kernel_drops,
                                         s.get("datagram.accepted", 0), rejected or "none"))
@@ -123,8 +128,12 @@ def report(h, args, samples, cpu_share, kernel_drops):
     # LiDAR packets it lost or shed.
     def count(name):
         return "%d" % s[name] if name in s else "n/a"
-    print("rsud counted: v2i.kernel_drops %s, lidar.kernel_drops %s, LiDAR packets lost %s, shed too late %s" % (
-        count("v2i.kernel_drops"), count("lidar.kernel_drops"), count("packet.lost"), count("packet.too_late")))
+    print("rsud counted: v2i.kernel_drops %s, lidar.kernel_drops %s, LiDAR packets lost %s, shed too late %s; "
+          "signatures verified on the loop %s, checked ahead on the receiver thread %s, dropped with its queue "
+          "full %s (most waiting %s)" % (
+              count("v2i.kernel_drops"), count("lidar.kernel_drops"), count("packet.lost"), count("packet.too_late"),
+              count("auth.signatures_verified"), count("auth.signatures_checked_ahead"),
+              count("v2i.receiver_queue_full"), count("v2i.receiver_waiting_max")))
     sent_by_rsud = int(s.get("corrections_sent", 0))
     print("corrections: rsud sent %d, vehicles received %d (lost in transport %d), to vehicles not in view %d, "
           "naming another vehicle %d" % (sent_by_rsud, len(cs), sent_by_rsud - len(cs),
@@ -174,6 +183,8 @@ def main():
     ap.add_argument("--smoke", action="store_true", help="200 vehicles for 5 s, with the assertions")
     ap.add_argument("--check", action="store_true", help="assert (see above)")
     ap.add_argument("--signed", action="store_true", help="signed announcements (rsud verifies every one)")
+    ap.add_argument("--verify-inline", action="store_true",
+                    help="rsud reads and verifies announcements on its event loop's thread (the baseline)")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.smoke:

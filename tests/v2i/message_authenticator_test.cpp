@@ -204,6 +204,45 @@ TEST_F(MessageAuthenticatorTest, ReconfigureKeepsReplayStateAndAppliesTheNewList
   EXPECT_EQ(verdict(first), AuthVerdict::kDuplicate);  // still remembered
 }
 
+// The signature checked ahead (rsud's receiver thread) gives the verdicts checking it inline gives, and
+// is taken only while it was checked against the signer's current key.
+TEST_F(MessageAuthenticatorTest, SignaturesCheckedAheadGiveTheSameVerdicts) {
+  const security::TrustList trust = keys_.trust();
+  const std::vector<std::uint8_t> good = announcement(&keys_.car, 1);
+  const std::vector<std::uint8_t> forged = tamper(announcement(&keys_.car, 2), [](auto& m) {
+    std::string p = m.payload();
+    p.back() = static_cast<char>(p.back() ^ 1);
+    m.set_payload(p);
+  });
+  const auto good_check = check_signature_ahead(good, trust);
+  const auto forged_check = check_signature_ahead(forged, trust);
+  ASSERT_TRUE(good_check && forged_check);
+  EXPECT_TRUE(good_check->valid);
+  EXPECT_FALSE(forged_check->valid);
+  EXPECT_EQ(good_check->public_key, keys_.car.public_key());
+  // Nothing to check ahead: unsigned, signer not listed, not an envelope.
+  EXPECT_FALSE(check_signature_ahead(announcement(nullptr, 3), trust));
+  EXPECT_FALSE(check_signature_ahead(announcement(&keys_.stranger, 3), trust));
+  EXPECT_FALSE(check_signature_ahead(std::vector<std::uint8_t>{0xFF, 0x01}, trust));
+
+  EXPECT_EQ(auth_.authenticate(good, kNow, &*good_check).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(auth_.authenticate(forged, kNow, &*forged_check).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth_.signatures_checked_ahead(), 2U);
+  EXPECT_EQ(auth_.signatures_verified(), 0U);
+  // A check that claims validity for bytes it was not made on is not believed against another key:
+  // a result checked against a key no longer the signer's (a reloaded list) is verified again.
+  SignatureCheck against_old_key = *forged_check;
+  against_old_key.public_key = keys_.stranger.public_key();
+  against_old_key.valid = true;
+  EXPECT_EQ(auth_.authenticate(forged, kNow, &against_old_key).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth_.signatures_verified(), 1U);
+  // The same bytes checked inline by a fresh receiver: the same verdicts.
+  MessageAuthenticator inline_auth(SecurityConfig{}, keys_.trust());
+  EXPECT_EQ(inline_auth.authenticate(good, kNow).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(inline_auth.authenticate(forged, kNow).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(inline_auth.signatures_verified(), 2U);
+}
+
 TEST(MessageSigner, CountsItsSequenceAndStampsTheTime) {
   MessageSigner signer(key_from(4), 0xFFFFFFFFU);
   const DecodedMessage a = decode_v2i_message(signer.encode(correction_from(kRsu), kNow));
