@@ -443,6 +443,8 @@ void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
     become_ready_if_possible();
   }
   send_corrections(result.corrections);
+  // The mount check of a rotation just completed (~1 ms), once its corrections are on the wire.
+  core_.check_mount_pending();
 }
 
 void RsuDaemon::send_corrections(const std::vector<core::OutgoingCorrection>& corrections) {

@@ -205,17 +205,21 @@ LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, 
 LidarStepResult RsuCore::on_lidar_points(std::span<const lidar::LidarPoint> points, TimeNs now) {
   if (!background_ready_)
     return learn(points, false);
+  check_mount_pending();  // what the caller left (rsu_core.h)
   mount_.to_map_frame(points, map_scratch_);
-  watch_mount(points, false);
-  return process(map_scratch_, Release::passed, now);
+  LidarStepResult result = process(map_scratch_, Release::passed, now);
+  watch_mount(points, false);  // after the corrections: the check waits for check_mount_pending()
+  return result;
 }
 
 LidarStepResult RsuCore::on_lidar_frame(std::span<const lidar::LidarPoint> points, TimeNs now) {
   if (!background_ready_)
     return learn(points, true);
+  check_mount_pending();
   mount_.to_map_frame(points, map_scratch_);
+  LidarStepResult result = process(map_scratch_, Release::everything, now);  // every vehicle swept
   watch_mount(points, true);
-  return process(map_scratch_, Release::everything, now);  // a whole rotation: every vehicle swept
+  return result;
 }
 
 LidarStepResult RsuCore::flush(TimeNs now) {
@@ -265,16 +269,24 @@ void RsuCore::watch_mount(std::span<const lidar::LidarPoint> points, bool whole_
       monitor_scratch_.push_back(points[i]);
   }
   if (whole_frame) {
-    check_mount(monitor_scratch_, points.empty() ? 0 : points.back().time_ns);
+    const TimeNs end = points.empty() ? 0 : points.back().time_ns;
+    mount_rotations_pending_.push_back(lidar::LidarFrame{end, end, monitor_scratch_});
     return;
   }
-  for (const lidar::LidarFrame& rotation : monitor_assembler_.add(monitor_scratch_))
-    check_mount(rotation.points, rotation.end_ns);
+  for (lidar::LidarFrame& rotation : monitor_assembler_.add(monitor_scratch_))
+    mount_rotations_pending_.push_back(std::move(rotation));
 }
 
-void RsuCore::check_mount(std::span<const lidar::LidarPoint> rotation, TimeNs time) {
-  if (monitor_->check_rotation(rotation, time))
-    mount_notices_.push_back(monitor_->notice());
+std::size_t RsuCore::check_mount_pending() {
+  const std::size_t n = mount_rotations_pending_.size();
+  if (monitor_) {
+    for (const lidar::LidarFrame& rotation : mount_rotations_pending_) {
+      if (monitor_->check_rotation(rotation.points, rotation.end_ns))
+        mount_notices_.push_back(monitor_->notice());
+    }
+  }
+  mount_rotations_pending_.clear();
+  return monitor_ ? n : 0;
 }
 
 std::vector<std::string> RsuCore::take_lidar_notices() {

@@ -148,6 +148,12 @@ class RsuCore {
   std::string mount_reason() const { return monitor_ ? monitor_->reason() : std::string(); }
   // The mount monitor (nullopt before the background is ready or when disabled).
   const std::optional<calibration::MountMonitor>& mount_monitor() const { return monitor_; }
+  // The mount check (calibration::MountMonitor, ~1 ms of CPU per rotation) of the rotations the LiDAR
+  // steps completed since the last call. A step leaves it pending, so that the corrections it returns
+  // do not wait for it (issue 16: correction latency); a caller that sends them first calls this after
+  // (rsud does). A step first checks what is still pending, so nothing is skipped when a caller never
+  // calls it. Returns how many rotations were checked.
+  std::size_t check_mount_pending();
 
  private:
   enum class Release { passed, everything };
@@ -168,7 +174,6 @@ class RsuCore {
   // A sample of the sweep's static points (sensor frame; map_scratch_ holds them in the map frame) for
   // the mount monitor, which checks each whole rotation.
   void watch_mount(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame);
-  void check_mount(std::span<const lidar::LidarPoint> rotation, TimeNs time);
   // mount.*: the monitor's counts, whether fixes are stopped, its latest estimate (measured).
   void report_mount(CounterList& out) const;
   // Passes a changed rotation rate or packet period measured by the decoder on to the stages.
@@ -199,7 +204,8 @@ class RsuCore {
   std::optional<calibration::MountMonitor> monitor_;
   lidar::FrameAssembler monitor_assembler_;  // rotations of a sample of the points, for monitor_
   std::vector<lidar::LidarPoint> monitor_scratch_;
-  std::size_t monitor_skip_ = 0;  // points since the last one sampled
+  std::vector<lidar::LidarFrame> mount_rotations_pending_;  // for check_mount_pending()
+  std::size_t monitor_skip_ = 0;                            // points since the last one sampled
   std::vector<std::string> mount_notices_;
 };
 

@@ -46,6 +46,20 @@ def cpu_s(pid):
     return (int(fields[11]) + int(fields[12])) / TICKS  # utime, stime (fields 14 and 15 of proc(5))
 
 
+def thread_cpu_s(pid):
+    """CPU seconds of each of the process's threads, by thread name (rsud's receiver is "rsud-v2i")."""
+    out = {}
+    for tid in os.listdir("/proc/%d/task" % pid):
+        try:
+            text = read_text("/proc/%d/task/%s/stat" % (pid, tid))
+        except OSError:
+            continue
+        name = text[text.index("(") + 1:text.rindex(")")]
+        fields = text.rsplit(")", 1)[1].split()
+        out[name] = out.get(name, 0.0) + (int(fields[11]) + int(fields[12])) / TICKS
+    return out
+
+
 def udp_drops(port):
     """Datagrams the kernel dropped for the UDP socket bound to `port` (its receive buffer was full),
     from the last column of /proc/net/udp."""
@@ -89,24 +103,27 @@ def run(args):
         h.epoch_ns = time.time_ns() + 1_000_000_000
         stream = h.stream(0.0, args.seconds)
         fleet = h.fleet(args.seconds + 0.5, extra=args.vehicles - len(IN_VIEW))
-        samples, cpu0, t0 = [], cpu_s(rsud.pid), time.time()
+        samples, cpu0, threads0, t0 = [], cpu_s(rsud.pid), thread_cpu_s(rsud.pid), time.time()
         deadline = t0 + args.seconds + 30
         while fleet.poll() is None and time.time() < deadline:
             mb = rss_mb(rsud.pid)
             if mb is not None:
                 samples.append((time.time() - t0, mb))
             time.sleep(0.25)
-        cpu_share = (cpu_s(rsud.pid) - cpu0) / (time.time() - t0)
+        elapsed = time.time() - t0
+        cpu_share = (cpu_s(rsud.pid) - cpu0) / elapsed
+        threads1 = thread_cpu_s(rsud.pid)
+        thread_shares = {n: (threads1[n] - threads0.get(n, 0.0)) / elapsed for n in threads1}
         finish(fleet, 10, "rsu-fleet")
         finish(stream, 10, "rsu-sim stream")
         drops = udp_drops(h.v2i_port)
         h.stop_rsud()
-        return report(h, args, samples, cpu_share, drops)
+        return report(h, args, samples, cpu_share, thread_shares, drops)
     finally:
         h.close()
 
 
-def report(h, args, samples, cpu_share, kernel_drops):
+def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
     s = h.stats()
     summary = h.fleet_summary()
     cs = h.corrections()
@@ -162,7 +179,9 @@ def report(h, args, samples, cpu_share, kernel_drops):
     slope = slope_mb_per_min(samples)
     print("rsud RSS: first %.1f MB, last %.1f MB, max %.1f MB, slope over the second half %+.2f MB/min "
           "(%d samples)" % (samples[0][1], samples[-1][1], max(m for _, m in samples), slope, len(samples)))
-    print("rsud CPU: %.0f %% of one core" % (100.0 * cpu_share))
+    busiest = sorted(thread_shares.items(), key=lambda kv: -kv[1])[:3]
+    print("rsud CPU: %.0f %% of one core (threads: %s)" % (
+        100.0 * cpu_share, ", ".join("%s %.0f %%" % (n, 100.0 * c) for n, c in busiest)))
     if args.check:
         assert not rejected, "announcements rejected: %s" % rejected
         assert sent_by_rsud == len(cs), "corrections lost in transport: %d sent, %d received" % (sent_by_rsud, len(cs))
