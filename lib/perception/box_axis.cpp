@@ -20,7 +20,14 @@ struct Extremes {
   std::size_t lo_point = 0, hi_point = 0;    // which points are the extremes
 };
 
-Extremes extremes(std::span<const BoxPoint> points, int a) {
+// Whether p can be on the footprint's outline at the sides of axis a: the lower body across the length,
+// below the bonnet at the front and back (BoxPoint).
+bool on_footprint_outline(const AxisContext& ctx, const BoxPoint& p, int a) {
+  return a == ctx.length_axis ? p.end_body : p.lower_body;
+}
+
+Extremes extremes(const AxisContext& ctx, int a) {
+  const std::span<const BoxPoint> points = ctx.points;
   Extremes e;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const double t = points[i].local[a];
@@ -32,7 +39,7 @@ Extremes extremes(std::span<const BoxPoint> points, int a) {
       e.hi = t;
       e.hi_point = i;
     }
-    if (points[i].lower_body) {
+    if (on_footprint_outline(ctx, points[i], a)) {
       e.lower_lo = std::min(e.lower_lo, t);
       e.lower_hi = std::max(e.lower_hi, t);
     }
@@ -50,7 +57,7 @@ std::vector<double> face_points(const AxisContext& ctx, int a, double sign, doub
   double along_min = kInf, along_max = -kInf, along_sum = 0.0;
   lowest = kInf;
   for (const BoxPoint& p : ctx.points) {
-    if (!p.lower_body || sign * (extreme - p.local[a]) > config.fit.edge_support_m)
+    if (!on_footprint_outline(ctx, p, a) || sign * (extreme - p.local[a]) > config.fit.edge_support_m)
       continue;
     s.push_back(sign * p.local[a]);
     along_min = std::min(along_min, p.local[b]);
@@ -206,8 +213,8 @@ AxisEstimate estimate_axis(const AxisContext& ctx, int a, const LidarGeometry& l
     out.evidence = {AxisAnchor::interval, 0, -1.0, dim};
     return out;
   }
-  const Extremes e = extremes(ctx.points, a);
-  const Extremes other = extremes(ctx.points, 1 - a);
+  const Extremes e = extremes(ctx, a);
+  const Extremes other = extremes(ctx, 1 - a);
   if (const auto face = face_anchor(ctx, a, e, lidar, config))
     return *face;
   const Side low = side_bound(ctx, a, -1.0, e, other, lidar, config);

@@ -59,6 +59,7 @@ struct View {
   const LidarGeometry& lidar;
   const CorrectionConfig& config;
   double lower_height = 0.0;  // above the road: the lower body
+  double end_height = 0.0;    // ... and the footprint's ends (BoxPoint::end_body)
   double vehicle_height = 0.0;
   double noise_sigma = 0.0;
 
@@ -67,8 +68,8 @@ struct View {
     out.reserve(points.size());
     for (const Eigen::Vector3d& p : points) {
       const double height = p.z() - lidar.ground_z;
-      out.push_back(
-          {f.local(p.head<2>()), height, height <= lower_height, (p.head<2>() - lidar.xy()).norm()});
+      out.push_back({f.local(p.head<2>()), height, height <= lower_height, height <= end_height,
+                     (p.head<2>() - lidar.xy()).norm()});
     }
     return out;
   }
@@ -125,7 +126,7 @@ FaceEvidence informative_face(const View& view, const RectangleFit& fit, std::si
     if (s < -d || s > len + d || std::abs(n) > d)
       continue;
     across.push_back(n);
-    if (p.z() - view.lidar.ground_z <= view.lower_height) {
+    if (p.z() - view.lidar.ground_z <= view.end_height) {
       ++lower;
     } else {
       upper_heights.push_back(p.z());
@@ -291,6 +292,7 @@ View view_of(std::span<const Eigen::Vector3d> finite, const RectangleFit& fit, c
           lidar,
           config,
           lower_body_height(size, config),
+          end_body_height(size, config),
           height_known ? size.height : 1e9,
           std::sqrt(point_noise_variance(range, config.covariance) +
                     config.covariance.face_tilt_sigma_m * config.covariance.face_tilt_sigma_m)};

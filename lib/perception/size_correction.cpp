@@ -1,4 +1,5 @@
 // Algorithm 1 of the paper, as written, plus the names of the correction enums.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -24,6 +25,11 @@ double lower_body_height(const VehicleSize& size, const CorrectionConfig& config
   if (!(std::isfinite(size.height) && size.height > 0.0))
     return std::numeric_limits<double>::infinity();
   return config.lower_body_fraction * size.height;
+}
+
+double end_body_height(const VehicleSize& size, const CorrectionConfig& config) {
+  const double lower = lower_body_height(size, config);
+  return std::isfinite(lower) ? std::min(lower, config.max_end_body_height_m) : lower;
 }
 
 std::string_view to_string(CorrectionStatus status) {

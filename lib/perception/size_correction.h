@@ -12,14 +12,16 @@
 //      height it is on the lower body, whose outline is the footprint (doors, bumpers); above it may be
 //      the glasshouse or roof, narrower and shorter than the footprint. The rectangle is fitted to the
 //      lower body's points where there are enough.
-//    * Yaw: a seen face tells the vehicle's direction only if it is a vertical surface of the body: on
-//      the lower body, or spanning several heights. A single laser's trace across a roof or a bonnet is
+//    * Yaw: a seen face tells the vehicle's direction only if it is a vertical surface of the body: below
+//      the bonnet (max_end_body_height_m; a van's bonnet top lies within its lower body), or spanning
+//      several heights. A single laser's trace across a roof or a bonnet is
 //      a line too (across the line of sight, whatever the car's heading) and tells nothing. The faces'
 //      yaw is fused with the vehicle's own (announced, predicted to the sweep) by their information;
 //      with no informative face the yaw is the vehicle's own, with its uncertainty.
 //    * Which fitted axis is the length: the yaw prior when decisive, else the box (of both assignments)
 //      most consistent with the points (box_consistency.h).
-//    * Position along each axis: a lower-body face's outer envelope (face_envelope.h: the footprint's
+//    * Position along each axis: a lower-body face's outer envelope (at the front and back: below the
+//      bonnet) (face_envelope.h: the footprint's
 //      edge is the outer envelope of the body's points, not their median), or the middle of both ends,
 //      or the interval the points and the LiDAR's view leave (box_axis.h) with its spread in the
 //      covariance. Before that, the fit's orientation is refined by least squares on the seen faces
@@ -125,6 +127,12 @@ struct CorrectionConfig {
   // Which part of the body a point can be on (see above): below this share of the announced height the
   // footprint's outline (every road vehicle's lower half is its full plan: bumpers, doors, sills).
   double lower_body_fraction = 0.55;
+  // ... but at the front and back only up to the bonnet: a van's belt line lies below half its height
+  // (1.2 of 2.45 m) and above it the windscreen stands a bonnet's length back (0.7-0.8 m); points on it
+  // taken for the footprint's end put the fix 0.6 m off while stating 0.1 m (`rsu-pilot matrix`: 94 of a
+  // VLP-16's fixes of the van at 2 m beyond 35 m, 62 of a VLP-32C's at 6 m). Up to this height the ends
+  // of every road vehicle are its footprint's (bumpers, a bus's or a lorry's flat front).
+  double max_end_body_height_m = 1.0;
   // Up to this height (and the lower body) the plan is full on any road vehicle (bumpers and doors; a
   // bus's windows start at about a third of its height, above it); a face seen only higher up, but
   // within the lower body's share, may be set back by up to mid_height_inset_m (box_axis.h).
@@ -170,6 +178,9 @@ struct CorrectionConfig {
 // number. (Up to max(that, full_plan_height_m) measured better for a small car, 0.9 m doors at 1.48 m,
 // but with more fixes beyond 3 sigma at 6-8 m mounts: `rsu-pilot matrix`, issue 12.)
 double lower_body_height(const VehicleSize& size, const CorrectionConfig& config);
+// Up to which height a point can be on the footprint's front or back: the lower body, at most
+// max_end_body_height_m (every point, as for the lower body, when the height is unknown).
+double end_body_height(const VehicleSize& size, const CorrectionConfig& config);
 
 CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& size,
                                  const Eigen::Vector2d& lidar_xy,

@@ -1,6 +1,8 @@
 #include "perception/vehicle_fix.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
 #include "common/angles.h"
@@ -9,7 +11,10 @@ namespace rsu::perception {
 namespace {
 
 // The xy of the points the rectangle is fitted to: the lower body's when it has enough points for a
-// fit (its outline is the footprint), else all of them.
+// fit (its outline is the footprint), else all of them. The lower body is not all of the footprint on
+// a van: its bonnet's top (1.2 of 2.45 m) lies within it, and a laser's trace across it, with the
+// glasshouse's far corner, made a diagonal "face" 20 deg off (`rsu-pilot matrix`, a VLP-32C 6 m up): so
+// it is fitted only where enough points lie below the bonnet (end_body_height) too.
 std::vector<Eigen::Vector2d> outline_points(std::span<const Eigen::Vector3d> points, const VehicleSize& size,
                                             const LidarGeometry& lidar, const VehicleFixConfig& config,
                                             bool lower_body_only) {
@@ -46,7 +51,12 @@ VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> points, const AnnouncedV
     return out;
   }
   std::vector<Eigen::Vector2d> outline = outline_points(points, vehicle.size, lidar, config, true);
-  if (outline.size() >= config.correction.min_lower_body_points) {
+  const double below_bonnet = end_body_height(vehicle.size, config.correction);
+  const auto under_bonnet = std::count_if(points.begin(), points.end(), [&](const Eigen::Vector3d& p) {
+    return p.allFinite() && p.z() - lidar.ground_z <= below_bonnet;
+  });
+  const auto enough = static_cast<std::ptrdiff_t>(config.correction.min_lower_body_points);
+  if (static_cast<std::ptrdiff_t>(outline.size()) >= enough && under_bonnet >= enough) {
     out.fit = fit_rectangle(outline, lidar.xy(), config.fit);
   }
   if (!out.fit.ok()) {
