@@ -1,9 +1,9 @@
-// rsud's V2I receiver thread (v2i.verifier_thread, on by default): reads the announcement socket and
-// checks each datagram's Ed25519 signature (v2i::check_signature_ahead, ~40 us each) off the event
-// loop's thread, so that 1000 signed vehicles at 10 Hz neither wait behind a LiDAR rotation's work nor
-// hold it up. The datagrams, each with its check, go to the event loop in arrival order, where RsuCore
-// does everything else (rate limit, rights, time and replay windows, registry): its state is touched by
-// that thread only. The socket stays the event loop's for sending (corrections, notices).
+// rsud's V2I receiver thread (v2i.verifier_thread: true; off by default, README "Robustness"): reads the
+// announcement socket and checks each datagram's Ed25519 signature (v2i::check_signature_ahead, ~40 us each)
+// off the event loop's thread, so that 1000 signed vehicles at 10 Hz neither wait behind a LiDAR rotation's
+// work nor hold it up. The datagrams, each with its check, go to the event loop in arrival order, where
+// RsuCore does everything else (rate limit, rights, time and replay windows, registry): its state is touched
+// by that thread only. The socket stays the event loop's for sending (corrections, notices).
 #pragma once
 
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20

@@ -74,7 +74,7 @@ class LiveRsu:
         self.trust_list = self.path("fleet.trust")
 
     def write_config(self, reorder_packets=0, capacity=256, learning_frames=None, extra="", signed=False,
-                     verifier_thread=True):
+                     verifier_thread=False):
         """rsud.yaml; signed: verify the fleet's signatures (call make_keys() and write the fleet's trust
         list first, fleet(write_trust_list=...)), else insecure mode; verifier_thread: rsud's
         v2i.verifier_thread (False: announcements read and verified on its event loop's thread)."""
@@ -111,10 +111,13 @@ logging:
         with open(self.path("rsud.yaml"), "w") as f:
             f.write(text)
 
-    def start_rsud(self, wait_ready=True):
+    def start_rsud(self, wait_ready=True, own_session=False):
+        """own_session: rsud in a session (and so a scheduling autogroup) of its own, as a service runs
+        beside the load generators (rsu_processes.Children.spawn)."""
         self.rsud_runs += 1
         self.log_path = self.path("rsud_%d.log" % self.rsud_runs)
-        self.rsud = self.children.spawn([self.tools["rsud"], "--config", self.path("rsud.yaml")], self.log_path)
+        self.rsud = self.children.spawn([self.tools["rsud"], "--config", self.path("rsud.yaml")], self.log_path,
+                                        own_session=own_session)
         if wait_ready:
             self.wait_for(lambda: "ready: serving" in self.log(), 20, "rsud to become ready")
         return self.rsud

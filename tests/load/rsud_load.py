@@ -11,8 +11,8 @@ core, from /proc/<pid>/stat).
 
   tests/load/rsud_load.py --build build                      # the full run: 1000 vehicles, 30 s
   tests/load/rsud_load.py --build build --signed             # the same, every announcement signed
-  tests/load/rsud_load.py --build build --signed --verify-inline   # baseline: rsud verifies on its one
-                                                             # event loop thread (v2i.verifier_thread: false)
+  tests/load/rsud_load.py --build build --signed --verifier-thread   # rsud verifies on its receiver
+                                                             # thread (v2i.verifier_thread: true)
   tests/load/rsud_load.py --build build --smoke [--signed]   # ctest: 200 vehicles, 5 s, with assertions
 
 With --smoke (or --check) it asserts: nothing rejected, no correction lost in transport, every vehicle in
@@ -98,8 +98,15 @@ def run(args):
         if args.signed:
             h.make_keys()
             h.write_trust_list(extra=args.vehicles - len(IN_VIEW))
-        h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=not args.verify_inline)
-        rsud = h.start_rsud()
+        h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=args.verifier_thread)
+        rsud = h.start_rsud(own_session=args.rsud_session == "own")
+        if args.group_nice is not None:
+            # The nice of rsud's autogroup and of this driver's (rsu-fleet, rsu-sim): how the scheduler
+            # weighs them against other sessions' work (sched(7)); -10 models a box of their own on a
+            # machine others share. Root to lower it.
+            for pid in (rsud.pid, os.getpid()):
+                with open("/proc/%d/autogroup" % pid, "w") as f:
+                    f.write("%d" % args.group_nice)
         h.epoch_ns = time.time_ns() + 1_000_000_000
         stream = h.stream(0.0, args.seconds)
         fleet = h.fleet(args.seconds + 0.5, extra=args.vehicles - len(IN_VIEW))
@@ -134,10 +141,12 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
         ("datagram.", "auth.", "validation.", "decode.", "registry.rate_limited", "registry.registry_full",
          "registry.too_many_sources", "registry.stale_sequence", "registry.duplicate_sequence"))}
     print("load: %d vehicles at 10 Hz for %.0f s, %s, VLP-32C stream, %d vehicles in view; rsud reads and "
-          "verifies on %s" % (
+          "verifies on %s, in %s session" % (
               args.vehicles, args.seconds,
               "signed (Ed25519, each vehicle its own key)" if args.signed else "unsigned (insecure mode)",
-              len(IN_VIEW), "its event loop's thread" if args.verify_inline else "its receiver thread"))
+              len(IN_VIEW), "its receiver thread" if args.verifier_thread else "its event loop's thread",
+              "its own" if args.rsud_session == "own" else "the load generators'")
+          + ("" if args.group_nice is None else "; rsud's and the generators' autogroups at nice %d" % args.group_nice))
     print("announcements: sent %d (send failures %d), dropped by the kernel at rsud's full receive buffer %s, "
           "accepted %d, rejected %s" % (summary["sent"], summary["send_failed"], kernel_drops,
                                         s.get("datagram.accepted", 0), rejected or "none"))
@@ -202,8 +211,18 @@ def main():
     ap.add_argument("--smoke", action="store_true", help="200 vehicles for 5 s, with the assertions")
     ap.add_argument("--check", action="store_true", help="assert (see above)")
     ap.add_argument("--signed", action="store_true", help="signed announcements (rsud verifies every one)")
-    ap.add_argument("--verify-inline", action="store_true",
-                    help="rsud reads and verifies announcements on its event loop's thread (the baseline)")
+    ap.add_argument("--verifier-thread", action="store_true",
+                    help="rsud reads and verifies announcements on a receiver thread (v2i.verifier_thread: "
+                         "true), not on its event loop's thread")
+    ap.add_argument("--rsud-session", choices=("own", "shared"), default="own",
+                    help="own (default): rsud in a session of its own, so that Linux's autogroup scheduler "
+                         "shares the cores between it and the load generators (rsu-fleet signing, rsu-sim) as "
+                         "between a service and other programs; shared: in this driver's session, sharing one "
+                         "group's CPU with them (the runs before issue 16's receiver thread)")
+    ap.add_argument("--group-nice", type=int, default=None,
+                    help="the nice value of rsud's scheduling autogroup and of this driver's (the load "
+                         "generators), e.g. -10 to model a machine of their own while others build on it "
+                         "(needs root to lower it)")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.smoke:

@@ -32,13 +32,15 @@ class Children:
     def __init__(self):
         self.procs = []
 
-    def spawn(self, cmd, stdout_path, stdin_path=None, stderr_path=None, env=None):
+    def spawn(self, cmd, stdout_path, stdin_path=None, stderr_path=None, env=None, own_session=False):
         """Starts cmd with stdout to stdout_path and stderr to stderr_path (default: into stdout); env
-        replaces the environment when given."""
+        replaces the environment when given. own_session: in a session of its own, so that Linux's
+        autogroup scheduling shares the CPU between it and this session's processes as between two
+        services, not as threads of one group."""
         stdin = open(stdin_path) if stdin_path else subprocess.DEVNULL
         out = open(stdout_path, "w")
         err = open(stderr_path, "w") if stderr_path else subprocess.STDOUT
-        p = subprocess.Popen(cmd, stdin=stdin, stdout=out, stderr=err, env=env)
+        p = subprocess.Popen(cmd, stdin=stdin, stdout=out, stderr=err, env=env, start_new_session=own_session)
         self.procs.append(p)
         return p
 
