@@ -72,10 +72,11 @@ bool GatheredVehicleFixer::fits_vehicle(const perception::RectangleFit& fit,
 }
 
 GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a,
-                                      bool lost_nearby) const {
+                                      bool lost_nearby, std::vector<Eigen::Vector2d> occluders) const {
   GatheredFix out;
   perception::LidarGeometry lidar = lidar_;
   lidar.complete_sweep = !lost_nearby;
+  lidar.occluders = std::move(occluders);
   // A near vehicle was held because its assigned detection lay outside its footprint (the gatherer);
   // if none of its own came while the sweep passed it, that one is more likely a neighbour's (its own
   // hidden, or its packets lost): no fix rather than someone else's.

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <span>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -47,8 +48,10 @@ class GatheredVehicleFixer {
 
   // The fix of `held` with what the vehicle announced (`a`): from the whole gathered union if it is
   // one vehicle of the announced size; otherwise from the detection the assignment gave it alone.
-  // lost_nearby: LiDAR packets were lost while the sweep passed it (no side of it counts as seen).
-  GatheredFix fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby = false) const;
+  // lost_nearby: LiDAR packets were lost while the sweep passed it (no side of it counts as seen);
+  // occluders: the other objects' points that may hide part of it (sweep_occluders.h).
+  GatheredFix fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby = false,
+                  std::vector<Eigen::Vector2d> occluders = {}) const;
 
  private:
   // The vehicle's fix from its points swept at `sweep_time`, with its announced size and its announced

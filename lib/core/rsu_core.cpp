@@ -73,6 +73,7 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       background_ready_(config.background.learning_frames == 0),
       announcements_(config),
       gatherer_(config.gathering, config.association, mount_.xy()),
+      occluders_(mount_.xy(), sweep_.rotation_period_ns()),
       fixer_(config, mount_),
       corrections_(config),
       refusals_(config.refusal_notices),
@@ -102,7 +103,9 @@ LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Rele
     const std::vector<tracking::VehicleHypothesis> vehicles = predict_announced(detections, now);
     // Associate: which detection is which vehicle (gates, one global assignment).
     const tracking::AssociationResult pairs = tracking::associate(detections, vehicles, config_.association);
-    // Gather: each vehicle's detections, across batches, until the sweep has passed it (fragments).
+    // Gather: each vehicle's detections, across batches, until the sweep has passed it (fragments);
+    // every detection is also what may hide part of another vehicle from the LiDAR.
+    occluders_.add(detections);
     lidar_stats_.clusters_unmatched += gatherer_.gather(std::move(detections), vehicles, pairs, sweep_);
   }
   // Fix and correction: each vehicle the sweep has passed, size-corrected with its announced size
@@ -157,7 +160,7 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
   // Packets lost while the sweep crossed the vehicle (or just before its first points: its leading part
   // may be what was lost).
   const bool lost_nearby = last_loss_ns_ >= held.first_time - sweep_.rotation_period_ns() / 8;
-  const GatheredFix fix = fixer_.fix(held, vehicle->announcement, lost_nearby);
+  const GatheredFix fix = fixer_.fix(held, vehicle->announcement, lost_nearby, occluders_.of(held));
   count(fix, lidar_stats_);
   if (!fix.ok())
     return;
@@ -242,6 +245,7 @@ void RsuCore::follow_geometry() {
   assembler_.set_rotation_hz(g.rotation_hz);
   monitor_assembler_.set_rotation_hz(g.rotation_hz);
   clusterer_.set_rotation_hz(g.rotation_hz);
+  occluders_.set_rotation_period(sweep_.rotation_period_ns());
 }
 
 void RsuCore::start_mount_monitor() {

@@ -33,6 +33,7 @@
 #include "core/packet_intake.h"
 #include "core/refusal_notices.h"
 #include "core/rsu_core_config.h"
+#include "core/sweep_occluders.h"
 #include "core/sweep_position.h"
 #include "core/vehicle_gatherer.h"
 #include "lidar/frame_assembler.h"
@@ -190,6 +191,7 @@ class RsuCore {
   std::vector<std::vector<lidar::LidarPoint>> background_frames_;  // sensor frame
   AnnouncementIntake announcements_;
   VehicleGatherer gatherer_;
+  SweepOccluders occluders_;  // the sweep's other objects, which may hide part of a vehicle
   GatheredVehicleFixer fixer_;
   CorrectionBuilder corrections_;
   RefusalNotices refusals_;

@@ -20,6 +20,44 @@
 namespace rsu::core {
 namespace {
 
+// A detection of points spaced 0.1 m along y at x = `x`, from y0 to y1, swept at `t`.
+perception::Detection detection_at(double x, double y0, double y1, TimeNs t) {
+  perception::Detection d;
+  for (double y = y0; y <= y1 + 1e-9; y += 0.1)
+    d.points.emplace_back(x, y, 0.8);
+  d.sweep_time_ns = t;
+  return d;
+}
+
+// What may hide a vehicle (sweep_occluders.h): another object of the same sweep nearer the LiDAR in the
+// vehicle's direction; not the vehicle's own points, not objects beside it or behind it, not another
+// rotation's.
+TEST(SweepOccluders, OtherObjectsNearerInTheVehiclesDirection) {
+  constexpr TimeNs kRotation = 100'000'000;
+  SweepOccluders occluders(Eigen::Vector2d::Zero(), kRotation);
+  const TimeNs t = 5 * kRotation;
+  const perception::Detection vehicle = detection_at(20.0, -1.0, 2.0, t);
+  const perception::Detection in_front = detection_at(10.0, 0.5, 1.0, t + 1'000'000);
+  const perception::Detection beside = detection_at(10.0, 6.0, 7.0, t);  // 31 deg off its direction
+  const perception::Detection behind = detection_at(30.0, 0.0, 1.0, t);
+  const perception::Detection last_rotation = detection_at(12.0, -0.5, 0.0, t - kRotation + 2'000'000);
+  occluders.add(std::vector<perception::Detection>{last_rotation});
+  occluders.add(std::vector<perception::Detection>{vehicle, in_front, beside, behind});
+  ASSERT_EQ(occluders.detections_kept(), 5U);
+
+  HeldVehicle held;
+  held.points = vehicle.points;
+  held.first_time = t;
+  const std::vector<Eigen::Vector2d> got = occluders.of(held);
+  ASSERT_EQ(got.size(), in_front.points.size());
+  for (const Eigen::Vector2d& xy : got)
+    EXPECT_DOUBLE_EQ(xy.x(), 10.0);
+
+  // A rotation later, the first batches are forgotten.
+  occluders.add(std::vector<perception::Detection>{detection_at(5.0, 0.0, 0.2, t + 2 * kRotation)});
+  EXPECT_EQ(occluders.detections_kept(), 1U);
+}
+
 using testing::announce;
 using testing::counter;
 using testing::SimStream;
