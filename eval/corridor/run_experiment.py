@@ -284,15 +284,28 @@ def main():
     ap.add_argument("--experiment", default=os.path.join(ROOT, "scenarios", "corridor_experiment.yaml"))
     ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder with the tools")
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "corridor"))
+    ap.add_argument("--rsu-mount-z-m", type=float,
+                    help="the RSU LiDAR at this height instead of the scenario's (issue 12: an elevated RSU); "
+                         "the scenario with it is written into --out")
     args = ap.parse_args()
     exp, scenario_path, scenario = prepare(args)
+    if args.rsu_mount_z_m is not None:
+        scenario = dict(scenario, lidar=dict(scenario["lidar"], mount=dict(scenario["lidar"]["mount"],
+                                                                           z=args.rsu_mount_z_m)))
+        elevated = os.path.join(args.out, "scenario_rsu_%gm.yaml" % args.rsu_mount_z_m)
+        with open(elevated, "w") as f:
+            f.write("# %s with the RSU LiDAR at %g m (written by run_experiment.py)\n" % (scenario_path,
+                                                                                        args.rsu_mount_z_m))
+            yaml.safe_dump(scenario, f)
+        print("RSU LiDAR at %g m above the road: %s" % (args.rsu_mount_z_m, elevated))
     run = Run(args)
     try:
         t0 = time.time()
         subprocess.run([run.tool("eval/rsu-corridor"), "ndt", args.experiment, "--out", args.out], check=True,
                        timeout=600)
         for model in exp["rsu_models"]:
-            live_run(run, exp, scenario_path, scenario, model, args.out)
+            case = LiveCase(model, scenario_path=elevated if args.rsu_mount_z_m is not None else None)
+            live_run(run, exp, scenario_path, scenario, case, args.out)
         subprocess.run([run.tool("eval/rsu-corridor"), "report", args.experiment, "--out", args.out], check=True,
                        timeout=120)
         subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "eval", "plots", "corridor_figures.py"), args.out,

@@ -22,6 +22,8 @@ import os
 import sys
 import time
 
+import yaml
+
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from live_rsu import ROTATION_S, finish, run_case  # noqa: E402
 
@@ -76,8 +78,19 @@ def main():
     ap.add_argument("--rsu-sim", required=True)
     ap.add_argument("--fleet", required=True)
     ap.add_argument("--work", required=True)
+    ap.add_argument("--mount-z-m", type=float,
+                    help="the RSU LiDAR at this height instead of the street's 2 m (an elevated RSU, issue 12; "
+                         "the street with it is written beside --work)")
     args = ap.parse_args()
-    return run_case(run, args.work, {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet}, SCENARIO)
+    scenario = SCENARIO
+    if args.mount_z_m is not None:
+        with open(SCENARIO) as f:
+            street = yaml.safe_load(f)
+        street["lidar"]["mount"]["z"] = args.mount_z_m
+        scenario = "%s_occlusion_street_%gm.yaml" % (os.path.abspath(args.work), args.mount_z_m)
+        with open(scenario, "w") as f:
+            yaml.safe_dump(street, f)
+    return run_case(run, args.work, {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet}, scenario)
 
 if __name__ == "__main__":
     sys.exit(main())
