@@ -62,12 +62,12 @@ void RangeImageBackground::recompute_thresholds() {
         const int b = ((bin + d) % bins_ + bins_) % bins_;  // azimuth wraps around
         nearest = std::min(nearest, percentile[row + static_cast<std::size_t>(b)]);
       }
-      const std::size_t c = row + static_cast<std::size_t>(bin);
-      background_[c] = nearest;
+      background_[row + static_cast<std::size_t>(bin)] = nearest;
       if (std::isfinite(nearest)) {
         const double bg = static_cast<double>(nearest);
         const double threshold = std::max(0.0, bg - config_.margin_m - config_.margin_per_m * bg);
-        threshold_sq_[c] = static_cast<float>(threshold * threshold);
+        threshold_sq_[static_cast<std::size_t>(bin) * static_cast<std::size_t>(rings_) +
+                      static_cast<std::size_t>(ring)] = static_cast<float>(threshold * threshold);
       }
     }
   }
