@@ -384,6 +384,7 @@ void RsuCore::report_mount(CounterList& out) const {
   out.add("mount", "rotations_mismatched", m.rotations_mismatched);
   out.add("mount", "rotations_unverifiable", m.rotations_unverifiable);
   out.add("mount", "stops", m.stops);
+  out.add("mount", "stops_unconfirmed", m.stops_unconfirmed);
   out.add("mount", "resumes", m.resumes);
   out.add_level("mount", "fixes_stopped", mount_serving() ? 0 : 1);
   if (!monitor_ || m.rotations_checked == 0)
