@@ -60,13 +60,18 @@ struct MountMonitorConfig {
   // is confirmed, within them only suspected (stopped all the same, said so, counted as
   // stops_unconfirmed). A scene whose sigma at the radius puts this many of them beyond the tolerance
   // cannot verify the mount to it at all (rotations_unverifiable, warned about once): there the fixes
-  // keep flowing while the estimate stays within the tolerance, and resume once it is back within
-  // resume_fraction of it; elsewhere they resume once it is back by this many sigmas.
+  // keep flowing while the estimate stays within the tolerance; once stopped there they stay stopped
+  // until a recalibration (nothing there can show the LiDAR is back); elsewhere they resume once it is
+  // back within resume_fraction of the tolerance by this many sigmas. Where the scene cannot verify,
+  // no stop is confirmed either (its sigma is not to be trusted): every stop there is a suspected one.
   double significance_sigmas = 3.0;
   // A suspected motion (beyond the tolerance, not by significance_sigmas) stops the fixes once this many
   // rotations in a row show it: one noisy rotation in a weak scene must not (0.3 s at 10 Hz: well
   // within the second the fixes must stop in). A confirmed one stops them at its first rotation.
   int suspect_rotations = 3;
+  // A direction of the motion (metres at the coverage radius) that one rotation's points pin down no
+  // better than this is not estimated (mount_monitor.cpp, held_step): what it says there is noise.
+  double max_free_sigma_m = 0.025;
 };
 
 // The sensor's motion since the reference: the reference frame -> the current sensor frame's pose in it.
@@ -124,6 +129,8 @@ class MountMonitor {
   // Why the fixes are stopped now (empty while serving): for the advertisement and the stats.
   const std::string& reason() const { return reason_; }
   StopCause cause() const { return cause_; }
+  // The estimate that stopped the fixes (while stopped: the advertisement's and the log's reason).
+  const MountDrift& stopped_by() const { return stopped_by_; }
 
   // The registration alone (for tests and the benchmark): the drift of `rotation` from `start`.
   MountDrift estimate(std::span<const lidar::LidarPoint> rotation, const Pose3& start) const;
@@ -148,6 +155,11 @@ class MountMonitor {
   // Matches on the fitted planes; weak_matches counts those on lines (within the gate of their plane).
   std::vector<PlaneMatch> match(const std::vector<Eigen::Vector3d>& points, const Pose3& motion,
                                 double max_residual_m, std::size_t& weak_matches) const;
+  Vector6d held_step(const PlaneFit& fit) const;
+  // Serving -> moved, with the cause and reason of the last estimate (significant: confirmed).
+  void stop(bool significant);
+  // Moved -> serving once `calm` has held for resume_after; true when it resumed.
+  bool resume_when_calm(bool calm, TimeNs time);
   // The error at the radius (the worst azimuth) and its standard deviation under `covariance`.
   std::pair<double, double> error_at_radius(const Pose3& motion, const Matrix6d& covariance) const;
 
@@ -162,8 +174,8 @@ class MountMonitor {
   TimeNs calm_since_ = 0;  // the first of the rotations in a row within resume_fraction (while moved)
   bool calm_ = false;
   int suspect_run_ = 0;  // rotations in a row with a suspected motion
-  Pose3 start_;          // where the next registration starts: the last observable estimate
   MountDrift last_;
+  MountDrift stopped_by_;
   MountMonitorStats stats_;
   std::string notice_;
   std::string reason_;
