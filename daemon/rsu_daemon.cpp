@@ -647,8 +647,13 @@ void RsuDaemon::on_advertise() {
   const auto address = asio::ip::make_address(config_.advertisement.address, ec);
   if (!ec)
     v2i_socket_.send_to(asio::buffer(bytes), udp::endpoint(address, config_.advertisement.port), 0, ec);
-  if (ec)
+  if (ec) {
     bad_input_.report("advertisement_send", ec.message());
+    return;
+  }
+  ++advertisements_.sent;
+  if (core_.fixes_withheld() != v2i::FixesWithheld::kNone)
+    ++advertisements_.saying_fixes_withheld;  // the vehicles are told why no corrections come
 }
 
 void RsuDaemon::on_stats() {
@@ -705,6 +710,8 @@ CounterList RsuDaemon::stats() {
   out.add("state", "background_save_failed", state_counts_.background_save_failed);
   out.add_level("state", "mount_from_calibration", config_.mount_source != "lidar.mount" ? 1 : 0);
   out.add("", "refusal_sends_failed", refusal_sends_failed_);
+  out.add("advertisement", "sent", advertisements_.sent);
+  out.add("advertisement", "saying_fixes_withheld", advertisements_.saying_fixes_withheld);
   core_.report(out);
   // Datagrams the kernel dropped before rsud could read them (its socket buffer was full): what was
   // sent is what rsud counted plus these.

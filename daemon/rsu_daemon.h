@@ -146,6 +146,11 @@ class RsuDaemon {
     std::uint64_t background_save_failed = 0;
   };
   StateCounts state_counts_;
+  struct AdvertisementCounts {
+    std::uint64_t sent = 0;
+    std::uint64_t saying_fixes_withheld = 0;  // of them, those that said fixes are withheld (and why)
+  };
+  AdvertisementCounts advertisements_;
 
   // PCD replay
   std::vector<std::vector<lidar::LidarPoint>> pcd_frames_;

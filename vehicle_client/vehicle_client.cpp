@@ -280,6 +280,11 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
           stats_.refusals.add(filter_.last_refusal().reason);
           stats_.last_refusal = ReceivedRefusal{filter_.last_refusal(), clock_(), edge::to_text(sender_)};
         }
+        if (verdict == CorrectionVerdict::kAdvertisement) {
+          stats_.advertisements.add(filter_.last_advertisement().fixes_withheld);
+          stats_.last_advertisement =
+              ReceivedAdvertisement{filter_.last_advertisement(), clock_(), edge::to_text(sender_)};
+        }
         if (verdict == CorrectionVerdict::kAccepted) {
           received = ReceivedCorrection{std::move(correction), clock_(), edge::to_text(sender_)};
           pending_.push_back(*received);

@@ -46,6 +46,14 @@ struct ReceivedRefusal {
   std::string sender;        // "ADDR:PORT" of the datagram's source
 };
 
+// An RSU's advertisement (proto/v2i.proto RsuAdvertisement), authenticated like a correction: it says
+// whether that RSU withholds its fixes now, and why.
+struct ReceivedAdvertisement {
+  v2i::RsuAdvertisement advertisement;
+  TimeNs received_time = 0;  // client clock
+  std::string sender;        // "ADDR:PORT" of the datagram's source
+};
+
 struct VehicleClientStats {
   std::uint64_t announcements_sent = 0;  // datagrams, one per RSU per announcement
   std::uint64_t keepalive_announcements = 0;
@@ -56,13 +64,17 @@ struct VehicleClientStats {
   EnumCounter<CorrectionVerdict> corrections;  // accepted, and rejected by reason (and refusal notices)
   EnumCounter<v2i::RefusalReason> refusals;    // refusal notices received, by the RSU's reason
   std::optional<ReceivedRefusal> last_refusal;
+  // Advertisements received, by what they say about the fixes (none: corrections are sent).
+  EnumCounter<v2i::FixesWithheld> advertisements;
+  std::optional<ReceivedAdvertisement> last_advertisement;
   EnumCounter<v2i::AuthVerdict> authentication;  // every datagram's signature/replay verdict
   std::uint64_t sequence_restarts = 0;           // an RSU restarted (CorrectionFilter)
   std::uint64_t dropped_unpolled = 0;            // over max_pending_corrections
 
   std::uint64_t accepted() const { return corrections.count(CorrectionVerdict::kAccepted); }
   std::uint64_t rejected() const {
-    return corrections.total() - accepted() - corrections.count(CorrectionVerdict::kRefusal);
+    return corrections.total() - accepted() - corrections.count(CorrectionVerdict::kRefusal) -
+           corrections.count(CorrectionVerdict::kAdvertisement);
   }
 };
 

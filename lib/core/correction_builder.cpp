@@ -92,7 +92,10 @@ bool CorrectionBuilder::corrected_this_rotation(std::uint64_t vehicle_id, TimeNs
          std::abs(batch_time - it->second.last_matched_sweep) < rotation_period_ns / 2;
 }
 
-std::vector<std::uint8_t> CorrectionBuilder::advertisement(TimeNs now) {
+std::vector<std::uint8_t> CorrectionBuilder::advertisement(TimeNs now, v2i::FixesWithheld withheld,
+                                                           double mount_error_at_radius_m) {
+  advertised_.fixes_withheld = withheld;
+  advertised_.mount_error_at_radius_m = withheld == v2i::FixesWithheld::kNone ? 0.0 : mount_error_at_radius_m;
   return signer_.encode(advertised_, now);
 }
 

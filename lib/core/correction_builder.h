@@ -62,8 +62,10 @@ class CorrectionBuilder {
   // Whether the vehicle was corrected from a sweep within half a rotation of `batch_time`: a vehicle is
   // fixed once per rotation (a later cluster near it is something else).
   bool corrected_this_rotation(std::uint64_t vehicle_id, TimeNs batch_time, TimeNs rotation_period_ns) const;
-  // The encoded RsuAdvertisement, signed in signed mode (empty if encoding failed).
-  std::vector<std::uint8_t> advertisement(TimeNs now);
+  // The encoded RsuAdvertisement, signed in signed mode (empty if encoding failed), saying whether the
+  // fixes are withheld now and why (with a mount cause, the estimated error at the coverage radius).
+  std::vector<std::uint8_t> advertisement(TimeNs now, v2i::FixesWithheld withheld = v2i::FixesWithheld::kNone,
+                                          double mount_error_at_radius_m = 0.0);
   // The encoded refusal notice, signed in signed mode (empty if encoding failed).
   std::vector<std::uint8_t> refusal(const v2i::AnnouncementRefusal& notice, TimeNs now) {
     return signer_.encode(notice, now);

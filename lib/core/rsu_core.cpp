@@ -248,6 +248,28 @@ void RsuCore::follow_geometry() {
   occluders_.set_rotation_period(sweep_.rotation_period_ns());
 }
 
+v2i::FixesWithheld RsuCore::fixes_withheld() const {
+  if (mount_serving())
+    return v2i::FixesWithheld::kNone;
+  switch (monitor_->cause()) {
+    case calibration::StopCause::kSuspected:
+      return v2i::FixesWithheld::kMountSuspected;
+    case calibration::StopCause::kMismatch:
+      return v2i::FixesWithheld::kMountMismatch;
+    case calibration::StopCause::kMoved:
+    case calibration::StopCause::kNone:
+      break;
+  }
+  return v2i::FixesWithheld::kMountMoved;
+}
+
+std::vector<std::uint8_t> RsuCore::advertisement(TimeNs now) {
+  const v2i::FixesWithheld withheld = fixes_withheld();
+  const bool estimated = monitor_ && withheld != v2i::FixesWithheld::kMountMismatch;
+  return corrections_.advertisement(now, withheld,
+                                    estimated ? monitor_->stopped_by().error_at_radius_m : 0.0);
+}
+
 void RsuCore::start_mount_monitor() {
   if (!config_.mount_monitor.enabled || background_frames_.empty())
     return;

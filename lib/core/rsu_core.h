@@ -114,8 +114,11 @@ class RsuCore {
   // nothing) if `next` is unusable.
   ReloadSummary reload(const RsuCoreConfig& next, TimeNs now);
 
-  // The encoded RsuAdvertisement, signed in signed mode, generated at `now` (empty if encoding failed).
-  std::vector<std::uint8_t> advertisement(TimeNs now) { return corrections_.advertisement(now); }
+  // The encoded RsuAdvertisement, signed in signed mode, generated at `now` (empty if encoding failed):
+  // it says whether the fixes are withheld (the mount monitor) and why.
+  std::vector<std::uint8_t> advertisement(TimeNs now);
+  // Why fixes are withheld now (kNone while serving).
+  v2i::FixesWithheld fixes_withheld() const;
 
   // Everything counted and measured, zeros included, in a stable order, each with its kind: for the
   // stats file, the metrics and logs.

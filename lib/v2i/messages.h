@@ -69,6 +69,33 @@ struct Correction {
   std::uint32_t announcement_sequence = 0;
 };
 
+// Why an RSU withholds its corrections (proto/v2i.proto FixesWithheld).
+enum class FixesWithheld : std::uint8_t {
+  kNone = 0,
+  kMountMoved = 1,      // the LiDAR moved beyond the tolerance (confirmed)
+  kMountSuspected = 2,  // its estimate is beyond the tolerance; the scene cannot confirm it
+  kMountMismatch = 3,   // its view no longer matches its reference scene
+  kUnknown = 4,         // a value this receiver does not know
+  kCount,
+};
+
+inline const char* to_string(FixesWithheld w) {
+  switch (w) {
+    case FixesWithheld::kNone:
+      return "none";
+    case FixesWithheld::kMountMoved:
+      return "mount_moved";
+    case FixesWithheld::kMountSuspected:
+      return "mount_suspected";
+    case FixesWithheld::kMountMismatch:
+      return "mount_mismatch";
+    case FixesWithheld::kUnknown:
+    case FixesWithheld::kCount:
+      break;
+  }
+  return "unknown";
+}
+
 struct RsuAdvertisement {
   std::uint32_t protocol_version = kProtocolVersion;
   std::uint64_t rsu_id = 0;
@@ -76,6 +103,8 @@ struct RsuAdvertisement {
   double coverage_radius_m = 0.0;
   std::uint32_t correction_port = 0;
   std::uint32_t announcement_port = 0;
+  FixesWithheld fixes_withheld = FixesWithheld::kNone;
+  double mount_error_at_radius_m = 0.0;  // with a mount cause: the RSU's estimate at coverage_radius_m
 };
 
 // Why an RSU refused an announcement (proto/v2i.proto RefusalReason).

@@ -111,6 +111,11 @@ void read_advertisement(const pb::RsuAdvertisement& in, RsuAdvertisement& out) {
   out.coverage_radius_m = in.coverage_radius_m();
   out.correction_port = in.correction_port();
   out.announcement_port = in.announcement_port();
+  const int withheld = in.fixes_withheld();
+  out.fixes_withheld = withheld >= 0 && withheld < static_cast<int>(FixesWithheld::kUnknown)
+                           ? static_cast<FixesWithheld>(withheld)
+                           : FixesWithheld::kUnknown;
+  out.mount_error_at_radius_m = in.mount_error_at_radius_m();
 }
 
 // A detail the vehicle may print: printable ASCII, short (proto/v2i.proto AnnouncementRefusal).
@@ -181,6 +186,10 @@ void write_advertisement(const RsuAdvertisement& r, pb::RsuAdvertisement& out) {
   out.set_coverage_radius_m(r.coverage_radius_m);
   out.set_correction_port(r.correction_port);
   out.set_announcement_port(r.announcement_port);
+  // kUnknown is a receiver's reading, never sent: an RSU that has a reason names it.
+  if (r.fixes_withheld != FixesWithheld::kUnknown && r.fixes_withheld != FixesWithheld::kCount)
+    out.set_fixes_withheld(static_cast<pb::FixesWithheld>(r.fixes_withheld));
+  out.set_mount_error_at_radius_m(r.mount_error_at_radius_m);
 }
 
 void write_refusal(const AnnouncementRefusal& r, pb::AnnouncementRefusal& out) {

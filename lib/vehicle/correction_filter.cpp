@@ -30,6 +30,8 @@ const char* to_string(CorrectionVerdict verdict) {
       return "stale";
     case CorrectionVerdict::kRefusal:
       return "refusal";
+    case CorrectionVerdict::kAdvertisement:
+      return "advertisement";
     case CorrectionVerdict::kCount:
       break;
   }
@@ -63,6 +65,10 @@ CorrectionVerdict CorrectionFilter::classify(std::span<const std::uint8_t> datag
       return CorrectionVerdict::kWrongVehicleId;
     last_refusal_ = std::move(*refusal);
     return CorrectionVerdict::kRefusal;
+  }
+  if (auto* advertisement = std::get_if<v2i::RsuAdvertisement>(&authenticated.message.body)) {
+    last_advertisement_ = *advertisement;
+    return CorrectionVerdict::kAdvertisement;
   }
   auto* correction = std::get_if<v2i::Correction>(&authenticated.message.body);
   if (correction == nullptr) {

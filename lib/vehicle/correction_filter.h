@@ -31,6 +31,8 @@ enum class CorrectionVerdict : std::uint8_t {
   kStale,           // a sweep no newer than the last one accepted from that RSU (reordered or replayed)
   kRefusal,         // not a correction: an RSU's notice that it refused this vehicle's announcement
                     // (authenticated like a correction; last_refusal() says why)
+  kAdvertisement,   // not a correction: an RSU's advertisement (authenticated like a correction;
+                    // last_advertisement() holds it: whether that RSU withholds its fixes, and why)
   kCount,
 };
 
@@ -58,6 +60,8 @@ class CorrectionFilter {
   const EnumCounter<CorrectionVerdict>& counts() const { return counts_; }
   // The refusal notice of the last check() that returned kRefusal.
   const v2i::AnnouncementRefusal& last_refusal() const { return last_refusal_; }
+  // The advertisement of the last check() that returned kAdvertisement.
+  const v2i::RsuAdvertisement& last_advertisement() const { return last_advertisement_; }
   // Every datagram's authentication verdict (accepted, or refused by reason).
   const EnumCounter<v2i::AuthVerdict>& authentication_counts() const { return authenticator_.counts(); }
   // Forgets silent RSUs' replay state (call now and then).
@@ -80,6 +84,7 @@ class CorrectionFilter {
   v2i::MessageAuthenticator authenticator_;
   EnumCounter<CorrectionVerdict> counts_;
   v2i::AnnouncementRefusal last_refusal_;
+  v2i::RsuAdvertisement last_advertisement_;
   std::map<std::uint64_t, RsuOrder> order_by_rsu_;
   std::uint64_t checks_ = 0;
   std::uint64_t sequence_restarts_ = 0;

@@ -121,6 +121,29 @@ TEST(WireCodec, AdvertisementRoundTrip) {
   EXPECT_EQ(r.coverage_radius_m, 40.0);
   EXPECT_EQ(r.correction_port, 47100U);
   EXPECT_EQ(r.announcement_port, 47000U);
+  EXPECT_EQ(r.fixes_withheld, FixesWithheld::kNone);  // an RSU that says nothing withholds nothing
+  EXPECT_EQ(r.mount_error_at_radius_m, 0.0);
+}
+
+// Whether the RSU withholds its fixes, and why (added within version 2): kept; a value this code does
+// not know reads as withheld for an unknown reason, never as serving.
+TEST(WireCodec, AdvertisementSaysWhyFixesAreWithheld) {
+  RsuAdvertisement in;
+  in.rsu_id = 5;
+  in.fixes_withheld = FixesWithheld::kMountSuspected;
+  in.mount_error_at_radius_m = 0.107;
+  const DecodedMessage out = decode_v2i_message(encode_v2i_message(in));
+  ASSERT_EQ(out.status, DecodeStatus::kOk);
+  const auto& r = std::get<RsuAdvertisement>(out.body);
+  EXPECT_EQ(r.fixes_withheld, FixesWithheld::kMountSuspected);
+  EXPECT_EQ(r.mount_error_at_radius_m, 0.107);
+
+  v2::V2iPayload p;
+  p.mutable_advertisement()->set_rsu_id(5);
+  p.mutable_advertisement()->set_fixes_withheld(static_cast<v2::FixesWithheld>(17));
+  const DecodedMessage unknown = decode_v2i_message(wrap(p));
+  ASSERT_EQ(unknown.status, DecodeStatus::kOk);
+  EXPECT_EQ(std::get<RsuAdvertisement>(unknown.body).fixes_withheld, FixesWithheld::kUnknown);
 }
 
 // A refusal notice keeps its fields; a detail the vehicle could not print safely (over 32 bytes, or not

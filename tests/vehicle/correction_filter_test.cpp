@@ -133,5 +133,28 @@ TEST(CorrectionFilter, SignedModeTakesOnlyGenuineFreshCorrections) {
   EXPECT_EQ(filter.counts().count(CorrectionVerdict::kNotAuthentic), 5U);
 }
 
+// An RSU's advertisement reaches the vehicle authenticated like a correction: it is kept (whether that
+// RSU withholds its fixes, and why), never taken for a correction; a forged one is not believed.
+TEST(CorrectionFilter, AdvertisementSayingFixesAreWithheldIsKeptNotFused) {
+  const v2i::security::SigningKey rsu_key = key_from(1);
+  CorrectionFilterConfig config{kVehicleId, 64, {}, {}};
+  config.trust_list.add({rsu_key.public_key(), v2i::security::SignerRole::kRsu, {1}});
+  CorrectionFilter filter(config);
+  v2i::MessageSigner rsu(rsu_key);
+  v2i::MessageSigner forged(key_from(2));
+  v2i::RsuAdvertisement ad;
+  ad.rsu_id = 1;
+  ad.fixes_withheld = v2i::FixesWithheld::kMountMoved;
+  ad.mount_error_at_radius_m = 0.44;
+  v2i::Correction out;
+  EXPECT_EQ(filter.check(rsu.encode(ad, kNow), kNow, out), CorrectionVerdict::kAdvertisement);
+  EXPECT_EQ(filter.last_advertisement().fixes_withheld, v2i::FixesWithheld::kMountMoved);
+  EXPECT_EQ(filter.last_advertisement().mount_error_at_radius_m, 0.44);
+  ad.fixes_withheld = v2i::FixesWithheld::kNone;
+  EXPECT_EQ(filter.check(forged.encode(ad, kNow), kNow, out), CorrectionVerdict::kNotAuthentic);
+  EXPECT_EQ(filter.last_advertisement().fixes_withheld, v2i::FixesWithheld::kMountMoved);
+  EXPECT_EQ(filter.counts().count(CorrectionVerdict::kAdvertisement), 1U);
+}
+
 }  // namespace
 }  // namespace rsu::vehicle

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -288,9 +289,35 @@ class Session {
                  static_cast<unsigned long long>(refusals_seen_));
   }
 
+  // An RSU's advertisement says it withholds its fixes (its LiDAR moved), or that it sends them again:
+  // logged when that RSU's word changes.
+  void log_advertisements() {
+    const VehicleClientStats stats = threaded_.client().stats();
+    if (!stats.last_advertisement)
+      return;
+    const v2i::RsuAdvertisement& a = stats.last_advertisement->advertisement;
+    const auto known = rsu_withholding_.find(a.rsu_id);
+    const v2i::FixesWithheld before =
+        known == rsu_withholding_.end() ? v2i::FixesWithheld::kNone : known->second;
+    rsu_withholding_[a.rsu_id] = a.fixes_withheld;
+    if (a.fixes_withheld == before)
+      return;
+    if (a.fixes_withheld == v2i::FixesWithheld::kNone) {
+      std::fprintf(stderr, "rsu-vehicle: RSU %llu (%s) sends corrections again\n",
+                   static_cast<unsigned long long>(a.rsu_id), stats.last_advertisement->sender.c_str());
+      return;
+    }
+    std::fprintf(stderr,
+                 "rsu-vehicle: RSU %llu (%s) withholds its corrections: %s (its estimate of the error a fix "
+                 "would carry at %.0f m: %.3f m)\n",
+                 static_cast<unsigned long long>(a.rsu_id), stats.last_advertisement->sender.c_str(),
+                 v2i::to_string(a.fixes_withheld), a.coverage_radius_m, a.mount_error_at_radius_m);
+  }
+
   // Fuses and records whatever corrections arrived.
   void handle_corrections() {
     log_refusals();
+    log_advertisements();
     for (const ReceivedCorrection& r : threaded_.client().poll()) {
       const vehicle::CorrectionStep step = core_.on_correction(r.correction);
       if (step.check && events_logged_ < kMaxEventsLogged) {
@@ -347,6 +374,7 @@ class Session {
   int events_logged_ = 0;
   std::uint64_t refusals_seen_ = 0;
   std::string last_refusal_logged_;
+  std::map<std::uint64_t, v2i::FixesWithheld> rsu_withholding_;  // each RSU's latest advertised word
   Steady::time_point last_refusal_log_{};
   Steady::time_point last_insecure_warning_{};
 };

@@ -48,6 +48,12 @@ void print_summary(std::FILE* out, const VehicleClientStats& c, const vehicle::V
                    v2i::to_string(c.last_refusal->refusal.reason), c.last_refusal->refusal.detail.c_str());
     }
   }
+  if (c.advertisements.total() > 0) {
+    std::fprintf(out, "; RSU advertisements, fixes withheld:");
+    for_each_count(c.advertisements, 0, [&](v2i::FixesWithheld w, std::uint64_t n) {
+      std::fprintf(out, " %s=%llu", v2i::to_string(w), ull(n));
+    });
+  }
   std::fprintf(out, "; authentication (%s)", v2i::to_string(mode));
   for_each_count(c.authentication, 0, [&](v2i::AuthVerdict v, std::uint64_t n) {
     std::fprintf(out, " %s=%llu", v2i::to_string(v), ull(n));
@@ -94,6 +100,11 @@ void write_stats_file(const std::string& path, const VehicleClientStats& c,
   if (c.last_refusal) {
     out << "refusal.last " << v2i::to_string(c.last_refusal->refusal.reason) << ':'
         << c.last_refusal->refusal.detail << "\n";
+  }
+  // RSU advertisements received, by what they said about the fixes (none: sent).
+  for (std::size_t i = 0; i < static_cast<std::size_t>(v2i::FixesWithheld::kCount); ++i) {
+    const auto w = static_cast<v2i::FixesWithheld>(i);
+    out << "advertisement.fixes_withheld." << v2i::to_string(w) << ' ' << c.advertisements.count(w) << "\n";
   }
   const vehicle::PoseFuserStats f = core.fuser_stats();
   out << "fuser.ndt_accepted " << f.ndt_accepted << "\nfuser.ndt_rejected " << f.ndt_rejected
