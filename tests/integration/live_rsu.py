@@ -74,10 +74,11 @@ class LiveRsu:
         self.trust_list = self.path("fleet.trust")
 
     def write_config(self, reorder_packets=0, capacity=256, learning_frames=None, extra="", signed=False,
-                     verifier_thread=False):
+                     verifier_thread=False, advertise_port=None):
         """rsud.yaml; signed: verify the fleet's signatures (call make_keys() and write the fleet's trust
         list first, fleet(write_trust_list=...)), else insecure mode; verifier_thread: rsud's
-        v2i.verifier_thread (False: announcements read and verified on its event loop's thread)."""
+        v2i.verifier_thread (False: announcements read and verified on its event loop's thread);
+        advertise_port: rsud advertises to 127.0.0.1:advertise_port every 0.2 s."""
         mount = self.scene["lidar"].get("mount", {})
         lidar_input = "velodyne_udp: {bind_address: 127.0.0.1, port: %d%s}" % (
             self.lidar_port, ", reorder_packets: %d" % reorder_packets if reorder_packets else "")
@@ -95,7 +96,7 @@ v2i:
   listen_address: 127.0.0.1
   port: %d
   verifier_thread: %s
-security:
+%ssecurity:
   %s
 registry:
   capacity: %d
@@ -106,6 +107,8 @@ logging:
 %s""" % (self.model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
          mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_input, background, self.v2i_port,
          "true" if verifier_thread else "false",
+         "  advertisement: {enabled: true, address: 127.0.0.1, port: %d, interval_s: 0.2}\n" % advertise_port
+         if advertise_port else "",
          "{mode: signed, key_file: %s, trust_list_file: %s}" % (self.path("rsu.key"), self.trust_list) if signed
          else "mode: insecure", capacity, self.path("stats"), extra)
         with open(self.path("rsud.yaml"), "w") as f:
