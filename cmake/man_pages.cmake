@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Man pages generated from each program's --help at build time (scripts/help_to_man.py), installed to
 # share/man with their program's install component. Not in sanitizer builds (nothing is packaged from them,
 # and running each instrumented program would only cost time).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Debian packages with CPack (`cpack -G DEB` in a build tree; README "Packages"): one package per install
 # component.
 #   rsud                         daemon: rsud, its systemd unit, /etc/rsud/ (conffiles), the sysctl snippet

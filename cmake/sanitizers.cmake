@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Sanitizers for every target (configure Debug or RelWithDebInfo). Errors abort so that CTest reports
 # them as failures.
 #   RSU_SANITIZE=ON         AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/)

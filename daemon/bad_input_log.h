@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Counted, rate-limited warnings for bad input (issue #4: "each is counted and logged at a bounded
 // rate"). A flood of garbage must not become a flood of log lines (journald would rate-limit the whole
 // service and hide everything else): the first few of each reason are logged one by one, the rest

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's configuration file (YAML; deploy/rsud.yaml is the annotated example). Read through
 // io::YamlField, so every error names the file, the line and the field, e.g.
 //   /etc/rsud/rsud.yaml:14: lidar.mount.z: expected a number, got "two"

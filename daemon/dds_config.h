@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `dds:` section of rsud.yaml and the `lidar.input.dds_pointcloud2` input (deploy/rsud.yaml
 // documents every key). Errors name the file, the line and the field, as in config.h.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/dds_edge.h"
 
 #include <spdlog/spdlog.h>

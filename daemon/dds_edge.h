@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's DDS edge (issue 6): the participant, the PointCloud2 input and the pose / object-list
 // outputs. Only moves samples: conversions are lib/ros's, decisions RsuCore's.
 //

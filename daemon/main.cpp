@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud: the roadside-unit daemon. Localizes announced connected vehicles with the roadside LiDAR and
 // sends them corrections (docs/design.md §1, issue #4). See --help; deploy/ holds the systemd unit and an
 // example configuration.

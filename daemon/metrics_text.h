@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's counters, levels, measured values and histograms in the Prometheus text exposition format
 // (version 0.0.4: "# HELP", "# TYPE", one sample per line), as node_exporter's textfile collector reads
 // it. Names and help come from the one list every part reports into (common/counter_list.h): the stats

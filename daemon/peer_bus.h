@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's side of the bus the RSUs of a road share (README, "Several RSUs on one bus"; issue 6): every
 // announcement rsud accepted from a vehicle over UDP is published on the peer-announcement topic with
 // its provenance, the vehicle's datagram byte for byte; what the other RSUs publish there is handed to

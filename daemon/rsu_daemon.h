@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One io_context on one
 // thread, which alone touches RsuCore, and with v2i.verifier_thread the V2I receiver thread
 // (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has: sockets

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // sd_notify(3) messages to the service manager: READY, WATCHDOG, STOPPING, RELOADING (with
 // MONOTONIC_USEC, as Type=notify-reload expects from systemd 253 on). Without NOTIFY_SOCKET (not run
 // by systemd) every call is a no-op.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The daemon's UDP sockets: binding with a clear error, the receive buffer asked of the kernel and read
 // back, and the kernel's own count of datagrams it dropped for a socket (its buffer was full), so that

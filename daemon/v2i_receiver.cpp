@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/v2i_receiver.h"
 
 #include <poll.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's V2I receiver thread (v2i.verifier_thread: true; off by default, README "Robustness"): reads the
 // announcement socket and checks each datagram's Ed25519 signature (v2i::check_signature_ahead, ~40 us each)
 // off the event loop's thread, so that 1000 signed vehicles at 10 Hz neither wait behind a LiDAR rotation's

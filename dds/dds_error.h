@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cyclone DDS return codes as exceptions carrying Cyclone's own text (dds_strretcode), so a failure
 // reads e.g. "dds: creating the reader of rt/points: Precondition Not Met".
 #pragma once

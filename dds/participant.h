@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A DDS domain participant, RAII. One per process is the DDS norm (rsud has one; a test process may
 // hold several: the first one's Cyclone configuration then applies to all of them, since Cyclone
 // configures a domain once per process).

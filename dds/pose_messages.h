@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // geometry_msgs Pose(WithCovariance) and builtin_interfaces Time as idlc's C types <-> lib/ros's plain
 // ones, shared by rsud's DDS edge and rsu-autoware-sidecar.
 #pragma once

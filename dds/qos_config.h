@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The QoS a topic's reader or writer is made with: a plain struct with this project's defaults, read
 // from YAML (rsud.yaml's `dds:` section) and turned into Cyclone QoS. Deadline and liveliness are
 // left at DDS's defaults (infinite): a LiDAR or a vehicle going quiet is not a DDS error here.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Typed topic, reader and writer over the C types idlc generates (dds/idl/*.idl): RAII handles,
 // Cyclone errors as DdsError. ROS 2 topic names are "rt/<ros name>" on the wire (docs/design.md §5):
 // ros_topic() makes them.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Run by `cmake --install` (and CPack) for the daemon component: installs rsud's example configuration
 # and its systemd unit with the paths of this installation. The configuration directory follows
 # GNUInstallDirs: /etc for the prefixes / and /usr (a Debian package), /etc/opt/... for /opt/...,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "edge/address_text.h"
 
 #include <boost/asio/io_context.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Addresses as text, for every program at the edge: an IP address ("192.0.2.7", "::1"), and a
 // "HOST:PORT" UDP endpoint and back, where HOST is an IPv4 literal, an IPv6 literal in brackets
 // ("[::1]:7000") or a name the resolver knows ("localhost"). (What a received announcement carries is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The common clock (docs/design.md §3) as the programs at the edge read it: the host's real-time
 // clock, GNSS- or PTP-disciplined on a real RSU or vehicle, shared by every process in tests on one
 // machine. The one place that reads it; lib/ never does (its callers pass the time in).

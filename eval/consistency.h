@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Is a stated uncertainty honest? The experiments score every estimate's position error against the
 // covariance it came with: the normalized estimation error squared (NEES, e^T P^-1 e) of the 2D position,
 // and the share of estimates beyond the 3-sigma bound, i.e. with a 2-dof NEES beyond its 99.73 % quantile

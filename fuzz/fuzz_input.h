@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A cursor over a fuzzer's input for the harnesses that split it into several messages: fixed-width
 // little-endian integers and length-prefixed records, the same framing make_seed_corpus.cpp writes.
 // Reading past the end yields zeros and short records, never out of bounds.

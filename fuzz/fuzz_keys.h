@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fixed keys of the fuzz harnesses and their seed corpora (fuzz/make_seed_corpus.cpp): the seeds
 // are signed with them, so that a harness in signed mode reaches past the signature check on seeds
 // and on mutations that keep the signed payload intact. Test keys only; never deployed.

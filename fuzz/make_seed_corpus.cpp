@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Writes the seed corpora of the fuzz harnesses into <dir>/<harness>/ (fuzz/corpus/ in the repository):
 // valid V2I datagrams signed with fuzz_keys.h's keys (plus one unsigned), valid VLP-16 and VLP-32C
 // packets from the encoder,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the Ouster metadata parser (lib/lidar/ouster/ouster_metadata.h): any text must give metadata
 // or an io::YamlError naming the line and field, never a crash or another exception; metadata it
 // accepts must make a decoder that takes a packet of its own size. Seeds: the real metadata files in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the Ouster lidar packet decoder (lib/lidar/ouster/ouster_lidar_decoder.h) in each profile: whatever
 // arrives on the lidar port must be accepted, recognised as an IMU packet or refused with a counted
 // reason, and every point it yields must be finite, of a real ring and a proper azimuth.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the pcap reader (lib/lidar/pcap.h) that rsud and rsu-decode replay captures with: any file must
 // give its complete UDP datagrams, counted skips and at most one error, never a crash; and read in
 // pieces (as a file is, chunk by chunk) it must give exactly what the whole file gives.

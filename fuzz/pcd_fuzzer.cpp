@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes PCD reading (io/pcd_io.h, the project's own reader): any file must give points or a PcdError.
 // read_pcd takes a path, so each input is written to a temporary file first.
 #include <unistd.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the PointCloud2 layout parser and point decoder (lib/ros/pointcloud2_layout.h): any header,
 // field list and data must give a rejection reason or points, never a read out of bounds, undefined
 // behaviour or a point that is not finite.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the RSU core's announcement path (RsuCore::on_datagram, lib/core/rsu_core.h): flood limit ->
 // authenticate (decode, signature, time and sequence windows) -> validate -> reply-to check ->
 // registry, with a fixed configuration and hand-stepped time, over a sequence of datagrams so that the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes rsud's configuration parser (daemon/config.h): any text must give a configuration or a
 // ConfigError naming the line and field, never a crash or another exception.
 #include <cstddef>

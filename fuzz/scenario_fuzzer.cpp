@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the scenario file parser (sim/scenario.h): any text must give a scenario or a ScenarioError
 // naming the line and field, never a crash or another exception.
 #include <cstddef>

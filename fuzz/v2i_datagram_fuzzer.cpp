@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the V2I datagram parser (wire_codec.h), the message authenticator (signature, signer's
 // rights, time and sequence windows; message_authenticator.h) and the announcement checks behind it
 // (announcement_validation.h): whatever arrives on the announcement port must decode to a status,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the Velodyne calibration reader (io/velodyne_calibration.h, lidar.calibration): any text must
 // give a usable sensor model or a YamlError naming the line and field, never a crash or another
 // exception. The first byte picks the model (VLP-16, VLP-32C, HDL-32E); the rest is the file.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzes the Velodyne decoder (lib/lidar/velodyne_decoder.h, through the decoder seam
 // lib/lidar/lidar_decoder.h) for the VLP-16, VLP-32C and HDL-32E in every return selection, and the
 // frame assembly behind it (lib/lidar/frame_assembler.h): whatever arrives on ports 2368 / 8308 must be

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/background_state.h"
 
 #include <fcntl.h>

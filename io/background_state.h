@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's learned background kept in its state directory (systemd's StateDirectory=), so that a restart
 // serves at once instead of learning again with no vehicle in view (README, "Calibrating the mount").
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/capture_file.h"
 #include "io/text_file.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A capture file (classic pcap) read datagram by datagram in chunks, so that a recording of any length
 // replays in constant memory (lib/lidar/pcap.h parses the bytes). Used by rsud's capture input and
 // rsu-decode.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // LZF decompression (Marc Lehmann's liblzf format), as PCD's binary_compressed data uses it.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The report rsu-calibrate writes with --out (README, "Calibrating the mount"), read back by rsud from
 // its state directory: the verdict and the mount. Only a `good` calibration is used; the rest of the
 // report (sigmas, covariance, residuals) is for the operator.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The header of a PCD file (PCL's Point Cloud Data format, v0.7), read strictly: the keywords VERSION,
 // FIELDS, SIZE, TYPE, COUNT, WIDTH, HEIGHT, VIEWPOINT, POINTS and DATA in that order, each at most once
 // (FIELDS, SIZE, TYPE, POINTS and DATA required; COUNT 1, HEIGHT 1 and WIDTH = POINTS by default),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PCD files of LiDAR points (PCL's format, read and written here: pcd_header.h). write_pcd's fields: x y z
 // intensity (float), ring (uint16), azimuth (float, rad), time (float64, seconds on the common clock).
 // Reading accepts any PCD that has x, y, z; intensity, ring, azimuth and time are used when present (as

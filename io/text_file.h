@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading a whole (small) text file, and the words for why a file could not be opened: every program's
 // file errors name the file and the operating system's reason (strerror of errno: "Permission denied",
 // "No such file or directory"), since "cannot open" alone sends an operator guessing.

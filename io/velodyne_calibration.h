@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Velodyne calibration files as the ROS velodyne driver and nebula (Autoware's driver) read them:
 //
 //   lasers:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/yaml_field.h"
 
 #include "io/text_file.h"

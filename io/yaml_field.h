@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading YAML with errors that point at the file, the line and the field:
 //   scenarios/pilot.yaml:12: lidar.mount.z: expected a number, got "two"
 // Unknown keys are errors too: a misspelt key silently falling back to a default is the worst kind of

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Configure and build one build tree. Usage: scripts/build.sh [release|asan|tsan] (default release).
 # release -> build/      (Release, warnings are errors, benchmarks included)
 # asan    -> build-asan/ (RelWithDebInfo at -O1 -g1 with AddressSanitizer + UndefinedBehaviorSanitizer, no benchmarks)

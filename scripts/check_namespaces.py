@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Fails when a source file's namespace does not follow its folder (issue 15; docs/architecture.md).
 
     scripts/check_namespaces.py [ROOT]     # ROOT: the repository (default: this script's parent folder)

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Fails when a file in lib/ is over 450 lines or a function there over 80 (issue 15: lib/ stays readable).
 
     scripts/check_sizes.py [ROOT]     # ROOT: the repository (default: this script's parent folder)

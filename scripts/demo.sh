@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The main job: installs what is missing, builds, and runs the end-to-end demo.
 #   1. the paper's realistic experiment (Sec. 4) in the corridor street, through the real processes on
 #      loopback: the vehicle's NDT self-localization, then for the VLP-16 and the VLP-32C the real rsud

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs every libFuzzer harness in fuzz/ (issue 7): installs what is missing, builds them with clang into
 # build-fuzz/ (ASan + UBSan + libFuzzer), and fuzzes each for SECONDS (default 20) on a copy of its seed
 # corpus in fuzz/corpus/<name>/, so a run never rewrites the repository's corpus.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Writes a man page from a program's own --help (issue 14: "man pages or --help-generated docs"), so the
 page never disagrees with the program. Usage:
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs every build, test and figure dependency from Debian packages. Idempotent: packages
 # already present are skipped, so a second run costs one dpkg query.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The test command: installs what is missing, builds, and runs every test in Release and again under
 # ASan+UBSan, the tests that run threads under TSan, then the fuzz harnesses briefly. Prints how long
 # each phase took. `scripts/test.sh --quick` runs the Release pass only.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A spinning LiDAR simulated firing by firing: Velodyne packets (for the encoder / pcap writer) and
 // whole frames of points with ground-truth labels (for experiments and tests).
 //

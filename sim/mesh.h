@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Triangle meshes for the simulated scene and the primitives the scene is built from.
 //
 // Winding convention: every triangle's vertices run counter-clockwise seen from outside, so the

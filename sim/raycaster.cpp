@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "sim/raycaster.h"
 
 #include <embree3/rtcore.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ray casting against a Scene with Embree 3: one BVH for everything static (ground, buildings, poles,
 // trees, shrubs) in the map frame, and one BVH per vehicle in the vehicle's own frame.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scenario YAML -> sim::Scenario, read through io::YamlField so that every error names the file, the
 // line and the field.
 #include "sim/scenario.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scenario files (YAML): the LiDAR, its mount, the scene and the vehicles (scenarios/*.yaml).
 // Every error names the file, the line and the field, e.g.
 //   scenarios/pilot.yaml:12: lidar.mount.z: expected a number, got "two"

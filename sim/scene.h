@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A scene as plain data: what is where. Scenario files (sim/scenario.h) are parsed into it; the ray
 // caster (sim/raycaster.h) builds meshes from it. Map frame: ENU, metres, radians (docs/design.md §3).
 #pragma once

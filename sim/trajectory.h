@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Vehicle trajectories (sim/scene.h) evaluated at a time: pose and velocity of the footprint centre.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A passenger-car-shaped closed mesh built from VehicleShape (sim/scene.h).
 //
 // Why not a box: the paper's L-shape fitting and size correction (Algorithm 1) are sensitive to what

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The clock the vehicle client reads, injected so that tests can step time. Times are nanoseconds of
 // the common clock (docs/design.md §3); the default is the host's (edge/host_clock.h).
 #pragma once

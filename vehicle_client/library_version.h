@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The installed vehicle client library's version (rsu-vehicle-client.so, issue 14): what a program built
 // against the package can print and check.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rsu-vehicle CLI's input: the vehicle's NDT poses as CSV, one pose a line, after a header line
 // naming the columns: time_ns,x,y,yaw first, then any of
 //   sxx,syy,syaw                 variances of x (m^2), y (m^2) and yaw (rad^2), all three or none

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "vehicle_client/vehicle_client.h"
 
 #include <array>

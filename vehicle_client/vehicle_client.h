@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vehicle's V2I client: announces the vehicle (size, own pose, where to reply) to the RSUs over UDP
 // and receives their corrections, delivered by callback and by poll(). Boost.Asio at the edge; what to
 // send and which corrections to take are decided by lib/vehicle (Announcer, CorrectionFilter). Runs on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Configuration of the vehicle's V2I client (issue 4, item 3). Defaults: the paper's test vehicle and
 // 10 Hz announcements.
 #pragma once

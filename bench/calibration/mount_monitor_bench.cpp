@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One rotation of the corridor (scenarios/corridor.yaml, VLP-32C and a 128-ring sensor) checked by the
 // mount monitor (rsud does it once per rotation), and the baseline in the same run: the range-image
 // background test of the rotation's every point, which every rotation costs already.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // RsuCore end to end, with real Velodyne packets of a simulated roadside LiDAR (issue #4 targets:
 // p99 latency <= 5 ms, >= 20k announcements/s on one core).
 //

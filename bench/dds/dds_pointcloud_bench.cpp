@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // DDS input benchmark (issue 6): VLP-32C clouds (~57,900 points, ~1 MB as PointCloud2) published at
 // 10 Hz over Cyclone DDS on loopback into a real rsud (child process) for a bounded time, with a
 // vehicle in the cloud announced over V2I so that poses come back over DDS. Prints, per run:

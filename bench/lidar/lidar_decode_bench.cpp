@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Decoding real Ouster captures (tests/data/real/ouster) into points, per profile, against a baseline
 // in the same run: reading every pixel's range out of the same packets with no geometry (the least a
 // decoder can do). Reports points (or pixels) per second.

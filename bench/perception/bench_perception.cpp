@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-frame perception on simulated corridor frames (scenarios/corridor.yaml; VLP-16, VLP-32C and a
 // generic 128-ring sensor): this library's pipeline against a baseline written as a PCL user would
 // write the paper's pipeline (k-d tree nearest neighbour against the reference frame,

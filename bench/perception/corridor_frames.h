@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Frames of the corridor scenario (scenarios/corridor.yaml) for the perception benchmarks: background
 // frames with the vehicles removed, and a frame with the vehicle in view, all in the map frame.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ray-casting and LiDAR-simulation speed on the corridor scenario (scenarios/corridor.yaml: a street
 // between two long facades with lamps, hedges and trees, one vehicle passing the RSU).
 // Targets (task brief): >= 10 M rays/s per core; a VLP-32C frame (~57.9k firings) in <= 6 ms.

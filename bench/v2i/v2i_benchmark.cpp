@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Throughput of the RSU's per-datagram V2I path (unsigned baseline and signed: Ed25519 sign and
 // verify, replay window) and of association at a busy intersection. The datagram benchmarks report
 // cpu_per_msg: CPU time per message; 1000 vehicles announcing at 10 Hz (10,000 messages/s) cost

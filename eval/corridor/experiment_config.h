@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The realistic experiment's configuration (scenarios/corridor_experiment.yaml): the scenario it runs in,
 // the vehicle's own LiDAR and NDT parameters, and which RSU LiDAR models to compare.
 #pragma once

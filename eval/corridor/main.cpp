@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-corridor: the paper's realistic experiment (Sec. 4) in the corridor street.
 //   rsu-corridor ndt EXPERIMENT --out DIR      the vehicle's own NDT self-localization -> DIR/ndt.csv
 //   rsu-corridor report EXPERIMENT --out DIR   score NDT, RSU and fused estimates -> table, summary.json

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A point-cloud map of the static scene for NDT (paper Sec. 4.1 used Tier IV's HD point-cloud map of the
 // digital twin): the static surfaces' triangles sampled uniformly by area, seeded.
 #pragma once

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Why NDT degrades in the degraded corridor: the vehicle's NDT self-localization (rsu-corridor ndt, the
 experiments' own NDT parameters and drive) in the two streets and in variants that move one feature from
 one street to the other:

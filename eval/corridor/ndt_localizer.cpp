@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "eval/corridor/ndt_localizer.h"
 
 #include <pcl/filters/random_sample.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vehicle's own LiDAR self-localization for the realistic experiment (paper Sec. 4): NDT scan
 // matching (pcl::NormalDistributionsTransform) against a point-cloud map, with only scan matching (no GNSS,
 // no IMU, as in the paper), the initial guess from the previous pose plus constant-velocity motion.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scores the realistic experiment against the scenario's truth and writes the paper's table (Table 2:
 // mean absolute error for +-36 m and +-50 m along the road) with RMSE, 95th percentile, maximum and the
 // share of estimates beyond 3 sigma of their own stated covariance, the same MAE beside the paper's,

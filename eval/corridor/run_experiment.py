@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The paper's realistic experiment (Sec. 4), end to end through the real processes on loopback, in the
 street an experiment file names: scenarios/corridor_experiment.yaml (the default) or
 scenarios/corridor_degraded_experiment.yaml (the street between two tall buildings where NDT degrades).

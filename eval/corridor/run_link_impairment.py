@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The V2I link impaired (issue 13 item 2): the realistic experiment in the degraded corridor, through the
 real processes on loopback as run_experiment.py runs it, once per link condition, with a relay process
 (rsu-relay) between rsud and the vehicle that delays, jitters, loses and reorders datagrams in both

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vehicle's own localization over the drive: its roof LiDAR simulated frame by frame (carried by the
 // vehicle, each ray at its own firing time), de-skewed with the velocity of the last two NDT poses, and
 // matched against the map by NDT with the initial guess from the previous pose plus constant-velocity

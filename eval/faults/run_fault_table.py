@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The vehicle is never made worse by an RSU (issue 18): the corridor drive of the realistic experiment
 through the real processes (rsud, rsu-sim stream, rsu-vehicle on loopback, signed), with a faulty RSU,
 case by case:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-pilot: reproduces the paper's pilot experiment (Sec. 3.1) for each LiDAR model and writes
 // cells.csv and summary.json into the output folder; eval/plots/pilot_heatmaps.py draws the heat maps.
 // `rsu-pilot matrix` runs it over mounts x LiDAR models x vehicles (eval/pilot/run_matrix.sh adds the

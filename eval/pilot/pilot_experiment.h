@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The paper's pilot experiment (Sec. 3.1, Table 1; docs/design.md §2), reproduced: a LiDAR above an empty
 // ground plane (2 m in the paper), the vehicle spinning about its centre at 20 deg/s while the LiDAR runs
 // at 10 Hz (2 deg per frame), one full turn per distance, distances 3 m to 40 m in 0.5 m steps. Each

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pilot experiment over a matrix of LiDAR mounts x sensors x vehicles (issue: fixes that hold from
 // 2 m to 8 m mounts, 16 to 128 rings, small car to bus). Each cell of the matrix is one pilot run (the
 // grid of distances x yaw angles set by the base configuration: coarser grids run faster); every run's

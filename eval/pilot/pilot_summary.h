@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pilot experiment's figures: accuracy per method (the paper's "error < 0.1 m from 6 to 36 m"), and
 // whether each fix's stated covariance is honest (docs/design.md §3: a stated uncertainty is a promise).
 //

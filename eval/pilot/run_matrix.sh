@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The pilot matrix (mounts x LiDAR models x vehicles) with heat maps of every cell of the matrix.
 #   eval/pilot/run_matrix.sh [OUT] [rsu-pilot matrix options...]     (from the repository's top folder)
 # Writes OUT/matrix.md (the table), OUT/matrix.csv and OUT/<model>_<mount>m_<vehicle>/ with cells.csv,

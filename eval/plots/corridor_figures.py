@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Figures of the realistic experiment (paper Sec. 4, Figs. 9 and 10) from <folder>/frames.csv:
   error_vs_position.png  position error against the vehicle's position along the road, per method
   error_boxplot.png      box plots of the error within -36..36 m and -50..50 m

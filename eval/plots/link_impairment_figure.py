@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Figure of the link-impairment experiment (eval/corridor/run_link_impairment.py) from
 <folder>/link_impairment.csv -> <folder>/fused_error_vs_link.png:
   left    the vehicle's fused MAE within the RSU's coverage against the one-way delay, one line per loss

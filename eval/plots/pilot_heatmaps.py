@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Heat maps of the pilot experiment (paper Sec. 3.1, Figs. 3-4), one PNG per metric and LiDAR model.
 
 Reads <folder>/cells.csv written by rsu-pilot and writes <folder>/<model>_<metric>.png: distance on x,

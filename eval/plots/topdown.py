@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Top-down picture of one simulated frame: points coloured by height, true vehicle boxes drawn.
 
 Reads the CSV files that `rsu-sim simulate` writes next to the frames:

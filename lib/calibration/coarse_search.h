@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The coarse stage of the mount calibration: from a rough initial pose (a hand-held GNSS and a compass:
 // metres and 10-20 deg off) to within a fraction of a metre and a degree, by a grid search over x, y and
 // yaw scoring how many background points land in voxels the map occupies. Height, roll and pitch stay

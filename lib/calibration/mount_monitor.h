@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Mount integrity (issue 17): is the LiDAR still where its mount says? Each rotation's static scene is
 // registered against the reference the mount belongs to (the background learned under it, sensor frame)
 // by the calibration's point-to-plane Gauss-Newton (point_to_plane.h) on a subsample of points; the

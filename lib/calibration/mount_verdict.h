@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What a mount calibration is worth: its covariance in the mount's parameters and a verdict an operator
 // can act on (good / ambiguous / failed, with the reason).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "calibration/point_to_plane.h"
 
 #include <algorithm>

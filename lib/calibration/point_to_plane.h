@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fine stage of the mount calibration: Gauss-Newton on point-to-plane distances between the
 // background scan and the map's local planes, and the information that the fit carries about the pose.
 //

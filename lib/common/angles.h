@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Angle helpers. Radians everywhere in code; yaw is counter-clockwise from +x (east) (docs/design.md §3).
 #pragma once
 

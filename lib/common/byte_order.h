@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Little-endian integers in byte buffers: sensor packets are little-endian whatever the host is.
 #pragma once
 

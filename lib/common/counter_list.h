@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Counters as ("area.name", value) pairs in a stable order: what rsud's stats file, its Prometheus
 // metrics and its logs print, and what tests look up by name. Every part that counts reports into one
 // CounterList, so a counter is named in one place (the part that counts it) and listed the same way

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Counts events per value of a reason/outcome enum whose last enumerator is kCount (list them with
 // CounterList, counter_list.h).
 #pragma once

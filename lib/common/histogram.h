@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A histogram over fixed bucket bounds, as Prometheus keeps one: how many observations fell at or
 // below each upper bound, their count and their sum. Observing is a binary search over a few bounds,
 // cheap enough for every LiDAR packet.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Poses in the map frame (ENU, metres, radians; docs/design.md §3).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Counter-based random numbers: the value for (seed, stream, index) does not depend on the order in
 // which values are drawn, so simulated noise is reproducible whatever the threading or culling.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Time on the project's one common clock (docs/design.md §3): nanoseconds, signed 64-bit.
 // lib/ never reads a clock; callers pass TimeNs in.
 #pragma once

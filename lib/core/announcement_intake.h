@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the vehicles tell the RSU, into its registry: every datagram from the announcement port, and
 // every announcement another RSU shared on the data bus, takes one path - a cheap per-source rate
 // limit, authentication (signature, signer's rights, time and sequence windows), decoding, validation,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The correction a vehicle receives (proto/v2i.proto Correction, messages.h): its fix (pose of the
 // footprint centre, covariance, how the yaw was settled) with the sweep time and the quality block,
 // encoded with the RSU's per-vehicle sequence and signed in signed mode. Also the RSU's advertisement,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What became of one datagram received on the announcement port (or shared by another RSU over the data
 // bus, RsuCore::on_peer_announcement): accepted into the registry, or the
 // stage that refused it and why. Every refusal has a reason, so the daemon counts and logs instead of

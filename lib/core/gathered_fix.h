@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A released vehicle's fix (vehicle_gatherer.h): from which of its gathered points, with its announced
 // size and heading, through perception::fix_vehicle with rsud's configuration, and the checks a fix
 // must pass before a correction may go out.

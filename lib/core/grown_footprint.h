@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // An announced vehicle's predicted footprint grown by its uncertainty (GatheringConfig): where the
 // detections of that vehicle may lie when its pose, carried to the sweep time, is uncertain.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where the LiDAR stands: its surveyed pose in the map frame (sensor -> map), and what the RSU asks of
 // it: points moved into the map frame, and the beam azimuth at which the sensor sees a place on the map.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "core/lidar_stats.h"
 
 namespace rsu::core {

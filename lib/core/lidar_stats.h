@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What RsuCore counts on the LiDAR side, from learning the background to the corrections sent, and how
 // the stages before it are listed in the stats file.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // LiDAR packets into points in firing order: the configured sensor's decoder (lidar/lidar_decoder.h),
 // the sensor's clock against the host's (lidar/sensor_clock.h: RsuCoreConfig::time_source and
 // clock_tolerance), the reorder stage (lidar/packet_order.h) and load shedding

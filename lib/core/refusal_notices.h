@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Telling a vehicle why its announcement was refused (proto/v2i.proto AnnouncementRefusal): which
 // refusals deserve a notice, and how many may go out. Only an announcement that passed authentication
 // gets one (in signed mode the vehicle's own signature, so a forged source address cannot aim notices at

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The RSU's whole decision logic, pure (no sockets, threads, clocks or files: docs/architecture.md):
 // the daemon hands it datagrams and LiDAR data with the time they arrived and sends what it returns.
 // Tests drive it with hand-stepped time, so everything the daemon decides is tested here in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Everything RsuCore needs to know, as plain structs holding the defaults (KISS-ICP style). The daemon
 // fills it from its YAML file (daemon/config.h); tests fill it by hand.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What may hide part of a vehicle from the LiDAR: the other foreground objects of the same sweep (a car
 // passing in front of a parked van, the next car of a queue). The fix takes a vehicle's points' end
 // behind one of them for the shadow's edge, not the vehicle's (perception::LidarGeometry::occluders;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where the LiDAR's sweep is (the latest point of the stream: its beam azimuth and firing time) and
 // when it will have passed a place on the map far enough that no cluster there can still grow (the
 // perception::SweepClusterer's closing rule, sweep_clusterer.h): what tells RsuCore that every cluster of a

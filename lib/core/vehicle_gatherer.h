@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Gathers each announced vehicle's detections across the batches of one rotation and holds the vehicle
 // until the sweep has passed its predicted footprint: then it is released to be fixed from them all.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A floor under a pose covariance (x, y, yaw): no estimate is credited with more precision than its
 // source can have, whatever it states. Used where an outside figure enters the vehicle's filters (an RSU's
 // fix, vehicle/vehicle_core.cpp) and where a match's own curvature is turned into a covariance

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Constant turn rate and velocity (CTRV) motion model over the state [x, y, yaw, v, yaw_rate]:
 // the point (x, y) moves at speed v along its heading yaw, which turns at yaw_rate. Map frame ENU,
 // metres, radians, seconds (docs/design.md §3). Used by the vehicle EKF and by the RSU to carry a vehicle's

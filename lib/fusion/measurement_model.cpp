@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "fusion/measurement_model.h"
 
 #include <Eigen/Cholesky>

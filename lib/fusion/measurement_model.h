@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Measurement models of the vehicle EKF: what an NDT pose and an RSU correction observe of the state
 // [x, y, yaw, v, yaw_rate] (the state's x, y is the vehicle's reference point).
 #pragma once

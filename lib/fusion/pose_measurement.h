@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Time-stamped planar pose measurements fed to the vehicle EKF (map frame ENU, m, rad; docs/design.md §3).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Vehicle-side extended Kalman filter over [x, y, yaw, v, yaw_rate] (CTRV model) fusing the vehicle's
 // NDT pose with RSU corrections (the paper's Section 4 fusion, with its open problems handled: yaw
 // modulo pi, off-by-90 deg boxes, late corrections). Pure computation: time comes with the data.

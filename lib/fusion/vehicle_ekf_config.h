@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Configuration of the vehicle-side EKF that fuses NDT poses with RSU corrections. Defaults suit a car
 // in town with 10 Hz NDT and 10 Hz RSU corrections (the paper's rates, Section 4).
 #pragma once

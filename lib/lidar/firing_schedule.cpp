@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Firing times and beam angles of a spinning Velodyne-like sensor (see firing_schedule.h).
 #include "lidar/firing_schedule.h"
 

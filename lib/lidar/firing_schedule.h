@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // When each laser fires and where it points, shared by the simulator (which casts the rays) and the
 // packet decoder (which rebuilds them), so that a simulated point survives encode -> decode exactly up
 // to the distance quantum.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rotation assembly (see frame_assembler.h).
 #include "lidar/frame_assembler.h"
 

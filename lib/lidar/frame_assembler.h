@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cuts a stream of decoded points into rotations (docs/architecture.md).
 //
 // A frame holds the points whose beam azimuth lies in [cut, cut + 360 deg) of one rotation. Points

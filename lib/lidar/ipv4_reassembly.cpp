@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // IPv4 fragment reassembly (see ipv4_reassembly.h).
 #include "lidar/ipv4_reassembly.h"
 

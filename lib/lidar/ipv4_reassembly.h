@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // IPv4 fragment reassembly (RFC 791, RFC 815) for recorded traffic. A LiDAR datagram larger than the
 // link MTU leaves the sensor as IP fragments, and a capture (tcpdump, Wireshark) records the fragments:
 // every Ouster lidar packet (3 to 25 kB) does so on a 1500-byte Ethernet. pcap.cpp puts them back

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The decoder seam (see lidar_decoder.h): names, counts and the factory.
 #include "lidar/lidar_decoder.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A packet decoder for the configured sensor: the one seam between the LiDARs' packet formats (Velodyne:
 // velodyne_decoder.h; Ouster: its own decoder) and everything downstream of them (RsuCore's frame and
 // sector assembly and its release rule, rsu-decode, rsud's UDP and capture inputs), which never asks

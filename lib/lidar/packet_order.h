@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Puts a Velodyne packet stream back in time order and counts what the network did to it (issue 7:
 // LiDAR packet loss and reordering). Velodyne data packets carry no sequence number, only the time of
 // their first firing (docs/design.md §2); consecutive packets are one packet period apart (12 blocks:

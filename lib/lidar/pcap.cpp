@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // pcap formatting and parsing (see pcap.h). Layouts: libpcap file format (tcpdump.org "pcap-savefile"),
 // Ethernet II, IPv4 (RFC 791, checksum RFC 1071), UDP (RFC 768).
 #include "lidar/pcap.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Classic pcap files (the libpcap format, as `tcpdump -w` and VeloView write them) as pure byte
 // formatting and parsing: rsud and rsu-decode replay recorded LiDAR traffic and tests write captures,
 // with no file or socket here.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One LiDAR return and one frame of returns, as every LiDAR source (simulator, Velodyne packets, PCD,
 // DDS) delivers them to the perception pipeline.
 #pragma once

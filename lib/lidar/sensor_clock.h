@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The offset between a LiDAR's clock and the host's, measured on every data packet (issue 11: sensor
 // time). A packet leaves the sensor after its last firing, so arrival - end of the packet (on the
 // sensor clock) = clock offset + transit and queueing delay. The delays only add, so the estimate is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Sensor tables from docs/design.md §2 (the manufacturers' manuals and the public Velodyne driver's
 // calibration files).
 #include "lidar/sensor_model.h"

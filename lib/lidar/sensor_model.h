@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Spinning-LiDAR sensor models (docs/design.md §2): beam geometry, firing timing and packet constants.
 //
 // Sensor frame: x forward, y left, z up. A beam with elevation w and rotation angle a (clockwise seen

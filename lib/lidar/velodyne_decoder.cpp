@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Velodyne packets into points (see velodyne_decoder.h).
 #include "lidar/velodyne_decoder.h"
 

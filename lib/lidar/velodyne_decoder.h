@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Velodyne decoder (VLP-16, VLP-32C, HDL-32E; lidar_decoder.h is the contract it keeps): packets
 // of one configured sensor into points.
 //

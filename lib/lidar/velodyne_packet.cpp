@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Velodyne data packet codec (see velodyne_packet.h; byte layout from docs/design.md §2 and the VLP-16 /
 // VLP-32C user manuals, "Data Packet Structure").
 #include "lidar/velodyne_packet.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Velodyne data packet (docs/design.md §2): the 1206-byte UDP payload on port 2368, and the 512-byte
 // position packet on port 8308. Byte layout from the VLP-16, VLP-32C and HDL-32E user manuals ("Data
 // Packet Structure", "Position Packet Structure"):

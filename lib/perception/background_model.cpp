@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "perception/background_model.h"
 
 namespace rsu::perception {

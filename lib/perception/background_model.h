@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The static background, whichever way it is modelled (paper Sec. 3.1 and 4.1), as one per-point
 // decision: the ground prefilter first (far ground returns at grazing incidence move by metres with
 // beam-angle noise, ground_height_filter.h), then the configured model. Used on whole frames by the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where a box of known length and width sits along one of its axes, from the vehicle's points and what the
 // LiDAR could have seen (the improved size correction, size_correction.h).
 //

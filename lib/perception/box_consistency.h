@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How well a box of known size agrees with a vehicle's points, in the box's frame: points outside it
 // speak against it, and so do stretches of its LiDAR-facing outline without points (a face the LiDAR
 // should have seen but did not). Decides which fitted axis is the vehicle's length when the vehicle's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One detected object: a cluster of foreground points and the rectangle fitted to it (L-shape fitting,
 // paper Sec. 3.1), before anything knows which vehicle it is. The one type every step after clustering
 // shares: the per-frame pipeline returns it, the RSU's sweep gathers it, association gates its

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Euclidean clustering (PCL's EuclideanClusterExtraction, as Autoware's euclidean_cluster runs it):
 // points are connected when within `tolerance_m`, clusters are the connected components, and only
 // components with min_points <= size <= max_points are kept. As in PCL, a component larger than

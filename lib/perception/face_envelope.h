@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where a vehicle's face is, from the points near it: its outer envelope, not their median.
 //
 // A face of the body (a door, a bumper) is its outermost surface there; what else the LiDAR hits near it

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Least-squares refinement of a fitted rectangle's orientation on the faces the LiDAR saw.
 //
 // The search criteria of Zhang et al. score angles by how close points come to the bounding edges; with

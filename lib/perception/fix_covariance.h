@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The covariance of a size-corrected fix (x, y, yaw), from what the LiDAR saw (docs/design.md §3: every
 // estimate carries its uncertainty).
 //

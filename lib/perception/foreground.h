@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The common shape of every background-removal method: each point is classified on its own (O(1)),
 // and a frame is reduced to the indices of its foreground points plus counted reasons for the rest.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Background removal (a): the pilot experiment's filter (paper Sec. 3.1: "we filtered out zero-height
 // points"). In an otherwise empty scene everything standing above the ground is the vehicle, so a point
 // is foreground when it is higher than a small threshold above the ground plane. Also used as a cheap

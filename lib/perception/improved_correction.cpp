@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The improved size correction (size_correction.h): which faces tell the yaw, the yaw fused with the
 // vehicle's own, the length/width assignment, and the box placed along each axis (box_axis.h).
 #include <algorithm>

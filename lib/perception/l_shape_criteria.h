@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rectangle-fitting criteria of Zhang et al. 2017, "Efficient L-Shape Fitting for Vehicle Detection
 // Using Laser Scanners" (IV 2017), Algorithms 3-5, plus Autoware's variant of the closeness criterion.
 // For a candidate angle theta the points are projected on e1 = (cos, sin) and e2 = (-sin, cos); the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // L-shape rectangle fitting (Zhang et al. 2017), paper Sec. 3.1: the footprint points of one cluster
 // -> the best-fitting rectangle under the chosen criterion and orientation search, plus, per edge, how
 // many points support it and whether it faces the LiDAR (what the size correction needs to know).

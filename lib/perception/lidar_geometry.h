@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What a fix needs to know about the LiDAR that saw the vehicle: where it is, which elevations its lasers
 // look at, how finely it samples azimuth, and where the road is. With it the fix can tell an edge of the
 // vehicle from an edge of what the LiDAR could see: a car below a mast-mounted LiDAR is cut off where

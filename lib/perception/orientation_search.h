@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Searches theta in [0, 90 deg) for the maximum of an L-shape criterion (Zhang et al. 2017, Alg. 2).
 //
 //  - exhaustive: every step (1 deg as in Zhang and Autoware), the reference.

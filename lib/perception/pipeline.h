@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The RSU's perception of one whole frame, as the paper runs it (Sec. 3-4): remove the static
 // background, cluster what is left, fit a rectangle to each cluster (L-shape fitting). It is a thin
 // composition of the parts rsud runs batch by batch (rsu::core::RsuCore::process, docs/architecture.md):

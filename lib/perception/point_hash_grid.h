@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A uniform grid over points stored as an open-addressing hash map from cell to a contiguous run of
 // points (points are sorted by cell). With the cell size at least the query radius, every point within
 // r of q lies in the 3x3x3 (spatial) or 3x3 (planar) cells around q's cell, so "is any point within r"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Background removal (c): a range-image model. Each (ring, azimuth bin) cell is one fixed beam
 // direction of the spinning LiDAR, so the static scene gives it one background range. The model learns
 // that range from several frames without vehicles and a point is foreground when it is closer than the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The result of L-shape fitting: a 2D rectangle in the map frame plus what the LiDAR saw of it.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Background removal (b), the paper's method (Sec. 4.1): a reference frame is recorded while no vehicle
 // is in view; a point of a later frame is foreground when no reference point lies within
 // `match_radius_m` of it. The paper finds the nearest reference point with a k-d tree; a hash grid of

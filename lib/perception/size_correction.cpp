@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Algorithm 1 of the paper, as written, plus the names of the correction enums.
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Size correction (paper Sec. 3.2): the connected vehicle announces its footprint size; the RSU aligns
 // a box of that size with the fitted rectangle and reports the box's centre and yaw.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clusters foreground points WHILE the LiDAR sweeps, and releases each cluster as soon as the sweep
 // has passed it, instead of waiting for the end of the rotation. This is what keeps the latency from
 // "the last packet covering the vehicle" to "correction sent" at a few milliseconds (issue #4: p99 <=

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One connected vehicle's fix from the LiDAR points on it: the paper's per-vehicle steps (Sec. 3: L-shape
 // fitting, then size correction with the size the vehicle announced, Algorithm 1 or the improved
 // correction), with the fix's covariance or the reason why there is no fix.

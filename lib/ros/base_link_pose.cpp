@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "ros/base_link_pose.h"
 
 #include <Eigen/Cholesky>

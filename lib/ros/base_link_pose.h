@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // An RSU's fix of a vehicle turned into what Autoware's ekf_localizer takes as a pose input: the pose of
 // the vehicle's base_link in the vehicle's map frame, pure (rsu-autoware-sidecar does the DDS).
 //

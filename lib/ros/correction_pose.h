@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A correction (lib/v2i Correction: footprint centre x, y, yaw with a 3x3 covariance over (x, y, yaw))
 // as geometry_msgs/PoseWithCovariance, pure. The 6x6 covariance is row-major over (x, y, z, rotation
 // about X, about Y, about Z), as ROS defines it. The RSU measures neither z, roll nor pitch: they are

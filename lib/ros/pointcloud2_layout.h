@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // sensor_msgs/PointCloud2 -> LidarPoints, pure (no DDS types: the DDS edge fills PointCloud2View
 // from the received sample). The layout is read from the message's `fields`:
 //   x, y, z      required, FLOAT32 or FLOAT64, count >= 1 (the first element is used)

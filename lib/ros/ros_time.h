@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // builtin_interfaces/Time <-> the common clock (TimeNs, docs/design.md §3). ROS time is {int32 sec,
 // uint32 nanosec in [0, 1e9)}: nanosec always adds, so times before the epoch have a negative sec.
 #pragma once

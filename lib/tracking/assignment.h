@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Minimum-cost assignment (the linear assignment problem), solved exactly with the Hungarian method in
 // its shortest-augmenting-path form (Kuhn 1955, Munkres 1957; the O(n^2 m) variant with row and column
 // potentials also used by Jonker and Volgenant 1987).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Which fitted cluster is which announced vehicle. Each pair is gated by the Mahalanobis distance of
 // the box centres and by size consistency, then ONE global minimum-cost assignment is solved over all
 // pairs (Hungarian method, assignment.h), so two vehicles side by side are never swapped the way a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where the RSU expects an announced vehicle's footprint box at a LiDAR sweep time: its announced pose
 // carried forward with its announced motion (CTRV, as the vehicle EKF) and moved from the reference
 // point to the box centre (docs/design.md §3), with the covariance grown for the unknowns.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Sanity checks of a decoded VehicleAnnouncement before it may touch the registry. Every rejection has
 // a reason, so the daemon can count what arrives (and from whom) instead of crashing or guessing.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "v2i/ip_literal.h"
 
 #include <arpa/inet.h>  // inet_pton only: a pure string-to-bytes parser, no socket is involved

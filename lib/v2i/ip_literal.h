@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Numeric IP address literals ("192.0.2.7", "2001:db8::1"), as announcements carry their reply_to and
 // as the daemon names a datagram's sender: the one parser every check of an address uses. Pure (the
 // C library's inet_pton turns text into bytes; no socket is involved).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The receiving side of V2I message security (proto/v2i.proto, version 2): decides whether a datagram
 // comes from a trusted signer that may say what it says, and is neither stale nor replayed. Pure: the
 // trust list is parsed elsewhere from text, time is passed in. Every verdict is counted by reason.

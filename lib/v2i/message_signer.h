@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sending side of V2I message security: encodes messages with the header every signed message
 // carries (generation time = now, the signer's own sequence number) and signs them with the sender's
 // key (proto/v2i.proto). Without a key (insecure mode, local development only) it sends unsigned.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // V2I messages as plain C++ data (decoded from / encoded to proto/v2i.proto by wire_codec.h).
 // Map frame ENU, metres, radians CCW from east; vehicle frame x forward, y left; time in ns of the
 // common clock (docs/design.md §3).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "v2i/source_rate_limiter.h"
 
 namespace rsu::v2i {

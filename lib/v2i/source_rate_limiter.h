@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-source token-bucket rate limiting of incoming datagrams, with a bounded number of sources so a
 // flood from many spoofed addresses cannot grow memory without limit.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A token bucket (the classic traffic-shaping limiter): `burst` tokens at most, refilled at `rate`
 // tokens per second; each admitted event takes one. Time is passed in.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The RSU's table of connected vehicles that announced themselves (paper Section 3.2: the vehicle tells
 // the RSU its box size over V2I). Keyed by vehicle id; entries expire after a silence. Pure: time is
 // passed in by the caller, which also validates announcements first (announcement_validation.h).

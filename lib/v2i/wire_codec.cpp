@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "v2i/wire_codec.h"
 
 #include <cstring>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Encoding and decoding of V2I datagrams (proto/v2i.proto, version 2) to and from the plain structs of
 // messages.h. A datagram is an envelope {protocol_version, payload bytes, signer key id, signature}
 // around a payload {generation time, sequence, body}. Decoding here checks structure only (parses, the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the vehicle sends to the RSUs, and when: its announcement (box size, reference offset, its own
 // best pose with covariance and motion, where to reply), one signed datagram per RSU with the vehicle's
 // own announcement sequence, and the keep-alive that repeats the latest pose when nothing new was sent

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Decides whether a datagram received on the vehicle's correction port is a correction this vehicle
 // should use, and counts every refusal by reason. Pure computation (no socket, time passed in): the
 // VehicleClient feeds it the bytes, the tests feed it crafted ones. In signed mode the RSU's signature

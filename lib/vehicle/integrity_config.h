@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Configuration of the vehicle's integrity monitor (vehicle/integrity_monitor.h): when an RSU is
 // believed, excluded and readmitted. The defaults and the false-exclusion and detection figures they
 // give are measured in tests/vehicle/integrity_monitor_test.cpp.

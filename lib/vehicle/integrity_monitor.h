@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fault detection and exclusion of RSU sources on the vehicle (as GNSS receivers do for satellites with
 // RAIM): every fix of every RSU is checked against the vehicle's own estimate (its NDT-only filter at
 // the fix's sweep time) with both covariances, and against the other RSUs' fixes where there are

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How the vehicle's own scan matching says it did, per pose: the quality indicator that lets the vehicle
 // know when its own localization is the one that failed (and only then lets RSU fixes take over the
 // pose). PCL's NDT (and Autoware's ndt_scan_matcher around it) gives three: whether the Newton iteration

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vehicle's pose fuser: lib/fusion's CTRV EKF (x, y, yaw, speed, yaw rate) fed with the vehicle's
 // NDT poses and the RSU corrections it receives, each at its own time with its own covariance. An RSU
 // correction counts at its sweep time (when the LiDAR swept the vehicle), its box yaw is used modulo pi, one

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "vehicle/vehicle_core.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vehicle's side of RSU-assisted localization as one pure loop (no sockets, threads or clocks; the
 // caller passes the data in with their times): its own NDT poses and the RSU corrections it accepted
 // (CorrectionFilter) are fused (PoseFuser over lib/fusion's EKF), and each NDT pose yields the state to

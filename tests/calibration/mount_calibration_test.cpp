@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-calibrate's registration against the simulator's truth: the background of a known mount, simulated
 // by the project's LiDAR simulator, registered against the map sampled from the same static scene, from
 // a rough start (about 2 m and 12 deg off). The mount must come back within 2 cm / 0.05 deg, the stated

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's mount integrity check (calibration/mount_monitor.h) against the simulator's truth: the corridor
 // simulated from the mount its reference was learned under, then from a mount moved by a known amount.
 // The registration must find the motion; a bump beyond the tolerance must stop the fixes at its first

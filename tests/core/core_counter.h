@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One of RsuCore::counters() by name, for the tests of the core.
 #pragma once
 

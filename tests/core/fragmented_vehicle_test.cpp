@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The corridor experiment's hard case (issue 5): the vehicle approaching the roadside VLP-32C head-on
 // from 50 m to 30 m. There its points break into a few small clusters (front face and bumper low,
 // cabin high, the hood between rings; the curb hedges hide the lower side) that the VLP-32C's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // RsuCore with an Ouster: the real low-bandwidth OS-1-128 capture (tests/data/real/ouster) through the
 // decoder seam into the same packet order, frame assembly and background learning as a Velodyne's
 // packets, every packet counted in the core's counters.

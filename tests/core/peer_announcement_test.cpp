@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Several RSUs sharing announcements (RsuCore::on_peer_announcement), with hand-stepped time: two
 // RsuCore instances exchange, through the test, what each accepted from a vehicle, as two rsud do over
 // the data bus. The vehicle announces to the first RSU only and is corrected by both across the handover.

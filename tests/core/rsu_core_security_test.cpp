@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // RsuCore in signed mode: announcements are taken only from trusted vehicle keys for their own ids,
 // fresh and not replayed (also when a peer RSU relays the vehicle's original bytes); the corrections and
 // advertisements it sends verify with its key at a vehicle; a reload keeps the replay state.

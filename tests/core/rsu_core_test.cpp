@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // RsuCore with hand-stepped time: announcements into the registry, real Velodyne packets of a
 // simulated roadside VLP-16 into corrections, and every refusal counted by its reason.
 #include "core/rsu_core.h"

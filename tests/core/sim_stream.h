@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test helper: a simulated VLP-16 on a roadside mount sending real Velodyne packets (sim/ + the packet
 // encoder), fed to RsuCore with hand-stepped time. The first `empty_rotations` and a half come from the
 // scene without vehicles (the background the RSU learns), the rest from the same scene with them: the

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """rsu-autoware-sidecar seen by independent ROS 2-style participants (issue 14 item 3, "must show"):
 tests/dds/participant/ros2_participant (plain C on Cyclone's C API, its own IDL) plays the RSU on one DDS
 domain, publishing the fixes an RSU publishes (geometry_msgs/PoseWithCovarianceStamped of the footprint box

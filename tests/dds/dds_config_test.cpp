@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud.yaml's dds: section and the dds_pointcloud2 input: defaults, every key, located errors.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """rsud over DDS seen by an independent ROS 2-style participant (issue 6, "must show"): the real rsud
 with its dds_pointcloud2 input, the real Cyclone DDS on loopback (deploy/cyclonedds-loopback.xml, given
 to the participant through CYCLONEDDS_URI as a ROS 2 user would), `rsu-sim simulate` for the scene, the

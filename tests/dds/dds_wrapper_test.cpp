@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The DDS plumbing (dds/): a participant configured by the shipped loopback file, a typed writer and
 // reader over rt/ topics, QoS from YAML, Cyclone errors as exceptions with Cyclone's text.
 #include <gtest/gtest.h>

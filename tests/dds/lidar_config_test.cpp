@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud.yaml's lidar: section (issue 11): the sensor's keys (calibration, returns, scan phase, time
 // source, clock tolerance) and the udp and pcap inputs: defaults, every key, located errors, and the
 // calibration file read into the decoder's tables.

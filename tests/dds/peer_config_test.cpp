@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud.yaml's dds.peers section (announcements shared between RSUs): defaults, every key, located errors;
 // and v2i.reply_to, which says where rsud answers the announcements it accepts (or shares).
 #include <gtest/gtest.h>

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # rsud --check-config accepts the shipped configuration and refuses broken ones with an error that
 # names the file, the line and the field. The shipped file's keys (/etc/rsud/keys/...) are made here by
 # rsu-keygen and the paths pointed at them. Usage: check_config.sh RSUD CONFIG WORK_DIR RSU_KEYGEN

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # One command-line convention across the programs: `--version` prints "<program> <version>" and exits 0
 # (even where other options are required), an unknown option is a usage error (exit 2), and so is
 # rsu-keygen or rsu-sim given nothing to do; an option renamed to carry its unit keeps its old name. Usage: cli_convention.sh VERSION PROGRAM...

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # cmake --install into a fresh prefix installs every program, the unit, the example configuration, the
 # sysctl snippet and the vehicle client package; a program outside the project is then built against the
 # package twice, with find_package(RsuVehicleClient) and with pkg-config, and run.

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # The Debian packages (cmake/packaging.cmake) built from this build tree with cpack, installed with dpkg
 # into a scratch root (never into this machine: dpkg --root, with this machine's package database copied
 # in so that every Depends: is checked against what is really installed here), then: the packages are

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """rsud started as the shipped systemd unit starts it, as far as a machine without systemd as PID 1 allows
 (issue 14 item 1). The keys are made by rsu-keygen with the README's commands, as root, into a stand-in
 for /etc/rsud/keys; the unit's own lines are then followed:

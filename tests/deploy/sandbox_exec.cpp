@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // sandbox_exec: runs a program under the seccomp filters a systemd unit's sandbox would install, for
 // tests on a machine without systemd as PID 1 (tests/deploy/rsud_as_unit.py). With libseccomp, as systemd
 // itself does it:

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # systemd-analyze verify on deploy/rsud.service, with its install paths pointed at this build (verify
 # checks that ExecStart's program exists). Usage: verify_unit.sh UNIT_TEMPLATE RSUD_DIR CONFIG_DIR WORK_DIR
 set -eu

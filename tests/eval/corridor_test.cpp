@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The realistic experiment's own parts: the NDT map, the vehicle's NDT self-localization and the error
 // statistics of the table, against ground truth the tests compute themselves.
 #include <gtest/gtest.h>

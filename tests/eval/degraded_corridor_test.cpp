@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The degraded corridor (scenarios/corridor_degraded.yaml) does what it is for: the vehicle's own NDT
 // over the whole drive, in it and in the corridor, against the scenario's truth.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Is the RSU's stated fix covariance honest? The pilot experiment (the Embree simulator's car, not a box,
 // spinning through every aspect) over the paper's range of claims, 6 m to 36 m (Sec. 3.2), scored against
 // the simulator's ground truth: the share of improved-correction fixes whose yaw error lies beyond 3 stated

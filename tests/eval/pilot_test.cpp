@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pilot experiment at a few distances: the paper's claims hold (Algorithm 1 mostly under 0.1 m,
 // off-by-90 deg spots in the raw fit) and the improved correction removes the off-by-90 deg errors.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-fleet: many connected vehicles in one process, for the load, fault and mis-association tests
 // (issue 7). The scenario's vehicles announce their TRUE poses at the common clock (scenario time 0 =
 // --epoch-ns, as rsu-sim stream is given), moved by a fixed error as a vehicle's own estimate would

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tests/fleet/fleet_options.h"
 
 #include <arpa/inet.h>

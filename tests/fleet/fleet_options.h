@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Command line of rsu-fleet (fleet_main.cpp): which vehicles announce, how, to whom, for how long.
 #pragma once
 

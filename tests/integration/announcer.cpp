@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test helper for the integration tests: a minimal connected vehicle. Announces a fixed pose at 10 Hz
 // to rsud from a UDP socket on --bind, signed with --key (or unsigned with --insecure), and prints
 // every correction it accepts on that socket (signed mode: verified against --trust-list, fresh, not

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Two RSUs on one DDS bus hand a vehicle over (issue 6, its first "must show"), through the real processes
 on loopback: two rsud (the shipped loopback Cyclone configuration, a DDS domain of this run's own), two
 `rsu-sim stream` (scenarios/handover_west.yaml and handover_east.yaml: two VLP-16s 40 m apart, coverage

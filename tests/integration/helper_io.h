@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared by the integration test helpers (announcer.cpp, send_datagram.cpp): an IPv4 socket address
 // from text and a small file's text, each empty when impossible (the caller says why and exits).
 #pragma once

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """One RSU on loopback, for the fault, load and mis-association tests (issue 7): the real rsud fed by the
 real `rsu-sim stream` (Velodyne packets of a scenario, paced on the host clock from a shared epoch) and the
 real vehicles of `rsu-fleet` (announcing the scenario vehicles' true poses on the same clock, printing every

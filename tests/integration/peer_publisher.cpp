@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test helper for handover_integration.py's bad_peers case: a misbehaving "RSU" on the peer bus. It
 // joins the DDS domain, waits (bounded) until rsud's peer reader matches, and publishes on the peer
 // topic, in this order:

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Fault tests of rsud (issue 7 item 5): the real rsud, the real `rsu-sim stream` and the real vehicles of
 `rsu-fleet`, on loopback, in the street of scenarios/fault_street.yaml (a VLP-16, two cars driving past at
 3 m/s, 7-8 m from the LiDAR at their nearest). Each case states what must happen and checks it:

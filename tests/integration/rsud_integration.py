@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Integration tests of rsud over loopback (issues #4, #7): the real rsud, the real `rsu-sim stream`
 sending Velodyne VLP-16 packets of a scenario, and a minimal announcing vehicle (rsud_test_announcer).
 Keys are made by the real rsu-keygen; messages are signed (proto/v2i.proto) unless a case says not.

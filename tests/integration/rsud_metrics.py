@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """rsud's Prometheus metrics (issue 14 item 4): the real rsud fed by the real `rsu-sim stream` and
 `rsu-fleet` (scenarios/fault_street.yaml, a VLP-16, a connected car driving past), its node_exporter textfile
 read while it serves the car and again after it stopped, each time parsed by this file's own reader of the

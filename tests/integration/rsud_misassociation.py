@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Mis-association test (issue 7 item 6): the real rsud, `rsu-sim stream` (VLP-32C) and `rsu-fleet` on
 loopback, in scenarios/occlusion_street.yaml: seven vehicles close together and occluding each other (a
 queue at a light, a car passing a parked van, two cars side by side), of which 2, 4 and 7 are NOT connected

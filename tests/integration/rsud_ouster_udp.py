@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """rsud with an Ouster (issue 11): the real low-bandwidth OS-1-128 capture (tests/data/real/ouster) sent to
 the real rsud over loopback UDP, packet by packet as recorded (lidar packets and IMU packets to the one port,
 as a sensor configured with udp_port_imu = udp_port_lidar sends them). Every payload must be accounted for

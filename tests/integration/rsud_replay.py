@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """gpsd-style golden replay (issue 11): the real rsud replays each real capture (tests/data/real/SOURCES.md:
 the Velodyne captures and the Ouster ones with their metadata) at maximum pace, and
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """reply_to and refusal notices (issue 14 item 6) through the real processes, signed as deployed: the real
 rsud (no LiDAR needed: announcements are judged while it learns its background), the real `rsu-vehicle`
 and rsud_test_send, keys and trust lists made by rsu-keygen, all on loopback.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test helper for the integration tests: sends ONE crafted V2I datagram, signed with --key or unsigned
 // (--unsigned 1), from a UDP socket on --from: a forged correction (a key the vehicle does not trust),
 // an unsigned announcement, a stale one (--age-ms). Python has no libsodium binding here, so the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PCD round trip and clear errors for files that are missing or lack coordinates.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsud's state directory (io/background_state.h, io/mount_calibration_file.h): the background round trip,
 // and a clear error, never a crash, for every way the files can be broken or foreign.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Velodyne calibration files (io/velodyne_calibration.h): the drivers' factory files are our built-in
 // tables, and a broken file is refused naming the line and the field.
 #include "io/velodyne_calibration.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The assembler on simulated sensor streams: schedule -> encode -> decode -> assemble.
 #include "lidar/frame_assembler.h"
 

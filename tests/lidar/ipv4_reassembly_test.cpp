@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // IPv4 fragment reassembly: the reassembler alone, then a real Ouster capture written as a 1500-byte
 // Ethernet would carry it (each lidar packet in IP fragments, as tcpdump records them) and read back.
 #include "lidar/ipv4_reassembly.h"

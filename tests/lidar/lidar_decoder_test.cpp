@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The decoder seam (lidar/lidar_decoder.h): the factory picks the configured sensor's decoder, every
 // payload is counted once, and the geometry downstream needs is there before any packet arrives.
 #include "lidar/lidar_decoder.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Real Ouster captures (tests/data/real/ouster, SOURCES.md) through the decoder:
 //  - every packet accounted for, every frame whole;
 //  - point counts per frame equal to what the capture must give, counted here from the raw bytes by

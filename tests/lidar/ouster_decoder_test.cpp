@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ouster decoding against hand-built packets (tests/lidar/ouster_test_packets.h, from the manual's
 // layout) whose points the test computes itself: the manual's range-to-xyz written out directly, and
 // a few beams whose answer is known by hand. Refusals and frame sequencing, one reason at a time.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Ouster decoder behind the decoder seam (lidar/lidar_decoder.h): the factory, the contract every
 // decoder keeps (every payload counted once, IMU packets auxiliary, the packet rhythm for loss
 // counting, geometry), on the real captures and on hand-built packets.

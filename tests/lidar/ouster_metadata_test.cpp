@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ouster metadata JSON against the real files in tests/data/real/ouster (SOURCES.md): what each holds
 // is read off the file itself, and the same sensor's flat and nested files must give one geometry.
 #include "lidar/ouster/ouster_metadata.h"

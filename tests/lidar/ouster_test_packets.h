@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ouster lidar packets built by hand for tests, straight from the firmware user manual's layout
 // (independent of lib/lidar/ouster's reader), and a raw reader of real packets for counting what a
 // capture must decode to.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Random and mutated packets never crash the decoder, and every rejection has the documented reason.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PacketOrder (lidar/packet_order.h): a stream whose packets are k * period, impaired in known ways;
 // the test knows which packets it dropped, swapped or repeated and checks the released order and the
 // counts against that.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test helper: packets encoded from a FiringSchedule with random ranges, as a sensor would send them.
 #pragma once
 

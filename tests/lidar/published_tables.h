@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The tests' own copy of the published sensor tables (docs/design.md §2), independent of the library's.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Golden tests against real recordings (tests/data/real/SOURCES.md): our decoder on real packets,
 // judged by the independent reference decoder's output (nebula, Autoware's Velodyne driver), never by
 // our own simulator, which shares our sensor tables.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The real captures in tests/data/real (SOURCES.md there) as the tests use them: file bytes, the UDP
 // datagrams of a pcap, and the share of a reference cloud matched by a decoded one.
 #pragma once

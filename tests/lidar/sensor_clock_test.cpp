@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sensor clock offset (lidar/sensor_clock.h) against offsets and delays the test sets.
 #include "lidar/sensor_clock.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Velodyne decoder's stream-level behaviour (lidar/velodyne_decoder.h) against truths the test
 // knows: the rotation rate measured from the packets at any rpm the sensors run, the return selection
 // of dual-return packets, position packets and their $GPRMC, and the real HDL-32E and early-firmware

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lidar/velodyne_packet.h"
 
 #include "lidar/velodyne_decoder.h"

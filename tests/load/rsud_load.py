@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Load test of rsud (issue 7 item 4): N vehicles announcing at 10 Hz from one `rsu-fleet` process (each
 from its own loopback address, as rsud rate-limits per host), four of them in view of a VLP-32C streamed
 by `rsu-sim stream` (tests/load/load_street.yaml), the rest beyond the coverage; for a bounded time.

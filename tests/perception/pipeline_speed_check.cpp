@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The per-frame pipeline's speed regression check (issue 16): the pipeline on a simulated VLP-32C
 // corridor frame (the frame bench_perception's BM_Pipeline times) against a fixed reference computation
 // on the same points, both timed alternately in this one process. The check is on their ratio, never on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SweepClusterer: clusters are released exactly when the sweep has passed them far enough that no
 // later point can join them (the geometric rule in sweep_clusterer.h), computed here independently.
 #include "perception/sweep_clusterer.h"

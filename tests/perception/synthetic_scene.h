@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test-side ground truth: boxes the tests know exactly, and an independent little ray caster that
 // samples what a LiDAR at a known position would see of them (2D for fitting, 3D for whole frames).
 #pragma once

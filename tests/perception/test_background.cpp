@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Background removal: the hash grid against brute force, and the three methods against the labels the
 // synthetic scene knows.
 #include <gtest/gtest.h>

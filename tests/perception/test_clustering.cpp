@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Euclidean clustering: the grid variant against the obviously-correct reference, and both against
 // clusters the test builds on purpose.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Size correction: Algorithm 1 as the paper writes it, and the improved correction that removes its
 // off-by-90 deg failures, against boxes the test knows.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fix covariance grows where the fit is weakly constrained: fewer points, one face seen, longer
 // range. Checked on the model directly and end to end on scans of known boxes.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // L-shape fitting (Zhang et al. 2017) against rectangles the test knows.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The whole per-frame pipeline on synthetic 3D frames whose vehicles the test placed.
 #include <gtest/gtest.h>
 

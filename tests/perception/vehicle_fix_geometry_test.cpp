@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fix on the views a roadside LiDAR really gets (issue 12): the simulator's vehicle body (hood,
 // glasshouse narrower than the body, rounded corners, wheels) seen by a VLP-16 / VLP-32C on a mast, not
 // a box. Each case must give a fix that is right (within 0.10 m) or whose stated covariance covers its

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-relay's faults (CorrectionTamper): corrections altered as configured and signed again so that the
 // vehicle's authenticator accepts them; everything else passes untouched.
 #include <gtest/gtest.h>

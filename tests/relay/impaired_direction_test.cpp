@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ImpairedDirection (tools/rsu_relay): datagrams k = 0, 1, ... pushed 10 ms apart, each carrying
 // its own index, so that what leaves when can be checked against each impairment's definition.
 #include <gtest/gtest.h>

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """rsu-relay as a process on loopback: a stand-in vehicle and a stand-in RSU (two UDP sockets)
 exchange datagrams through it. Asserts that announcements reach the RSU from the relay's RSU-side
 address at the vehicle's port (so that rsud's reply-to check passes), that answers sent back there reach

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // An RSU fix as the vehicle's base_link pose (lib/ros/base_link_pose.h), checked against a vehicle whose
 // base_link pose the test sets: the box centre and the RSU's folded yaw are made from it here with plain
 // trigonometry, and the stated covariance against the spread of many fixes drawn from the RSU's.

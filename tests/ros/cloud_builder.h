@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Builds PointCloud2 byte layouts for the tests by hand: every value is written byte by byte from its
 // integer representation in the requested byte order (shifts, not memcpy), independently of how
 // lib/ros reads them.

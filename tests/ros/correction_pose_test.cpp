@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Correction -> PoseWithCovariance and ROS time: checked against what the numbers must mean (the
 // quaternion rotates +x onto the heading; the 6x6 holds the 3x3 at x, y, yaw; times round-trip).
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PointCloud2 -> LidarPoints: every datatype in both byte orders, padding and rows, time semantics,
 // ring orders, and every rejection reason. Expected values are the ones the test wrote (cloud_builder.h
 // encodes them byte by byte).

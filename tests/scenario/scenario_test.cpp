@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scenario files: the shipped examples load as written, and every kind of broken file is rejected with
 // an error naming the file, the line and the field.
 #include <gtest/gtest.h>

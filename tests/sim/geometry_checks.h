@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Independent geometry used by the sim tests as ground truth: mesh topology and volume, closest
 // points on triangles, analytic ray intersections. Written here, not taken from sim/, so a test does
 // not check the code under test against itself.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """scripts/check_namespaces.py on trees this test writes: silent where each file's namespace follows its
 folder (also nested spellings, deeper along the path, lib/common as rsu, local anonymous namespaces,
 aliases, forward declarations of another folder's types, namespaces in comments and strings), and naming

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Fails if the given rsud binary links a library it must not (issue 15): the simulator's Embree and TBB,
 # VTK, OpenNI, libusb. Prints what it links either way, so that a failure shows the culprit.
 set -euo pipefail

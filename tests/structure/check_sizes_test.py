@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """scripts/check_sizes.py on trees this test writes: silent on code within the limits, and naming each
 function over 80 lines (free, member defined in a class, constructor with an initialiser list, template
 with "class T") and each file over 450 lines, whatever braces comments and strings hold."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What the structure checkers' tests share: running a checker on a tree the test writes."""
 import pathlib
 import subprocess

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """rsu-decode on the real captures (tests/data/real/SOURCES.md), as a user runs it.
 
   - the real VLP-32C capture: one PCD per rotation with the fields x y z intensity ring time, the counts

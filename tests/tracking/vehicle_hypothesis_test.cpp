@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tracking/vehicle_hypothesis.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The receiving side of message security: every verdict, on datagrams the test builds and signs
 // itself, and the counts.
 #include "v2i/message_authenticator.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ed25519 against RFC 8032 §7.1 (test vectors 1-3), tampering, key ids and the key file text.
 #include <gtest/gtest.h>
 

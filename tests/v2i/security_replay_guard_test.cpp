@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Replay protection: the generation-time window's edges, the 64-wide sequence window (reordering,
 // duplicates, wrap-around, restarts) against an independent reference, and bounded state.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Trust-list text: entries, the binding of keys to ids, and located errors.
 #include <gtest/gtest.h>
 

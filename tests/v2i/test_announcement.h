@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A plausible announcement for tests: a Lexus RX450h (docs/design.md §2) reporting its rear axle.
 #pragma once
 

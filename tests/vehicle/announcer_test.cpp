@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Announcer: one signed datagram per RSU, each with that RSU's reply address and the same announcement
 // sequence; implausible states refused without a sequence spent; the keep-alive decision against the
 // test's own clock arithmetic.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // CorrectionFilter: ordering per RSU, restart of an RSU, sequence wrap-around and bounded memory (in
 // insecure mode: those are about ordering), then signed mode: only genuine, fresh RSU corrections.
 #include "vehicle/correction_filter.h"

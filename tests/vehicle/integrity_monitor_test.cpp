@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vehicle's fault detection and exclusion (IntegrityMonitor inside VehicleCore) on simulated drives
 // whose truth, NDT noise and RSU faults the test makes itself: honest sources are (almost) never
 // excluded, and the false-exclusion rate is measured; biased, rotated, overconfident and wrong-vehicle

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PoseFuser on a simulated straight drive: noisy NDT plus RSU corrections (box centre, yaw modulo pi,
 // delivered late) against the test's own ground truth.
 #include "vehicle/pose_fuser.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // VehicleCore: the vehicle's loop (NDT pose -> corrections -> fuse -> announce) on a simulated straight
 // drive, against the test's own truth.
 #include "vehicle/vehicle_core.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A fake RSU for the client tests: one plain POSIX UDP socket on 127.0.0.1 with a receive timeout, so
 // every wait in a test is bounded.
 #pragma once

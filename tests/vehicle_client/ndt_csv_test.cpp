@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rsu-vehicle CLI's NDT pose CSV: what parses, and that every error names its line.
 #include "vehicle_client/ndt_csv.h"
 

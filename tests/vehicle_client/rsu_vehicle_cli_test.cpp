@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rsu-vehicle CLI end to end, signed: NDT poses in, a fake RSU (plain UDP socket) that verifies each
 // announcement against the vehicle key the test generated and answers with a correction signed by its
 // RSU key, from the test's own truth; fused poses and a corrections file out.

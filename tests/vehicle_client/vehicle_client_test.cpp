@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // VehicleClient over loopback against a fake RSU (a plain UDP socket): what goes out, what comes back,
 // and what is refused.
 #include "vehicle_client/vehicle_client.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Options renamed to carry their unit (--length -> --length-m): the old spelling stays accepted for
 // existing scripts, with a warning, by rewriting the command line before it is parsed, so that each
 // program declares, and its --help shows, only the new name.

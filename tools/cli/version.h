@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // --version for every program (one convention across the command-line tools): prints "<program>
 // <project version>" and the program exits 0. Looked for before the options are parsed, so that it works
 // without the options a program otherwise requires (and under each rsu-sim subcommand).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Binary PCD files (as rsu-sim and rsu-decode write them, and nebula's reference decodes) read in pure
 Python, shared by the tests that check those files.
 

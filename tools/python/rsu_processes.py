@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Helpers to run the project's real processes on loopback, shared by the integration tests
 (tests/integration/*.py), the load and fault tests and the realistic experiment
 (eval/corridor/run_experiment.py).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-autoware-sidecar: an RSU's fixes of this vehicle, from DDS, as the vehicle's base_link pose for
 // Autoware's ekf_localizer (issue 14 item 3); no ROS installation needed, the DDS types are ROS 2's
 // (dds/idl). It reads the RSU's geometry_msgs/PoseWithCovarianceStamped of the vehicle's footprint box

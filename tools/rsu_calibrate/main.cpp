@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-calibrate: where the RSU's LiDAR is, from its background scan and the street's map.
 //   rsu-calibrate --background bg.pcd [--background ...] --map map.pcd --initial x,y,z,roll,pitch,yaw
 // The initial mount is a rough one (a hand-held GNSS and a compass; angles in degrees). Prints the mount

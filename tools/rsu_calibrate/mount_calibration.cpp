@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tools/rsu_calibrate/mount_calibration.h"
 
 #include <pcl/kdtree/kdtree_flann.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-calibrate's registration: the RSU's background scan (sensor frame) against the street's map, from
 // a rough initial mount, coarse to fine: a grid search over x, y, yaw on a 1 m then a 0.3 m voxel
 // occupancy of the map (lib/calibration/coarse_search.h), then point-to-plane Gauss-Newton against the

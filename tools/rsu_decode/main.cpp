@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-decode: turns a LiDAR capture into one PCD file per rotation, through the same decoder seam
 // (lib/lidar/lidar_decoder.h) and rotation assembly (lib/lidar/frame_assembler.h) rsud uses.
 #include <boost/program_options.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-keygen: makes Ed25519 key pairs for signed V2I messages (proto/v2i.proto) and keeps trust lists
 // (lib/v2i/security/trust_list.h). The secret key file is created with mode 0600. Nothing is ever
 // overwritten without --force; a trust list only grows (one entry per key).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A faulty RSU made on purpose (rsu-relay, issue 18's fault injection): corrections on their way to the
 // vehicle are decoded, altered (a position bias, a scaled covariance, bursts of another vehicle's pose)
 // and signed again with the RSU's key, which the test owns. Once any alteration is configured every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tools/rsu_relay/impaired_direction.h"
 
 #include <algorithm>

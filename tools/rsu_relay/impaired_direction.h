@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One direction of an impaired radio link (rsu-relay): what happens to each datagram and when it
 // leaves. A datagram is lost with probability `loss`; otherwise it leaves `delay_ms` plus a uniform
 // jitter within +-`jitter_ms` (never before it arrived) after it came, so that with jitter a later

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-relay: the V2I link between a vehicle and its RSUs, on loopback, made as bad as a radio link can
 // be (delay, jitter, loss, reordering, each direction, seeded) or as a faulty RSU would make it
 // (corrections biased, overconfident, or another vehicle's, signed again with the RSU's key). Neither

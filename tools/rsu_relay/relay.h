@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-relay's event loop: UDP datagrams between a vehicle and its RSUs on loopback, each direction
 // impaired (ImpairedDirection), corrections altered on the way down (CorrectionTamper). Boost.Asio, one
 // thread.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The subcommands of rsu-sim. Each returns the process exit code; errors are thrown as exceptions
 // with a message fit for the user.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-sim: the LiDAR and scene simulator's command line.
 //   rsu-sim simulate SCENARIO [--out DIR] [--frames N]   frames (PCD), packets (pcap), truth, picture data
 //   rsu-sim stream SCENARIO --to HOST:PORT [...]         Velodyne packets over UDP, real time or fast

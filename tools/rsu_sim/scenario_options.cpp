@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tools/rsu_sim/scenario_options.h"
 
 #include <stdexcept>

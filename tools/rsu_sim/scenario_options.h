@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Options shared by rsu-sim's subcommands: the scenario file and overrides of it.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-sim simulate: frames as PCD (sensor frame), the Velodyne packets as a pcap, the true vehicle
 // poses, and the data of a top-down picture (drawn by eval/plots/topdown.py).
 #include <boost/program_options.hpp>

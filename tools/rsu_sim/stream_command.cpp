@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-sim stream: the scenario's Velodyne data packets over UDP, paced at real time (as a sensor
 // sends them) or as fast as possible. Packet times are the simulation clock; with --clock wall the
 // simulation clock is shifted so that the first packet is "now" on the host clock (the common clock

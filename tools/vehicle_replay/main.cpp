@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-vehicle-replay: a recorded drive through the vehicle core again, offline and deterministic: the NDT
 // poses rsu-vehicle read (its stdin) and the corrections it received (its --corrections file, with their
 // arrival times), merged by time as the live client met them (the corrections received by an NDT pose's

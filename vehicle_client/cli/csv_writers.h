@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rsu-vehicle CLI's outputs, as CSV with a header line (map frame ENU, m, rad CCW from east,
 // ns of the common clock; docs/design.md §3).
 #pragma once

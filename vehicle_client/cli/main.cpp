@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rsu-vehicle: the vehicle side of RSU-assisted localization on the command line. Reads the vehicle's
 // NDT poses as CSV on stdin, announces the vehicle to the RSU(s), receives their corrections, fuses
 // both, and prints the fused poses as CSV on stdout (issue 4, item 3). The decisions are the vehicle

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "vehicle_client/cli/stats_report.h"
 
 #include <fstream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What rsu-vehicle reports when it ends: a one-line summary on stderr and, with --stats FILE, every
 // counter as "key value" lines (as rsud's stats file): the V2I client's, the fuser's, the vehicle's own
 // NDT health and the integrity monitor's, overall and per RSU (issue 18: exclusions say which RSU, why,

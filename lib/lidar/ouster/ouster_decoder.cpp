@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ouster lidar packet decoder (see ouster_decoder.h).
 #include "lidar/ouster/ouster_decoder.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Turns one Ouster sensor's lidar packets into points (ouster_packet.h for the bytes,
 // ouster_geometry.h for where they point), with every refusal counted by reason.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ouster beam geometry (see ouster_geometry.h).
 #include "lidar/ouster/ouster_geometry.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where an Ouster pixel's return lies, from the sensor's metadata (the firmware user manuals'
 // "Lidar Range to XYZ" and the Ouster SDK's XYZ lookup table).
 //

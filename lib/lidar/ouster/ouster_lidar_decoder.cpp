@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Ouster decoder behind the decoder seam (see ouster_lidar_decoder.h).
 #include "lidar/ouster/ouster_lidar_decoder.h"
 

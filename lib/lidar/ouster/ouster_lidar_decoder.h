@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Ouster decoder behind the decoder seam (lidar/lidar_decoder.h): OS0 / OS1 / OS2 lidar packets
 // of one sensor, described by its metadata JSON (ouster_metadata.h), into points (ouster_decoder.h).
 //

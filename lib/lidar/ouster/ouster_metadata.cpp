@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ouster metadata JSON (see ouster_metadata.h). Field names, layouts and defaults are those of the
 // public Ouster SDK (ouster-sdk, BSD-3-Clause) and the sensor firmware user manuals.
 #include "lidar/ouster/ouster_metadata.h"

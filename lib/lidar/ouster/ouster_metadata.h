@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // An Ouster sensor's metadata JSON (OS0 / OS1 / OS2), as the sensor's HTTP API and the Ouster SDK
 // write it next to a recording: the beam geometry, the frame and packet format and the UDP profile
 // the lidar packets are decoded with. The caller reads the file and passes its text in.

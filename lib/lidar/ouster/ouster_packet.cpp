@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ouster lidar packet layout (see ouster_packet.h).
 #include "lidar/ouster/ouster_packet.h"
 

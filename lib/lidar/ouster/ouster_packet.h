@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The byte layout of Ouster lidar packets (UDP payloads, port 7502 by default), per profile, from the
 // OS0/OS1/OS2 firmware user manuals ("Lidar Data Format") and the public Ouster SDK. Little-endian.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "v2i/security/ed25519.h"
 
 #include <sodium.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ed25519 signatures (RFC 8032, pure Ed25519) with libsodium, and the key id that names a public key on
 // the wire (proto/v2i.proto). Pure computation: keys come from seeds the caller supplies (rsu-keygen
 // draws them from the OS), nothing here reads files or clocks.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The text formats of key files, parsed from TEXT the caller read (lib/ does no file I/O; rsud, the
 // vehicle client and rsu-keygen read and write the files). Errors throw std::invalid_argument naming
 // "<source>:<line>: what is wrong", like the YAML readers (io/yaml_field.h).

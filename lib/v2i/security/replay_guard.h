@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Replay protection for signed V2I messages (proto/v2i.proto): a generation-time window around the
 // receiver's clock, and per signer a sliding anti-replay window over its sequence numbers (RFC 4303
 // §3.4.3, IPsec ESP: a 64-bit bitmap below the highest number accepted), so that mild reordering is

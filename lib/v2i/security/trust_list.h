@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The trust list: which public keys a receiver accepts signatures from, and what each may sign.
 //
 // Text format (one entry per line; '#' starts a comment; parsed from TEXT the caller read):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* An independent ROS 2-style DDS participant for rsud's DDS test (tests/dds/dds_participant_test.py).
  * Plain C on Cyclone's C API and its own IDL (ros2_messages.idl); it includes nothing of the project.
  * Cyclone is configured the way a ROS 2 user does it: the CYCLONEDDS_URI environment variable.

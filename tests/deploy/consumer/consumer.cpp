@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A program outside the project built against the installed vehicle client package (tests/deploy/
 // install_consumer.sh): it reads a vehicle key with the library's own parser (its key id printed), parses an
 // RSU endpoint and prints the library's version, so its headers, its exported symbols and its dependencies
