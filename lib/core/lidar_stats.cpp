@@ -17,6 +17,7 @@ void report(const lidar::PacketOrderStats& o, const perception::SweepClustererSt
   out.add("sweep", "clusters_released", s.clusters_released);
   out.add("sweep", "clusters_dropped_small", s.clusters_dropped_small);
   out.add("sweep", "clusters_dropped_large", s.clusters_dropped_large);
+  out.add("sweep", "clusters_dropped_cut_at_start", s.clusters_dropped_cut_at_start);
   out.add("sweep", "points_dropped_stale", s.points_dropped_stale);
   out.add("sweep", "points_dropped_overflow", s.points_dropped_overflow);
   out.add("sweep", "points_dropped_restart", s.points_dropped_restart);

@@ -109,6 +109,10 @@ void SweepClusterer::add(const lidar::LidarPoint& p, bool foreground) {
     running_ = true;
     sweep_ = a - offset;
     last_time_ = p.time_ns;
+    const double max_offset = laser_offset_rad_.empty()
+                                  ? 0.0
+                                  : *std::max_element(laser_offset_rad_.begin(), laser_offset_rad_.end());
+    start_u_ = sweep_ + max_offset;
   }
   // Unwrap against where this laser should point by now: robust to lost packets shorter than half a
   // turn.
@@ -155,6 +159,21 @@ std::vector<SweepClusterer::ComponentState> SweepClusterer::component_states(con
   return state;
 }
 
+bool SweepClusterer::cut_at_start(const Cluster& members) const {
+  // The mirror of the closing rule (component_states): a point nearer the start line than the
+  // clustering tolerance may have neighbours that went by before the stream began.
+  for (const std::uint32_t i : members) {
+    const double ahead = azimuth_[i] - start_u_;
+    if (ahead >= kPi / 2.0) {
+      continue;
+    }
+    if (ahead <= 0.0 || range_[i] * std::sin(ahead) <= clustering_.tolerance_m) {
+      return true;
+    }
+  }
+  return false;
+}
+
 void SweepClusterer::drop_stale() {
   const double oldest_allowed = sweep_ - kPi;
   compact_pending([&](std::size_t i) {
@@ -178,8 +197,11 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     drop_stale();
   }
   if (points_.empty()) {
-    // Nothing pending: bring the unwrapped sweep back near [0, 2 pi) so it never loses precision.
-    sweep_ = std::fmod(sweep_, kTwoPi);
+    // Nothing pending: bring the unwrapped sweep back near [0, 2 pi) so it never loses precision
+    // (the start line, once a whole turn behind, no longer cuts anything).
+    const double shift = sweep_ - std::fmod(sweep_, kTwoPi);
+    start_u_ = sweep_ - start_u_ > kTwoPi ? -kInf : start_u_ - shift;
+    sweep_ -= shift;
     return out;
   }
   const double a_future = sweep_ - lag_rad_;
@@ -212,6 +234,10 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     const Cluster& members = components.clusters[c];
     for (const std::uint32_t i : members) {
       take[i] = true;
+    }
+    if (cut_at_start(members)) {
+      ++stats_.clusters_dropped_cut_at_start;
+      continue;
     }
     if (members.size() < min_points_) {
       ++stats_.clusters_dropped_small;

@@ -75,8 +75,10 @@ struct SweepClustererStats {
   std::uint64_t points_seen = 0;
   std::uint64_t foreground_points = 0;
   std::uint64_t clusters_released = 0;
-  std::uint64_t clusters_dropped_small = 0;   // fewer than ClusteringConfig::min_points (noise)
-  std::uint64_t clusters_dropped_large = 0;   // more than max_points (e.g. a wall, no background yet)
+  std::uint64_t clusters_dropped_small = 0;  // fewer than ClusteringConfig::min_points (noise)
+  std::uint64_t clusters_dropped_large = 0;  // more than max_points (e.g. a wall, no background yet)
+  // Reaching back to where the stream (re)started: part of the object went by before the first point.
+  std::uint64_t clusters_dropped_cut_at_start = 0;
   std::uint64_t points_dropped_stale = 0;     // pending for half a rotation (see file comment)
   std::uint64_t points_dropped_overflow = 0;  // over SweepConfig::max_pending_points
   std::uint64_t points_dropped_restart = 0;   // pending when the stream restarted
@@ -135,6 +137,7 @@ class SweepClusterer {
   std::vector<ComponentState> component_states(const Clustering& components, double a_future) const;
   std::vector<SweptCluster> release(bool everything);
   void drop_stale();
+  bool cut_at_start(const Cluster& members) const;
   // Keeps the pending points for which drop(i) is false, in order (points_, azimuth_, range_ together).
   template <typename Drop>
   void compact_pending(Drop drop) {
@@ -166,6 +169,9 @@ class SweepClusterer {
 
   bool running_ = false;
   double sweep_ = 0.0;  // newest unwrapped encoder azimuth seen (largest beam azimuth without table)
+  // The unwrapped beam azimuth from which every laser has been seen since the stream (re)started: an
+  // object within the clustering tolerance of it may have begun before it and is never released whole.
+  double start_u_ = 0.0;
   TimeNs last_time_ = 0;
 
   // Pending foreground points and, in parallel, their unwrapped azimuth and planar range.
