@@ -5,8 +5,8 @@
 # each phase took. `scripts/test.sh --quick` runs the Release pass only.
 #
 # What runs where, and why (budget: the whole command under 30 min on 2 cores, fresh machine; measured
-# on CI: install 1 s, Release build 392 s, tests 143 s, ASan build 636 s, tests 132 s, TSan build ~165 s,
-# tests ~70 s, fuzz ~190 s: about 29 min):
+# on a fresh clone: install 1 s, Release build 406 s, tests 177 s, ASan build 638 s, tests 96 s, TSan
+# build 187 s, tests ~70 s (~25 s since the pilot's long sweeps left it), fuzz ~190 s: about 29 min):
 #   Release     every test
 #   ASan+UBSan  every test (memory errors and UB anywhere, our parsers above all) but those labelled
 #               `throughput` (the load smoke and the mis-association run): they assert the speed of an
@@ -71,8 +71,11 @@ if [ "${1:-}" != "--quick" ]; then
   end "TSan build"
   begin "TSan tests"
   # Children (rsud, rsu-sim, the vehicles) inherit TSAN_OPTIONS: a race in any of them fails its test.
+  # The pilot's two long cell sweeps are computation (38 s under TSan); its worker pool is checked by
+  # Pilot.SameSeedSameResult (2 threads against 1).
   TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp" \
-    ctest --test-dir build-tsan --output-on-failure -j "$(nproc)" -L threads -LE realtime
+    ctest --test-dir build-tsan --output-on-failure -j "$(nproc)" -L threads -LE realtime \
+      -E '^Pilot\.(PointCountFallsWithDistance|Vlp16ReproducesThePaperAndTheImprovedCorrectionRemovesOffBy90)$'
   end "TSan tests"
 
   begin "fuzz"
