@@ -177,6 +177,11 @@ MountDrift MountMonitor::estimate(std::span<const lidar::LidarPoint> rotation, c
   }
   d.matches = fit.matches;
   d.rms_m = fit.rms_m;
+  // What a rotation has matches the reference, but too little of it to tell (a part of a rotation, its
+  // other packets lost): unobservable, not a view that no longer matches (which would stop the fixes).
+  if (d.observable && !enough(fit.matches + weak) &&
+      static_cast<double>(fit.matches + weak) >= config_.min_match_fraction * static_cast<double>(d.sampled))
+    d.observable = false;
   d.matches_reference = d.observable && enough(fit.matches + weak);
   d.motion = motion;
   d.covariance = Matrix6d::Identity();  // unknown: metres and radians

@@ -54,8 +54,14 @@ struct MountMonitorConfig {
   // as unobservable, nothing decided. With enough points but fewer than min_match_fraction of them on
   // the reference's planes, the scene is no longer the reference's (moved far beyond what the
   // registration follows: a remount by metres): the fixes stop as for a drift.
+  // Fewer than min_matches on the reference although at least min_match_fraction of them match it (a
+  // part of a rotation: packets lost) is unobservable too, not a mismatch.
   std::size_t min_matches = 300;
   double min_match_fraction = 0.3;
+  // rsud (RsuCore) does not check a rotation that lacked more than this share of its packets (lost in
+  // the kernel by a daemon too slow for its LiDAR, or shed as too late): what is left of it says
+  // little, and it must not read as motion. Fewer lost (network loss) are checked on what they have.
+  double max_missing_fraction = 0.1;
   // The rule (a bumped sensor must never mislead a vehicle): fixes stop when the estimated error exceeds
   // the tolerance, whether or not by this many of its standard deviations; beyond it by them the motion
   // is confirmed, within them only suspected (stopped all the same, said so, counted as

@@ -211,7 +211,12 @@ class RsuCore {
   lidar::FrameAssembler monitor_assembler_;  // rotations of a sample of the points, for monitor_
   std::vector<lidar::LidarPoint> monitor_scratch_;
   std::vector<lidar::LidarFrame> mount_rotations_pending_;  // for check_mount_pending()
-  std::size_t monitor_skip_ = 0;                            // points since the last one sampled
+  // Packets the stream lacked (lost on the way or by the kernel, shed as too late) when the monitor's
+  // last rotation was completed: a rotation that lacked more than max_missing_fraction of its packets
+  // is not checked (watch_mount).
+  std::uint64_t missing_at_last_rotation_ = 0;
+  std::uint64_t mount_rotations_gappy_ = 0;  // mount.rotations_gappy
+  std::size_t monitor_skip_ = 0;             // points since the last one sampled
   std::vector<std::string> mount_notices_;
 };
 

@@ -244,6 +244,32 @@ TEST(MountMonitorWeakStreet, Vlp16StillServesAndSmallBumpsStopTheFixes) {
   }
 }
 
+// Part of a still rotation, its other packets lost (a daemon too slow for its LiDAR): what there is matches
+// the reference, too little of it to tell. Unobservable, never a view that no longer matches the
+// reference ("moved far", which stopped the fixes of a still sensor: integration_rsud_security under a
+// TSan rsud). Parts of 300-600 static points, each the first points of the rotation (its first azimuths).
+TEST(MountMonitorWeakStreet, PartOfARotationIsNotMotion) {
+  const Street street("vlp16");
+  const calibration::MountMonitor reference = street.monitor();
+  const std::vector<lidar::LidarPoint> whole = street.rotation(3, {});
+  int unobservable = 0;
+  for (std::size_t n = 300; n <= 600; n += 20) {
+    ASSERT_LT(n, whole.size());
+    calibration::MountMonitor m = reference;
+    const std::vector<lidar::LidarPoint> part(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
+    m.check_rotation(part, 3 * kRotation);  // true when it warns that the street cannot verify the mount
+    EXPECT_TRUE(m.serving()) << n << " points: " << m.notice();
+    EXPECT_EQ(m.stats().rotations_mismatched, 0U) << n << " points, " << m.last().matches << " matched";
+    unobservable += static_cast<int>(m.stats().rotations_unobservable);
+  }
+  EXPECT_GT(unobservable, 0);  // the smallest parts cannot tell
+  // The whole rotation still can.
+  calibration::MountMonitor m = reference;
+  m.check_rotation(whole, 3 * kRotation);
+  EXPECT_TRUE(m.serving());
+  EXPECT_TRUE(m.last().observable && m.last().matches_reference);
+}
+
 // The measurements quoted in the README (not run by ctest: ~20 s): bumps of 0.1-1 deg of yaw and 5-10 cm
 // on the fault street (VLP-16, VLP-32C) and the corridor, rotations until the fixes stop, and false stops
 // over 200 still rotations. build/tests/calibration/mount_monitor_tests

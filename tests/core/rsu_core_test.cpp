@@ -567,6 +567,43 @@ TEST(RsuCore, GarbageLidarPacketsAreCountedNotFatal) {
   EXPECT_EQ(core.lidar_decoder().packets_seen(), 2U);
 }
 
+// A daemon too slow for its LiDAR loses packets in bursts (the kernel drops them at its full socket
+// buffer): a rotation that lacked many of them is not checked by the mount monitor (mount.rotations_gappy)
+// and never stops the fixes of a still sensor; one with a few lost (network loss) is checked on what it has.
+TEST(RsuCore, RotationsLackingManyPacketsAreNoMountEvidence) {
+  RsuCore core(test_config());
+  const sim::LidarSimulator lidar(lidar::make_vlp16(), testing::roadside_mount(), sim::NoiseModel{},
+                                  testing::street_scene());
+  const std::int64_t per_rotation = lidar.packet_index_at(lidar.rotation_period_ns());  // 75
+  std::array<std::uint8_t, lidar::kPacketBytes> payload{};
+  int bursts = 0;
+  for (std::int64_t k = 0; k < 16 * per_rotation; ++k) {
+    const std::int64_t rotation = k / per_rotation;
+    const std::int64_t at = k % per_rotation;
+    // After learning and a whole rotation: every other rotation loses 40 % of its packets in one burst,
+    // the others two.
+    const bool burst =
+        rotation >= 7 && rotation % 2 == 1 && at >= per_rotation / 4 && at < per_rotation * 13 / 20;
+    const bool few = rotation >= 7 && rotation % 2 == 0 && (at == 10 || at == 40);
+    if (burst || few) {
+      bursts += burst && at == per_rotation / 4 ? 1 : 0;
+      continue;
+    }
+    const lidar::PacketReturns r = lidar.simulate_packet(k);
+    lidar::encode_packet(lidar.model(), r, payload);
+    core.on_lidar_packet(payload, r.blocks.first_firing_ns + 1'400'000);
+  }
+  EXPECT_EQ(bursts, 5);
+  EXPECT_GT(counter(core, "packet.lost"), 5U * 30U);
+  // Each burst's rotation skipped (and at most the next, when the burst is counted late).
+  EXPECT_GE(counter(core, "mount.rotations_gappy"), 4U);
+  EXPECT_LE(counter(core, "mount.rotations_gappy"), 6U);
+  EXPECT_GE(counter(core, "mount.rotations_checked"), 6U);  // the whole ones and those that lost two
+  EXPECT_EQ(counter(core, "mount.rotations_mismatched"), 0U);
+  EXPECT_EQ(counter(core, "mount.stops"), 0U);
+  EXPECT_TRUE(core.mount_serving());
+}
+
 // A LiDAR remounted while rsud was down (issue 17): the background saved under the old mount is loaded as
 // the reference, and the moved sensor's first rotations stop the fixes; the advertisement says so and
 // why. The same sensor unmoved keeps serving and advertises that it does.
