@@ -11,8 +11,8 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
   using io::YamlField;
   const YAML::Node root = io::parse_yaml(io::read_text_file(path), path);
   const YamlField doc(root, "", path, 1);
-  doc.expect_map(
-      {"scenario", "vehicle_id", "rsu_models", "duration_s", "seed", "vehicle_lidar", "map", "ndt"});
+  doc.expect_map({"scenario", "vehicle_id", "traffic_connected", "rsu_models", "duration_s", "seed",
+                  "vehicle_lidar", "map", "ndt"});
   CorridorExperimentConfig c;
   c.source = path;
   const YamlField scenario = doc.required("scenario");
@@ -24,6 +24,17 @@ CorridorExperimentConfig load_corridor_experiment(const std::string& path) {
     found = found || v.id == c.vehicle_id;
   if (!found)
     doc.child("vehicle_id").fail("no vehicle with this id in " + scenario_path.string());
+  if (doc.has("traffic_connected")) {
+    for (const YamlField& id : doc.child("traffic_connected").items()) {
+      const auto v = static_cast<std::uint32_t>(id.number());
+      bool in_scenario = false;
+      for (const auto& sv : c.scenario.scene.vehicles)
+        in_scenario = in_scenario || sv.id == v;
+      if (!in_scenario || v == c.vehicle_id)
+        id.fail("not another vehicle of " + scenario_path.string());
+      c.traffic_connected.push_back(v);
+    }
+  }
   for (const YamlField& m : doc.required("rsu_models").items()) {
     if (!lidar::sensor_model_by_name(m.text()) || !lidar::sensor_model_by_name(m.text())->has_packet_format())
       m.fail("not a LiDAR model with a Velodyne packet format (vlp16, vlp32c)");

@@ -16,6 +16,9 @@ struct CorridorExperimentConfig {
   std::string source;
   sim::Scenario scenario;
   std::uint32_t vehicle_id = 1;
+  // Other connected vehicles of the scenario (traffic, issue 13 item 3): they announce their true poses
+  // through rsu-fleet in the live runs; the rest of the scenario's vehicles are not connected.
+  std::vector<std::uint32_t> traffic_connected;
   std::vector<std::string> rsu_models;
   double duration_s = 10.8;
   std::uint64_t seed = 11;

@@ -87,6 +87,22 @@ const sim::Vehicle& vehicle_of(const CorridorExperimentConfig& c) {
   throw std::runtime_error("no vehicle");
 }
 
+// The true distance from (x, y) to the nearest vehicle of the scenario other than `own` at time t (NaN
+// when there is none): a fix nearer another vehicle than its own is that vehicle's.
+double nearest_other_m(const sim::Scenario& scenario, std::uint32_t own, double x, double y, TimeNs t) {
+  double best = std::numeric_limits<double>::quiet_NaN();
+  for (const sim::Vehicle& v : scenario.scene.vehicles) {
+    if (v.id == own)
+      continue;
+    const Pose2 p = sim::pose_at(v.trajectory, t);
+    const double d = std::hypot(x - p.x, y - p.y);
+    best = std::isnan(best) ? d : std::min(best, d);
+  }
+  return best;
+}
+
+constexpr double kHmiM = 0.30;  // an HMI fix: beyond 3 sigma and more than this off
+
 // epoch_ns: subtracted from the file's times (processes that ran on the host clock, see run_experiment.sh).
 std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, const std::string& path,
                                        bool box_yaw, TimeNs epoch_ns) {
@@ -112,6 +128,8 @@ std::vector<ScoredEstimate> score_file(const CorridorExperimentConfig& config, c
     e.along_road_m = truth.x - config.scenario.lidar.mount.x;
     e.error_m = std::hypot(x - truth.x, y - truth.y);
     e.yaw_error_deg = box_yaw ? axis_error_deg(yaw, truth.yaw) : rad_to_deg(angle_distance(yaw, truth.yaw));
+    if (box_yaw)
+      e.nearest_other_m = nearest_other_m(config.scenario, vehicle.id, x, y, e.time_ns);
     e.position_nees = std::numeric_limits<double>::quiet_NaN();
     const auto cell = [&](std::optional<std::size_t> c) {
       return c && *c < row.size() ? std::stod(row[*c]) : 0.0;
@@ -171,6 +189,44 @@ std::vector<std::string> methods_rsu_models(const std::vector<std::string>& meth
   return models;
 }
 
+// The corrections rsu-fleet received for the other connected vehicles (live_rsu.py's format: "correction
+// recv_ns vehicle named rsu seq sweep_ns x y yaw points error yaw_error other other_error sigmas"),
+// scored against the scenario's truth here, by the same rule as the experiment vehicle's.
+void score_fleet(const CorridorExperimentConfig& config, const std::string& path, TimeNs epoch_ns,
+                 TrafficScores& traffic) {
+  std::ifstream in(path);
+  if (!in)
+    throw std::runtime_error(path + ": cannot open (the traffic's connected vehicles' corrections)");
+  std::vector<double> errors, nees;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string word; words >> word;)
+      w.push_back(word);
+    if (w.size() != 16 || w[0] != "correction")
+      continue;
+    const auto id = static_cast<std::uint32_t>(std::stoul(w[2]));
+    const auto named = static_cast<std::uint32_t>(std::stoul(w[3]));
+    const TimeNs t = std::stoll(w[6]) - epoch_ns;
+    const double x = std::stod(w[7]), y = std::stod(w[8]), sigmas = std::stod(w[15]);
+    const sim::Vehicle* own = nullptr;
+    for (const sim::Vehicle& v : config.scenario.scene.vehicles)
+      own = v.id == id ? &v : own;
+    if (own == nullptr)
+      throw std::runtime_error(path + ": a correction for vehicle " + w[2] + ", not in the scenario");
+    const Pose2 truth = sim::pose_at(own->trajectory, t);
+    const double error = std::hypot(x - truth.x, y - truth.y);
+    ++traffic.fleet_corrections;
+    traffic.fleet_wrong += named != id || nearest_other_m(config.scenario, id, x, y, t) < error ? 1 : 0;
+    traffic.fleet_hmi += sigmas * sigmas > kChi2TwoDof3Sigma && error > kHmiM ? 1 : 0;
+    if (std::abs(truth.x - config.scenario.lidar.mount.x) <= 50.0) {
+      errors.push_back(error);
+      nees.push_back(sigmas >= 0 ? sigmas * sigmas : std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  traffic.fleet_pm50 = error_stats(errors, nees);
+}
+
 }  // namespace
 
 ErrorStats error_stats(const std::vector<double>& errors, const std::vector<double>& nees) {
@@ -213,6 +269,16 @@ ExperimentScores score_experiment(const CorridorExperimentConfig& config, const 
     std::ifstream(dir + "/epoch_" + m + ".txt") >> epoch;
     scores.estimates["rsu_" + m] = score_file(config, dir + "/corrections_" + m + ".csv", true, epoch);
     scores.estimates["fused_" + m] = score_file(config, dir + "/fused_" + m + ".csv", false, epoch);
+    if (config.scenario.scene.vehicles.size() > 1) {
+      TrafficScores& traffic = scores.traffic[m];
+      for (const ScoredEstimate& e : scores.estimates["rsu_" + m]) {
+        ++traffic.vehicle_corrections;
+        traffic.vehicle_wrong += e.nearest_other_m < e.error_m ? 1 : 0;
+        traffic.vehicle_hmi += e.position_nees > kChi2TwoDof3Sigma && e.error_m > kHmiM ? 1 : 0;
+      }
+      if (!config.traffic_connected.empty())
+        score_fleet(config, dir + "/fleet_" + m + ".corrections", epoch, traffic);
+    }
   }
   for (const auto& [method, estimates] : scores.estimates) {
     for (const auto& [range, half] : kRanges) {
@@ -253,6 +319,22 @@ std::string format_table(const ExperimentScores& scores, const std::vector<std::
       std::snprintf(line, sizeof line, "  %-14s %6zu %10s %10s %10s %10s  %13s\n", m.c_str(), s.count,
                     fmt(s.mae_m, 3).c_str(), fmt(s.rmse_m, 3).c_str(), fmt(s.p95_m, 3).c_str(),
                     fmt(s.max_m, 3).c_str(), percent(s.beyond_3sigma).c_str());
+      out << line;
+    }
+  }
+  if (!scores.traffic.empty()) {
+    out << "traffic: corrections rsud sent, to the WRONG vehicle (nearer another vehicle's truth, or naming "
+           "another), HMI (beyond 3 sigma and > 0.30 m off):\n";
+    for (const auto& [model, t] : scores.traffic) {
+      char line[320];
+      std::snprintf(
+          line, sizeof line,
+          "  %-7s experiment vehicle: %zu corrections, %zu wrong vehicle, %zu HMI; other connected "
+          "vehicles: %zu corrections, %zu wrong vehicle, %zu HMI, within +-50 m MAE %s m, max %s m, "
+          "beyond 3 sigma %s\n",
+          model.c_str(), t.vehicle_corrections, t.vehicle_wrong, t.vehicle_hmi, t.fleet_corrections,
+          t.fleet_wrong, t.fleet_hmi, fmt(t.fleet_pm50.mae_m, 3).c_str(), fmt(t.fleet_pm50.max_m, 3).c_str(),
+          percent(t.fleet_pm50.beyond_3sigma).c_str());
       out << line;
     }
   }
@@ -365,8 +447,23 @@ std::string summary_json(const ExperimentScores& scores, const std::vector<std::
     out << '"' << g.range << "\": {\"reduction_vs_ndt\": " << json_number(g.reduction_vs_ndt)
         << ", \"better_of_ndt_and_rsu_mae_m\": " << json_number(g.best_mae_m) << "}";
   }
-  out << (model.empty() ? "}\n" : "}}\n");
-  out << "}\n";
+  out << (model.empty() ? "}" : "}}");
+  if (!scores.traffic.empty()) {
+    out << ",\n  \"traffic\": {";
+    bool first = true;
+    for (const auto& [m, t] : scores.traffic) {
+      out << (first ? "" : ", ") << '"' << m << "\": {\"vehicle_corrections\": " << t.vehicle_corrections
+          << ", \"vehicle_wrong_vehicle\": " << t.vehicle_wrong << ", \"vehicle_hmi\": " << t.vehicle_hmi
+          << ", \"fleet_corrections\": " << t.fleet_corrections
+          << ", \"fleet_wrong_vehicle\": " << t.fleet_wrong << ", \"fleet_hmi\": " << t.fleet_hmi
+          << ", \"fleet_pm50_mae_m\": " << json_number(t.fleet_pm50.mae_m)
+          << ", \"fleet_pm50_max_m\": " << json_number(t.fleet_pm50.max_m)
+          << ", \"wrong_vehicle\": " << t.vehicle_wrong + t.fleet_wrong << "}";
+      first = false;
+    }
+    out << "}";
+  }
+  out << "\n}\n";
   return out.str();
 }
 

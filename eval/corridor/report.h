@@ -6,6 +6,7 @@
 // summary.json.
 #pragma once
 
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -21,12 +22,24 @@ struct ScoredEstimate {
   double error_m = 0;        // planar position error
   double yaw_error_deg = 0;  // mod 180 for RSU fixes (a box has no front)
   double position_nees = 0;  // against the estimate's own stated covariance (eval/consistency.h)
+  // RSU fixes: how far the nearest OTHER vehicle of the scenario truly was (NaN: no other vehicle).
+  double nearest_other_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct ErrorStats {
   std::size_t count = 0;
   double mae_m = 0, rmse_m = 0, p95_m = 0, max_m = 0;
   double beyond_3sigma = 0;  // share of the estimates with a position NEES beyond the 3-sigma bound
+};
+
+// Traffic (issue 13 item 3), per RSU model: the corrections rsud sent to the connected vehicles, and how
+// many went to the WRONG vehicle: addressed to one vehicle (or naming another) but nearer another
+// vehicle's true position at the sweep time (any vehicle of the scenario, connected or not); HMI: beyond
+// 3 sigma of the stated covariance and more than 0.30 m off the vehicle's own truth.
+struct TrafficScores {
+  std::size_t vehicle_corrections = 0, vehicle_wrong = 0, vehicle_hmi = 0;  // the experiment's vehicle
+  std::size_t fleet_corrections = 0, fleet_wrong = 0, fleet_hmi = 0;        // the other connected vehicles
+  ErrorStats fleet_pm50;  // the other connected vehicles' corrections within +-50 m (own vehicle's truth)
 };
 
 struct ExperimentScores {
@@ -36,6 +49,8 @@ struct ExperimentScores {
   std::map<std::string, std::map<std::string, ErrorStats>> stats;
   // NDT frames in each range, for the RSU's coverage (how many got a fix)
   std::map<std::string, std::size_t> frames_in_range;
+  // RSU model -> traffic scores; only for a scenario with more than one vehicle
+  std::map<std::string, TrafficScores> traffic;
 };
 
 // How the fused pose of one RSU model compares in one range with NDT alone and with the better of NDT and
@@ -50,7 +65,8 @@ std::vector<FusedGoals> fused_goals(const ExperimentScores& scores,
                                     const std::vector<std::string>& rsu_models);
 
 // Reads <dir>/ndt.csv and, per RSU model m, <dir>/corrections_<m>.csv and <dir>/fused_<m>.csv (columns
-// named in their header rows; time_ns, x, y, yaw required). Missing files are reported as errors.
+// named in their header rows; time_ns, x, y, yaw required), and with traffic <dir>/fleet_<m>.corrections
+// (rsu-fleet's correction lines). Missing files are reported as errors.
 ExperimentScores score_experiment(const CorridorExperimentConfig& config, const std::string& dir);
 
 // Statistics of the errors; nees (empty, or one per error) gives beyond_3sigma.

@@ -70,6 +70,30 @@ def make_keys(run, out, vehicle_id):
     return keys
 
 
+# Traffic (issue 13 item 3): the experiment file's traffic_connected vehicles announce their true poses
+# (moved 0.3 m, as an own estimate is off) through rsu-fleet, each signed with its own test key, and
+# record every correction they get (fleet_<tag>.corrections, scored by rsu-corridor report).
+def trust_traffic(run, exp, scenario_path, keys):
+    """Adds the traffic's connected vehicles' keys to rsud's trust list (before rsud reads it)."""
+    fleet_list = os.path.join(keys, "fleet_trust.list")
+    subprocess.run([run.tool("tests/fleet/rsu-fleet"), "--rsu", "127.0.0.1:1", "--scenario", scenario_path,
+                    "--epoch-ns", "0", "--connected", ",".join(str(v) for v in exp["traffic_connected"]),
+                    "--signed", fleet_list, "--write-trust-list-only"], check=True, stdout=subprocess.DEVNULL,
+                   timeout=60)
+    with open(fleet_list) as src, open(os.path.join(keys, "rsud_trust.list"), "a") as dst:
+        dst.write(src.read())
+    return fleet_list
+
+
+def start_traffic(run, exp, scenario_path, v2i_port, fleet_list, epoch, duration, out, tag):
+    seconds = duration + 0.3 - (time.time_ns() - epoch) * 1e-9
+    return run.spawn([run.tool("tests/fleet/rsu-fleet"), "--rsu", "127.0.0.1:%d" % v2i_port, "--scenario",
+                      scenario_path, "--epoch-ns", str(epoch), "--seconds", "%.3f" % seconds, "--connected",
+                      ",".join(str(v) for v in exp["traffic_connected"]), "--signed", fleet_list,
+                      "--corrections", os.path.join(out, "fleet_%s.corrections" % tag)],
+                     os.path.join(out, "fleet_%s.log" % tag))
+
+
 def record_background(run, scenario_path, model, bg_dir):
     """The RSU's background: frames of the street without vehicles (sensor frame), as PCD files."""
     subprocess.run([run.tool("tools/rsu-sim"), "simulate", scenario_path, "--model", model, "--without-vehicles",
@@ -187,6 +211,7 @@ def live_run(run, exp, scenario_path, scenario, case, out, background=None, link
     pcds = background or record_background(run, scenario_path, model, os.path.join(out, "background_" + tag))
 
     keys = make_keys(run, out, vehicle["id"])
+    fleet_list = trust_traffic(run, exp, scenario_path, keys) if exp.get("traffic_connected") else None
     lidar_port, v2i_port = free_udp_port(), free_udp_port()
     config = write_rsud_config(case, mount, pcds, lidar_port, v2i_port, keys, out)
     log = os.path.join(out, "rsud_%s.log" % tag)
@@ -213,6 +238,9 @@ def live_run(run, exp, scenario_path, scenario, case, out, background=None, link
     stream = run.spawn([run.tool("tools/rsu-sim"), "stream", scenario_path, "--model", model, "--to",
                         "127.0.0.1:%d" % lidar_port, "--epoch-ns", str(epoch), "--start", "0",
                         "--seconds", str(duration)], os.path.join(out, "stream_%s.log" % tag))
+    fleet = None
+    if fleet_list:
+        fleet = start_traffic(run, exp, scenario_path, v2i_port, fleet_list, epoch, duration, out, tag)
     # rsu-vehicle paces its rows from its own start: start it when the first NDT pose is due.
     start_at = (epoch + first_ndt_ns) / 1e9
     time.sleep(max(0.0, start_at - time.time()))
@@ -226,7 +254,8 @@ def live_run(run, exp, scenario_path, scenario, case, out, background=None, link
                               "--stats", os.path.join(out, "vehicle_%s.stats" % tag)] + case.vehicle_args,
                              os.path.join(out, "fused_%s.csv" % tag), stdin_path=shifted)
     deadline = time.time() + duration + 30
-    for i, p in enumerate((stream, vehicle_proc)):
+    waited = [(stream, "rsu-sim stream"), (vehicle_proc, "rsu-vehicle")] + ([(fleet, "rsu-fleet")] if fleet else [])
+    for p, name in waited:
         while p.poll() is None and time.time() < deadline:
             elapsed = time.time() - epoch / 1e9
             sys.stderr.write("\r  %-7s live run: %5.1f / %.1f s of the drive" % (tag, min(max(elapsed, 0), duration),
@@ -234,10 +263,9 @@ def live_run(run, exp, scenario_path, scenario, case, out, background=None, link
             sys.stderr.flush()
             time.sleep(0.2)
         if p.poll() is None:
-            sys.exit("\nrun_experiment: %s did not finish in time" % ("rsu-sim stream", "rsu-vehicle")[i])
+            sys.exit("\nrun_experiment: %s did not finish in time" % name)
         if p.returncode != 0:
-            sys.exit("\nrun_experiment: %s failed (%d); see %s" % (("rsu-sim stream", "rsu-vehicle")[i], p.returncode,
-                                                                   out))
+            sys.exit("\nrun_experiment: %s failed (%d); see %s" % (name, p.returncode, out))
     sys.stderr.write("\n")
     if relay is not None:
         relay.send_signal(signal.SIGTERM)  # it writes its counters
@@ -252,7 +280,8 @@ def live_run(run, exp, scenario_path, scenario, case, out, background=None, link
     with open(os.path.join(out, "rsud_%s.stats" % tag)) as f:
         stats = dict(line.split() for line in f)
     refused = {k: v for k, v in stats.items() if k.startswith("auth.") and v != "0" and k not in (
-        "auth.accepted", "auth.signers_tracked", "auth.trusted_keys")}
+        "auth.accepted", "auth.signers_tracked", "auth.trusted_keys", "auth.signatures_verified",
+        "auth.signatures_checked_ahead")}
     # rsud sheds LiDAR packets it would process too late (max_packet_age_ms): on a host too busy to keep
     # the LiDAR's pace the run then measures the host, not the method; say so.
     shed = int(stats.get("packet.too_late", 0)) + int(stats.get("packet.lost", 0))

@@ -6,6 +6,8 @@
 #include <Eigen/Cholesky>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <string>
 #include <vector>
@@ -143,6 +145,58 @@ TEST(FusedGoals, ComparesWithNdtAndTheBetterOfNdtAndTheRsu) {
   // An RSU without a fix in the range does not make "the better" zero.
   set("rsu_vlp16", 0.0, 0.0, 0);
   EXPECT_NEAR(fused_goals(scores, {"vlp16"})[0].best_mae_m, 0.20, 1e-12);
+}
+
+// Traffic: a correction nearer another vehicle's true position than its own vehicle's is counted as the
+// wrong vehicle's, for the experiment's vehicle (its corrections CSV) and the fleet's (rsu-fleet lines),
+// and one naming another vehicle too; HMI: beyond 3 sigma and more than 0.30 m off.
+TEST(TrafficScores, CountsCorrectionsNearerAnotherVehicleAsWrong) {
+  CorridorExperimentConfig config;
+  config.scenario = sim::parse_scenario(R"(
+name: traffic_score_test
+lidar: {model: vlp16, mount: {x: 0, y: -8.5, z: 2}}
+vehicles:
+  - {id: 1, trajectory: {static: {x: 0, y: -5.25, yaw_deg: 0}}}
+  - {id: 2, trajectory: {static: {x: 0, y: -1.75, yaw_deg: 0}}}
+  - {id: 3, trajectory: {static: {x: 20, y: 5.25, yaw_deg: 180}}}
+)",
+                                        "traffic_score_test");
+  config.vehicle_id = 1;
+  config.rsu_models = {"vlp16"};
+  config.traffic_connected = {3};
+  const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "traffic_scores";
+  std::filesystem::create_directories(dir);
+  const long long epoch = 1'000'000'000;
+  std::ofstream(dir / "epoch_vlp16.txt") << epoch << "\n";
+  std::ofstream(dir / "ndt.csv") << "time_ns,x,y,yaw\n100000000,0.1,-5.25,0\n";
+  std::ofstream(dir / "fused_vlp16.csv") << "time_ns,x,y,yaw,source\n"
+                                         << epoch + 100000000 << ",0,-5.25,0,ndt\n";
+  // Vehicle 1: 0.05 m off (its own); 0.3 m from vehicle 2, 3.2 m from its own (wrong); 0.5 m off stating
+  // sigma 0.1 m (HMI, its own).
+  std::ofstream(dir / "corrections_vlp16.csv") << "time_ns,x,y,yaw,cxx,cxy,cyy\n"
+                                               << epoch + 100000000 << ",0.05,-5.25,0,0.01,0,0.01\n"
+                                               << epoch + 200000000 << ",0,-2.05,0,0.01,0,0.01\n"
+                                               << epoch + 300000000 << ",0.5,-5.25,0,0.01,0,0.01\n";
+  // Vehicle 3 (the fleet): its own at 0.02 m; one addressed to it naming vehicle 1; one at vehicle 2.
+  const auto line = [&](int named, double x, double y, double sigmas) {
+    return "correction 0 3 " + std::to_string(named) + " 1 1 " + std::to_string(epoch + 100000000) + " " +
+           std::to_string(x) + " " + std::to_string(y) + " 3.14 100 0 0 0 0 " + std::to_string(sigmas) + "\n";
+  };
+  std::ofstream(dir / "fleet_vlp16.corrections")
+      << "# a comment line\n"
+      << line(3, 20.02, 5.25, 0.5) << line(1, 20.0, 5.25, 0.5) << line(3, 0.2, -1.75, 40.0);
+  const ExperimentScores scores = score_experiment(config, dir.string());
+  ASSERT_EQ(scores.traffic.count("vlp16"), 1u);
+  const TrafficScores& t = scores.traffic.at("vlp16");
+  EXPECT_EQ(t.vehicle_corrections, 3u);
+  EXPECT_EQ(t.vehicle_wrong, 1u);
+  EXPECT_EQ(t.vehicle_hmi, 2u);  // the wrong one (3.2 m off, 32 sigma) and the 0.5 m one (5 sigma)
+  EXPECT_EQ(t.fleet_corrections, 3u);
+  EXPECT_EQ(t.fleet_wrong, 2u);
+  EXPECT_EQ(t.fleet_hmi, 1u);  // the one at vehicle 2, ~21 m from vehicle 3, 40 sigma
+  EXPECT_EQ(t.fleet_pm50.count, 3u);
+  EXPECT_NEAR(t.fleet_pm50.max_m, std::hypot(19.8, 7.0), 1e-3);
+  EXPECT_NE(summary_json(scores, {"ndt", "rsu_vlp16"}).find("\"wrong_vehicle\": 3"), std::string::npos);
 }
 
 }  // namespace
