@@ -3,16 +3,21 @@
 //   rsu-corridor ndt EXPERIMENT --out DIR      the vehicle's own NDT self-localization -> DIR/ndt.csv
 //   rsu-corridor report EXPERIMENT --out DIR   score NDT, RSU and fused estimates -> table, summary.json
 //   rsu-corridor map EXPERIMENT --out DIR      the street's map the vehicles localize in -> DIR/map.pcd
+//   rsu-corridor placement EXPERIMENT --out DIR  where to put the RSU's LiDAR
+//   (eval/corridor/placement_study.h)
 // eval/corridor/run_experiment.sh runs the whole experiment (the live part through the real processes).
 #include <boost/program_options.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "eval/corridor/experiment_config.h"
 #include "eval/corridor/map_sampling.h"
+#include "eval/corridor/placement_study.h"
 #include "eval/corridor/report.h"
 #include "eval/corridor/vehicle_ndt_run.h"
 #include "io/pcd_io.h"
@@ -77,15 +82,65 @@ int run_map(const eval::CorridorExperimentConfig& config, const std::filesystem:
   return 0;
 }
 
+// Comma-separated numbers / words.
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    if (!item.empty())
+      out.push_back(item);
+  }
+  return out;
+}
+
+int run_placement(const eval::CorridorExperimentConfig& config, const std::filesystem::path& out,
+                  const po::variables_map& vm) {
+  eval::PlacementStudyConfig study;
+  study.duration_s = config.duration_s;
+  study.seed = config.seed;
+  study.models = split_list(vm["models"].as<std::string>());
+  study.heights_m.clear();
+  for (const std::string& h : split_list(vm["heights-m"].as<std::string>()))
+    study.heights_m.push_back(std::stod(h));
+  const std::vector<std::string> laterals = split_list(vm["laterals"].as<std::string>());
+  std::erase_if(study.laterals, [&](const auto& l) {
+    return std::find(laterals.begin(), laterals.end(), l.first) == laterals.end();
+  });
+  study.rotation_stride = vm["rotation-stride"].as<int>();
+  study.threads = vm["threads"].as<int>();
+  if (study.models.empty() || study.heights_m.empty() || study.laterals.empty() || study.rotation_stride < 1)
+    throw std::invalid_argument(
+        "placement: need models, heights, laterals (curb, median, across), stride >= 1");
+  std::fprintf(stderr, "placement study: %zu placements in %s (the fix rsud runs, rsud's configuration)\n",
+               study.models.size() * study.heights_m.size() * study.laterals.size(),
+               config.scenario.source.c_str());
+  const auto results = eval::run_placement_study(config.scenario, study);
+  std::ofstream(out / "placement.csv") << eval::placement_csv(results);
+  const std::string table = eval::placement_table(results, study);
+  std::ofstream(out / "placement_table.md") << table;
+  std::ofstream(out / "summary.json") << eval::placement_json(results, study, config.scenario.source);
+  std::cout << table;
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (rsu::tools::cli::print_version_if_asked(argc, argv, "rsu-corridor"))
     return 0;
   po::options_description options(
-      "rsu-corridor {ndt|report|map} EXPERIMENT [--out DIR]: the paper's realistic experiment (Sec. 4)");
+      "rsu-corridor {ndt|report|map|placement} EXPERIMENT [--out DIR]: the paper's realistic experiment "
+      "(Sec. 4)");
   options.add_options()("help,h", "show this help")("version", rsu::tools::cli::kVersionHelp)(
-      "out,o", po::value<std::string>()->default_value("out/corridor"), "output folder");
+      "out,o", po::value<std::string>()->default_value("out/corridor"), "output folder")(
+      "models", po::value<std::string>()->default_value("vlp16,vlp32c,generic128"),
+      "placement: LiDAR models")("heights-m", po::value<std::string>()->default_value("2,4,6,8"),
+                                 "placement: mount heights, m")(
+      "laterals", po::value<std::string>()->default_value("curb,median,across"),
+      "placement: curb (y = -8.5 m, the south sidewalk), median (y = 0), across (y = 8.5 m, the north "
+      "sidewalk)")("rotation-stride", po::value<int>()->default_value(1),
+                   "placement: score every n-th rotation")("threads", po::value<int>()->default_value(2),
+                                                           "placement: worker threads");
   // The positional arguments, named in the usage line above rather than listed as options.
   po::options_description all;
   all.add(options).add_options()("command", po::value<std::string>(), "ndt, report or map")(
@@ -110,7 +165,10 @@ int main(int argc, char** argv) {
       return run_report(config, out);
     if (command == "map")
       return run_map(config, out);
-    std::fprintf(stderr, "rsu-corridor: unknown command \"%s\" (ndt, report or map)\n", command.c_str());
+    if (command == "placement")
+      return run_placement(config, out, vm);
+    std::fprintf(stderr, "rsu-corridor: unknown command \"%s\" (ndt, report, map or placement)\n",
+                 command.c_str());
     return 2;
   } catch (const po::error& e) {  // unknown option, missing value: a usage error
     std::fprintf(stderr, "rsu-corridor: %s (see --help)\n", e.what());

@@ -2,17 +2,16 @@
 #include "eval/pilot/pilot_experiment.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
-#include <thread>
 
 #include <Eigen/Eigenvalues>
 
 #include "common/angles.h"
 #include "common/random.h"
 #include "eval/consistency.h"
+#include "eval/parallel_indices.h"
 #include "lidar/sensor_model.h"
 #include "perception/ground_height_filter.h"
 #include "sim/lidar_simulator.h"
@@ -245,18 +244,9 @@ PilotResult run_pilot(const PilotConfig& config) {
 
   const auto wall_start = std::chrono::steady_clock::now();
   std::vector<DistanceRun> runs(result.distances.size());
-  std::atomic<std::size_t> next{0};
-  auto worker = [&] {
-    for (std::size_t i = next++; i < runs.size(); i = next++) {
-      runs[i] = run_distance(config, *model, indices[i], result.distances[i], result.frames_per_turn);
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int t = 1; t < std::max(1, config.threads); ++t)
-    threads.emplace_back(worker);
-  worker();
-  for (auto& t : threads)
-    t.join();
+  run_indices_in_parallel(runs.size(), config.threads, [&](std::size_t i) {
+    runs[i] = run_distance(config, *model, indices[i], result.distances[i], result.frames_per_turn);
+  });
   for (auto& r : runs) {
     result.rays_cast += r.rays;
     result.cells.insert(result.cells.end(), r.cells.begin(), r.cells.end());

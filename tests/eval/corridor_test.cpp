@@ -15,6 +15,7 @@
 #include "common/angles.h"
 #include "eval/corridor/map_sampling.h"
 #include "eval/corridor/ndt_localizer.h"
+#include "eval/corridor/placement_study.h"
 #include "eval/corridor/report.h"
 #include "lidar/sensor_model.h"
 #include "sim/lidar_simulator.h"
@@ -197,6 +198,66 @@ vehicles:
   EXPECT_EQ(t.fleet_pm50.count, 3u);
   EXPECT_NEAR(t.fleet_pm50.max_m, std::hypot(19.8, 7.0), 1e-3);
   EXPECT_NE(summary_json(scores, {"ndt", "rsu_vlp16"}).find("\"wrong_vehicle\": 3"), std::string::npos);
+}
+
+// The placement study on one street: a car passes a VLP-16 at 2 m in the inner lane while a truck stands
+// in the outer lane between them for part of the pass. Unoccluded, the fix rsud runs is accurate (the
+// pilot's 2 m VLP-16); the truck hides the car at some rotations, and the summary counts the samples.
+TEST(PlacementStudy, ScoresEveryVehicleRotationAndFlagsOcclusion) {
+  const sim::Scenario scenario = sim::parse_scenario(R"(
+name: placement_test
+lidar: {model: vlp16, mount: {x: 0, y: -8.5, z: 2}, noise: {seed: 3}}
+scene: {ground: {half_extent_m: 60}}
+vehicles:
+  - id: 1
+    trajectory: {waypoints: [{t_s: 0, x: -12, y: -1.75, yaw_deg: 0}, {t_s: 2.0, x: 10, y: -1.75, yaw_deg: 0}]}
+  - id: 2
+    shape: {length: 8.5, width: 2.5, height: 3.6, belt_height: 1.3, hood_length: 0.3, windscreen_run: 0.15,
+            wheelbase: 5.0, wheel_radius: 0.48}
+    trajectory: {static: {x: 6, y: -5.25, yaw_deg: 0}}
+)",
+                                                     "placement_test");
+  PlacementStudyConfig config;
+  config.models = {"vlp16"};
+  config.heights_m = {2.0};
+  config.laterals = {{"curb", -8.5}};
+  config.duration_s = 2.0;
+  config.threads = 1;
+  const std::vector<PlacementResult> results = run_placement_study(scenario, config);
+  ASSERT_EQ(results.size(), 1u);
+  const PlacementResult& r = results[0];
+  EXPECT_EQ(r.vehicle_rotations, r.samples.size());
+  std::size_t occluded_car = 0, clear_car = 0, fixes = 0;
+  std::vector<double> clear_errors;
+  for (const PlacementSample& s : r.samples) {
+    EXPECT_LE(std::abs(s.along_road_m), config.coverage_radius_m);
+    fixes += s.fixed ? 1 : 0;
+    if (s.vehicle_id == 2) {
+      EXPECT_FALSE(s.occluded);  // nothing stands between the truck and the LiDAR
+      continue;
+    }
+    // Independently: the truck (x 1.75..10.25, y -6.5..-4) lies on the line of sight from (0, -8.5) to the
+    // car's centre when that line crosses y = -5.25 within the truck's length.
+    const double x_at_truck = s.along_road_m * (8.5 - 5.25) / (8.5 - 1.75);
+    const bool behind_truck = x_at_truck > 1.75 && x_at_truck < 10.25;
+    if (behind_truck) {
+      EXPECT_TRUE(s.occluded) << "car at x " << s.along_road_m;
+    }
+    occluded_car += s.occluded ? 1 : 0;
+    if (!s.occluded && std::abs(s.along_road_m) > 4.0) {
+      ++clear_car;
+      if (s.fixed)
+        clear_errors.push_back(s.error_m);
+    }
+  }
+  EXPECT_GE(occluded_car, 3u);
+  EXPECT_GE(clear_car, 5u);
+  ASSERT_GE(clear_errors.size(), clear_car / 2);
+  std::sort(clear_errors.begin(), clear_errors.end());
+  EXPECT_LT(clear_errors[clear_errors.size() / 2], config.accurate_m);
+  EXPECT_EQ(r.fixes, fixes);
+  EXPECT_LE(r.occlusion_losses, r.occluded);
+  EXPECT_LE(r.coverage_m, 2 * config.coverage_radius_m);
 }
 
 }  // namespace
