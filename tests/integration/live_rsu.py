@@ -50,6 +50,10 @@ class LiveRsu:
         self.log_path = None
         self.background = []
         self.trust_list = None  # signed mode: the fleet's trust list (make_keys)
+        # An Ouster instead of the scenario's Velodyne (use_ouster): rsu-sim stream --ouster's options,
+        # the metadata it writes and rsud reads.
+        self.ouster_options = None
+        self.metadata = self.path("ouster_metadata.json")
         # Scenario time 0 on the host clock, shared by the stream and the fleet (docs/design.md §3).
         self.epoch_ns = time.time_ns() + int(lead_s * 1e9)
 
@@ -60,6 +64,17 @@ class LiveRsu:
         self.children.kill_all()
 
     # ---- rsud ----------------------------------------------------------------------------------------
+    def use_ouster(self, model, lidar_mode, profile):
+        """The LiDAR is a simulated Ouster (rsu-sim stream --ouster): rsud decodes its lidar packets with the
+        metadata the stream writes (start a stream before rsud; wait_for_metadata)."""
+        self.model = model
+        self.ouster_options = ["--ouster", model, "--lidar-mode", lidar_mode, "--profile", profile,
+                               "--metadata-out", self.metadata]
+
+    def wait_for_metadata(self, seconds=10):
+        wait_for(lambda: os.path.exists(self.metadata) and read_text(self.metadata).rstrip().endswith("}"),
+                 seconds, "rsu-sim stream to write the Ouster's metadata")
+
     def record_background(self, frames=3):
         out = self.path("background")
         r = subprocess.run([self.tools["rsu_sim"], "simulate", self.scenario, "--without-vehicles", "--frames",
@@ -81,13 +96,14 @@ class LiveRsu:
         v2i.verifier_thread (False: announcements read and verified on its event loop's thread);
         advertise_port: rsud advertises to 127.0.0.1:advertise_port every 0.2 s."""
         mount = self.scene["lidar"].get("mount", {})
-        lidar_input = "velodyne_udp: {bind_address: 127.0.0.1, port: %d%s}" % (
-            self.lidar_port, ", reorder_packets: %d" % reorder_packets if reorder_packets else "")
+        lidar_input = "%s: {bind_address: 127.0.0.1, port: %d%s}" % (
+            "udp" if self.ouster_options else "velodyne_udp", self.lidar_port,
+            ", reorder_packets: %d" % reorder_packets if reorder_packets else "")
         background = ("learning_frames: %d" % learning_frames if learning_frames is not None
                       else "pcd_files: [%s]" % ", ".join(self.background))
         text = """rsu_id: 1
 lidar:
-  model: %s
+  model: %s%s
   mount: {x: %s, y: %s, z: %s, roll_deg: %s, pitch_deg: %s, yaw_deg: %s}
   input:
     %s
@@ -105,7 +121,7 @@ logging:
   level: info
   stats_interval_s: 0.5
   stats_file: %s
-%s""" % (self.model, mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
+%s""" % (self.model, "\n  metadata: %s" % self.metadata if self.ouster_options else "", mount.get("x", 0), mount.get("y", 0), mount.get("z", 0), mount.get("roll_deg", 0),
          mount.get("pitch_deg", 0), mount.get("yaw_deg", 0), lidar_input, background, self.v2i_port,
          "true" if verifier_thread else "false",
          "  advertisement: {enabled: true, address: 127.0.0.1, port: %d, interval_s: 0.2}\n" % advertise_port
@@ -166,7 +182,7 @@ logging:
     def stream(self, start_s, seconds, name="stream", loss=0.0, reorder=0.0, seed=1, options=()):
         cmd = [self.tools["rsu_sim"], "stream", self.scenario, "--to", "127.0.0.1:%d" % self.lidar_port,
                "--epoch-ns", str(self.epoch_ns), "--start", str(start_s), "--seconds", str(seconds)]
-        cmd += list(options)
+        cmd += list(options) + (self.ouster_options or [])
         if loss or reorder:
             cmd += ["--loss", str(loss), "--reorder", str(reorder), "--impair-seed", str(seed)]
         return self.children.spawn(cmd, self.path(name + ".log"))

@@ -15,6 +15,8 @@ core, from /proc/<pid>/stat).
   tests/load/rsud_load.py --build build --signed --verifier-thread   # rsud verifies on its receiver
                                                              # thread (v2i.verifier_thread: true)
   tests/load/rsud_load.py --build build --smoke [--signed]   # ctest: 200 vehicles, 5 s, with assertions
+  tests/load/rsud_load.py --build build --ouster os1-128 --lidar-mode 2048x10   # a dense LiDAR (simulated
+                                                             # Ouster packets) instead of the VLP-32C
 
 With --smoke (or --check) it asserts: nothing rejected, no correction lost in transport, every vehicle in
 view corrected in at least 95 % of its rotations, p99 latency under 50 ms, and RSS growth under 5 MB/min.
@@ -95,12 +97,23 @@ def run(args):
              "keygen": os.path.join(args.build, "tools", "rsu-keygen")}
     h = LiveRsu(args.work, tools, SCENARIO)
     try:
-        h.record_background()
+        if args.ouster:
+            h.use_ouster(args.ouster, args.lidar_mode, args.profile)
+        else:
+            h.record_background()
         if args.signed:
             h.make_keys()
             h.write_trust_list(extra=args.vehicles - len(IN_VIEW))
-        h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=args.verifier_thread)
-        rsud = h.start_rsud(own_session=args.rsud_session == "own")
+        h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=args.verifier_thread,
+                       learning_frames=3 if args.ouster else None)
+        if args.ouster:
+            # rsud learns the background from the scene without its vehicles, streamed for the 3 s before
+            # scenario time 0 (the Velodyne runs load rsu-sim simulate's frames instead); the stream
+            # writes the metadata rsud reads at start.
+            h.epoch_ns = time.time_ns() + 5_000_000_000
+            h.stream(-3.0, 3.0, name="stream_learning", options=["--without-vehicles"])
+            h.wait_for_metadata()
+        rsud = h.start_rsud(own_session=args.rsud_session == "own", wait_ready=not args.ouster)
         if args.group_nice is not None:
             # The nice of rsud's autogroup and of this driver's (rsu-fleet, rsu-sim): how the scheduler
             # weighs them against other sessions' work (sched(7)); -10 models a box of their own on a
@@ -108,7 +121,10 @@ def run(args):
             for pid in (rsud.pid, os.getpid()):
                 with open("/proc/%d/autogroup" % pid, "w") as f:
                     f.write("%d" % args.group_nice)
-        h.epoch_ns = time.time_ns() + 1_000_000_000
+        if args.ouster:
+            h.wait_for(lambda: "ready: serving" in h.log(), 20, "rsud to learn the background and serve")
+        else:
+            h.epoch_ns = time.time_ns() + 1_000_000_000
         stream = h.stream(0.0, args.seconds)
         fleet = h.fleet(args.seconds + 0.5, extra=args.vehicles - len(IN_VIEW))
         samples, cpu0, threads0, t0 = [], cpu_s(rsud.pid), thread_cpu_s(rsud.pid), time.time()
@@ -124,6 +140,7 @@ def run(args):
         thread_shares = {n: (threads1[n] - threads0.get(n, 0.0)) / elapsed for n in threads1}
         finish(fleet, 10, "rsu-fleet")
         finish(stream, 10, "rsu-sim stream")
+        print(read_text(h.path("stream.log")).strip())
         drops = udp_drops(h.v2i_port)
         h.stop_rsud()
         return report(h, args, samples, cpu_share, thread_shares, drops)
@@ -141,10 +158,11 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
     rejected = {k: int(v) for k, v in s.items() if v > 0 and k not in not_rejections and k.startswith(
         ("datagram.", "auth.", "validation.", "decode.", "registry.rate_limited", "registry.registry_full",
          "registry.too_many_sources", "registry.stale_sequence", "registry.duplicate_sequence"))}
-    print("load: %d vehicles at 10 Hz for %.0f s, %s, VLP-32C stream, %d vehicles in view; rsud reads and "
+    print("load: %d vehicles at 10 Hz for %.0f s, %s, %s stream, %d vehicles in view; rsud reads and "
           "verifies on %s, in %s session" % (
               args.vehicles, args.seconds,
               "signed (Ed25519, each vehicle its own key)" if args.signed else "unsigned (insecure mode)",
+              "%s %s %s (simulated)" % (args.ouster, args.lidar_mode, args.profile) if args.ouster else "VLP-32C",
               len(IN_VIEW), "its receiver thread" if args.verifier_thread else "its event loop's thread",
               "its own" if args.rsud_session == "own" else "the load generators'")
           + ("" if args.group_nice is None else "; rsud's and the generators' autogroups at nice %d" % args.group_nice))
@@ -155,6 +173,8 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
     # LiDAR packets it lost or shed.
     def count(name):
         return "%d" % s[name] if name in s else "n/a"
+    print("rsud counted: LiDAR packets accepted %s, columns lost by the Ouster decoder %s, frames complete %s" % (
+        count("packet.accepted"), count("decoder.columns_skipped"), count("decoder.frames_complete")))
     print("rsud counted: v2i.kernel_drops %s, lidar.kernel_drops %s, LiDAR packets lost %s, shed too late %s; "
           "signatures verified on the loop %s, checked ahead on the receiver thread %s, dropped with its queue "
           "full %s (most waiting %s)" % (
@@ -168,6 +188,7 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
     # Per vehicle in view: the rotations from its first correction to the end of the stream, and the ones
     # without a correction (gaps between consecutive sweep times).
     worst_share = 1.0
+    rotation_s = 1.0 / int(args.lidar_mode.split("x")[1]) if args.ouster else ROTATION_S
     for v in IN_VIEW:
         got = sorted(c["sweep_ns"] for c in cs if c["vehicle"] == v)
         if not got:
@@ -175,8 +196,8 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
             worst_share = 0.0
             continue
         end_ns = h.epoch_ns + int(args.seconds * 1e9)
-        expected = int(round((end_ns - got[0]) * 1e-9 / ROTATION_S))
-        missing = sum(max(0, int(round((b - a) * 1e-9 / ROTATION_S)) - 1) for a, b in zip(got, got[1:]))
+        expected = int(round((end_ns - got[0]) * 1e-9 / rotation_s))
+        missing = sum(max(0, int(round((b - a) * 1e-9 / rotation_s)) - 1) for a, b in zip(got, got[1:]))
         errors = [c["error"] for c in cs if c["vehicle"] == v]
         share = len(got) / max(1, expected)
         worst_share = min(worst_share, share)
@@ -224,6 +245,11 @@ def main():
                     help="the nice value of rsud's scheduling autogroup and of this driver's (the load "
                          "generators), e.g. -10 to model a machine of their own while others build on it "
                          "(needs root to lower it)")
+    ap.add_argument("--ouster", default=None, metavar="MODEL",
+                    help="the LiDAR is a simulated Ouster (rsu-sim stream --ouster), e.g. os1-128, instead of the "
+                         "street's VLP-32C; rsud learns the background from the first 3 s of stream")
+    ap.add_argument("--lidar-mode", default="2048x10", help="with --ouster: columns x Hz (2048x10, 1024x20, ...)")
+    ap.add_argument("--profile", default="RNG19_RFL8_SIG16_NIR16", help="with --ouster: the packet profile")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.smoke:

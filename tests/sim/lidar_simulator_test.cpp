@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "geometry_checks.h"
+#include "lidar/ouster/ouster_decoder.h"
 #include "lidar/velodyne_decoder.h"
+#include "sim/ouster_simulator.h"
 #include "sim/trajectory.h"
 
 namespace rsu::sim {
@@ -30,6 +32,16 @@ Scene ground_only() {
   Scene s;
   s.ground.half_extent_m = 250.0;
   return s;
+}
+
+// A wall whose near face is the plane at 8 m from the origin along the direction 0.6 rad.
+Building wall_at_8m() {
+  return Building{.x = 13.0 * std::cos(0.6),
+                  .y = 13.0 * std::sin(0.6),
+                  .yaw = 0.6,
+                  .length = 10.0,
+                  .width = 60.0,
+                  .height = 30.0};
 }
 
 Eigen::Vector3d xyz(const lidar::LidarPoint& p) {
@@ -281,13 +293,7 @@ TEST(SimLidarSimulator, Vlp32cPacketsDecodeToPointsOnTheCalibratedBeams) {
       -1.4, 4.2, -1.4, 1.4, -1.4, 1.4, -4.2, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 1.4,
       -1.4, 4.2, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4, -1.4, 1.4, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4};
   Scene scene = ground_only();
-  // A wall whose near face is the plane at 8 m along the direction 0.6 rad, in front of the LiDAR.
-  scene.buildings.push_back(Building{.x = 13.0 * std::cos(0.6),
-                                     .y = 13.0 * std::sin(0.6),
-                                     .yaw = 0.6,
-                                     .length = 10.0,
-                                     .width = 60.0,
-                                     .height = 30.0});
+  scene.buildings.push_back(wall_at_8m());  // in front of the LiDAR
   const Raycaster rc(scene);
   const Pose3 mount{0.0, 0.0, 2.0, 0.0, 0.0, 0.0};
   const lidar::SensorModel model = lidar::make_vlp32c();
@@ -334,6 +340,58 @@ TEST(SimLidarSimulator, Vlp32cPacketsDecodeToPointsOnTheCalibratedBeams) {
     EXPECT_EQ(next, points.size());
   }
   EXPECT_GT(on_wall, 20000);
+}
+
+// rsu-sim stream --ouster's packets (sim/ouster_simulator.h), decoded by rsud's Ouster decoder with the
+// metadata the simulator writes, in each profile: every packet accepted, whole frames, and every point
+// on the surface its ray hit (the ground plane, or the wall's face at 8 m), placed by the mount.
+TEST(SimOusterSimulator, PacketsDecodeToPointsOnTheSceneInEachProfile) {
+  Scene scene = ground_only();
+  scene.buildings.push_back(wall_at_8m());
+  const Raycaster rc(scene);
+  const Pose3 mount{1.0, -2.0, 2.0, 0.0, 0.0, 0.3};
+  const Eigen::Isometry3d to_map = mount.to_isometry();
+  // The wall's face in the map frame: points x with n . x = 8 (n the unit vector along 0.6 rad).
+  const Eigen::Vector2d normal(std::cos(0.6), std::sin(0.6));
+  for (const auto profile : {lidar::ouster::UdpProfile::rng19_rfl8_sig16_nir16,
+                             lidar::ouster::UdpProfile::legacy, lidar::ouster::UdpProfile::rng15_rfl8_nir8}) {
+    SCOPED_TRACE(std::string(lidar::ouster::to_string(profile)));
+    const std::string json = ouster_metadata_json({"os1-64", "512x20", profile});
+    const lidar::ouster::Metadata m = lidar::ouster::parse_metadata(json, "simulated");
+    EXPECT_EQ(m.prod_line, "OS-1-64");
+    EXPECT_EQ(m.columns_per_frame, 512);
+    EXPECT_EQ(m.frequency_hz, 20);
+    const OusterSimulator sim(m, mount, no_noise(), rc);
+    EXPECT_EQ(sim.packets_per_frame(), 32);
+    lidar::ouster::Decoder decoder(m);
+    // The range field's unit (RNG15: 8 mm) bounds how far a decoded point lies from its surface.
+    const double tolerance = profile == lidar::ouster::UdpProfile::rng15_rfl8_nir8 ? 0.006 : 0.0015;
+    int on_ground = 0, on_wall = 0, elsewhere = 0;
+    std::vector<std::uint8_t> bytes;
+    std::vector<lidar::LidarPoint> points;
+    for (std::int64_t k = 0; k < 2 * sim.packets_per_frame(); ++k) {
+      sim.packet(k, 1'000'000'000, bytes);
+      points.clear();
+      ASSERT_EQ(decoder.decode(bytes, points), lidar::ouster::PacketResult::accepted) << k;
+      EXPECT_EQ(decoder.last_packet().first_time_ns, sim.packet_time_ns(k) + 1'000'000'000);
+      for (const lidar::LidarPoint& p : points) {
+        const Eigen::Vector3d x = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+        if (std::abs(x.z()) < tolerance)
+          ++on_ground;
+        else if (std::abs(x.head<2>().dot(normal) - 8.0) < tolerance)
+          ++on_wall;
+        else
+          ++elsewhere;
+      }
+    }
+    EXPECT_EQ(decoder.stats().frames_complete, 2U);
+    EXPECT_EQ(decoder.stats().columns_skipped, 0U);
+    EXPECT_EQ(elsewhere, 0);
+    EXPECT_GT(on_wall, 2000);
+    EXPECT_GT(on_ground, 10000);
+  }
+  EXPECT_THROW(ouster_metadata_json({"os1-128", "2048x20"}), std::exception);  // not a mode the sensor has
+  EXPECT_THROW(ouster_metadata_json({"os3-128", "1024x10"}), std::invalid_argument);
 }
 
 // Sector simulation casts only the firings in the window, and those come out exactly as in the full

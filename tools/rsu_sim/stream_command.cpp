@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
-// rsu-sim stream: the scenario's Velodyne data packets over UDP, paced at real time (as a sensor
-// sends them) or as fast as possible. Packet times are the simulation clock; with --clock wall the
-// simulation clock is shifted so that the first packet is "now" on the host clock (the common clock
+// rsu-sim stream: the scenario's Velodyne data packets over UDP, or with --ouster an Ouster's lidar
+// packets (sim/ouster_simulator.h; the metadata JSON rsud needs written to --metadata-out), paced at real
+// time (as a sensor sends them) or as fast as possible. Packet times are the simulation clock; with --clock
+// wall the simulation clock is shifted so that the first packet is "now" on the host clock (the common clock
 // of tests on one machine). --loss and --reorder impair the stream as a bad network would (issue 7's
 // fault tests), drawn per packet from a counter-based random stream, so a seed repeats a run exactly.
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
@@ -11,6 +12,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <thread>
@@ -20,6 +22,7 @@
 #include "edge/host_clock.h"
 #include "lidar/velodyne_packet.h"
 #include "sim/lidar_simulator.h"
+#include "sim/ouster_simulator.h"
 #include "sim/scenario.h"
 #include "tools/rsu_sim/commands.h"
 #include "tools/rsu_sim/scenario_options.h"
@@ -42,6 +45,72 @@ double fraction_option(const po::variables_map& vm, const char* name) {
   return v;
 }
 
+// The Ouster's packets (--ouster): paced like the Velodyne stream, its columns stamped on the shared
+// clock (a sensor synchronised by PTP); no impairments.
+int stream_ouster(const po::variables_map& vm, const sim::Scenario& scenario, double seconds,
+                  bool wall_clock) {
+  if (!vm.count("metadata-out"))
+    throw std::runtime_error("stream: --ouster needs --metadata-out FILE (the metadata rsud reads)");
+  if (scenario.lidar.mount_motion || vm["loss"].as<double>() > 0.0 || vm["reorder"].as<double>() > 0.0)
+    throw std::runtime_error("stream: --ouster has no moving mount, --loss or --reorder");
+  sim::OusterSpec spec;
+  spec.model = vm["ouster"].as<std::string>();
+  spec.lidar_mode = vm["lidar-mode"].as<std::string>();
+  const auto profile = lidar::ouster::udp_profile_from_string(vm["profile"].as<std::string>());
+  if (!profile)
+    throw std::runtime_error("stream: --profile must be LEGACY, RNG19_RFL8_SIG16_NIR16 or RNG15_RFL8_NIR8");
+  spec.profile = *profile;
+  const std::string json = sim::ouster_metadata_json(spec);
+  const std::string metadata_path = vm["metadata-out"].as<std::string>();
+  {
+    std::ofstream out(metadata_path);
+    out << json;
+    if (!out.flush())
+      throw std::runtime_error("stream: cannot write " + metadata_path);
+  }
+  const lidar::ouster::Metadata metadata = lidar::ouster::parse_metadata(json, metadata_path);
+  const sim::Raycaster raycaster(scenario.scene);
+  const sim::OusterSimulator simulator(metadata, scenario.lidar.mount, scenario.lidar.noise, raycaster);
+  const TimeNs sim_start = vm.count("start") ? from_seconds(vm["start"].as<double>()) : scenario.start_ns;
+  const bool has_epoch = vm.count("epoch-ns") > 0;
+  const bool fast = vm.count("fast") > 0;
+  const TimeNs clock_offset = has_epoch    ? static_cast<TimeNs>(vm["epoch-ns"].as<long long>())
+                              : wall_clock ? edge::host_now_ns() - sim_start
+                                           : 0;
+
+  asio::io_context io;
+  asio::ip::udp::socket socket(io);
+  const auto destination = edge::parse_udp_endpoint(vm["to"].as<std::string>());
+  socket.open(destination.protocol());
+  const auto wall_start = std::chrono::steady_clock::now();
+  const std::int64_t first = simulator.packet_index_at(sim_start);
+  const std::int64_t last = simulator.packet_index_at(sim_start + from_seconds(seconds));
+  std::vector<std::uint8_t> payload;
+  std::uint64_t sent = 0, failed = 0;
+  for (std::int64_t k = first; k < last; ++k) {
+    // The packet leaves once its last column has fired.
+    const TimeNs due = simulator.packet_time_ns(k + 1);
+    if (has_epoch && !fast) {
+      std::this_thread::sleep_until(std::chrono::system_clock::time_point(
+          std::chrono::duration_cast<std::chrono::system_clock::duration>(
+              std::chrono::nanoseconds(due + clock_offset))));
+    } else if (!fast) {
+      std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(due - sim_start));
+    }
+    simulator.packet(k, clock_offset, payload);
+    boost::system::error_code ec;
+    socket.send_to(asio::buffer(payload), destination, 0, ec);
+    ec ? ++failed : ++sent;
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  std::printf("sent %llu %s packets (%s, %s, %zu bytes; %llu failed) to %s in %.2f s; metadata %s\n",
+              static_cast<unsigned long long>(sent), spec.model.c_str(), spec.lidar_mode.c_str(),
+              std::string(lidar::ouster::to_string(spec.profile)).c_str(), payload.size(),
+              static_cast<unsigned long long>(failed), vm["to"].as<std::string>().c_str(), wall,
+              metadata_path.c_str());
+  return failed == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int run_stream(const std::vector<std::string>& args) {
@@ -59,7 +128,15 @@ int run_stream(const std::vector<std::string>& args) {
       "loss", po::value<double>()->default_value(0.0), "fraction of packets not sent (network loss)")(
       "reorder", po::value<double>()->default_value(0.0),
       "fraction of packets held back and sent after the next one (network reordering)")(
-      "impair-seed", po::value<unsigned long long>()->default_value(1), "seed of --loss and --reorder");
+      "impair-seed", po::value<unsigned long long>()->default_value(1), "seed of --loss and --reorder")(
+      "ouster", po::value<std::string>(),
+      "send an Ouster's lidar packets instead: os0-, os1- or os2- and 16, 32, 64 or 128 beams (os1-128)")(
+      "lidar-mode", po::value<std::string>()->default_value("1024x10"),
+      "with --ouster: columns x Hz (512x10, 512x20, 1024x10, 1024x20, 2048x10)")(
+      "profile", po::value<std::string>()->default_value("RNG19_RFL8_SIG16_NIR16"),
+      "with --ouster: LEGACY, RNG19_RFL8_SIG16_NIR16 or RNG15_RFL8_NIR8")(
+      "metadata-out", po::value<std::string>(),
+      "with --ouster: write the sensor's metadata JSON here (rsud's lidar.metadata) and start");
   add_scenario_options(options);
   po::positional_options_description positional;
   positional.add("scenario", 1);
@@ -84,6 +161,8 @@ int run_stream(const std::vector<std::string>& args) {
   const std::uint64_t impair_seed = vm["impair-seed"].as<unsigned long long>();
 
   const sim::Scenario scenario = load_scenario(vm);
+  if (vm.count("ouster"))
+    return stream_ouster(vm, scenario, seconds, clock == "wall");
   if (!scenario.lidar.model.has_packet_format())
     throw std::runtime_error("stream: LiDAR model " + scenario.lidar.model_name +
                              " has no Velodyne packet format");
