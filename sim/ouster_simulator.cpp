@@ -143,7 +143,8 @@ std::int64_t OusterSimulator::packet_index_at(TimeNs t) const {
   return k;
 }
 
-void OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out) const {
+std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns,
+                                    std::vector<std::uint8_t>& out) const {
   const ouster::Metadata& m = metadata_;
   const bool legacy = m.profile == ouster::UdpProfile::legacy;
   const std::int64_t frame = floor_div(k, packets_per_frame_);
@@ -198,6 +199,7 @@ void OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std::vector
     }
   }
   raycaster_->cast_batch(rays, hits);
+  std::size_t vehicle_returns = 0;
 
   for (int c = 0; c < m.columns_per_packet; ++c) {
     const int column = first_column + c;
@@ -222,6 +224,7 @@ void OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std::vector
       const double range_m = hit.range + range_noise[i];
       if (!(range_m > 0.0) || range_m > max_range_m_)
         continue;  // no return
+      vehicle_returns += hit.surface == SurfaceClass::kVehicle ? 1 : 0;
       const auto range = static_cast<std::uint32_t>(std::lround(range_m * 1000.0 / range_unit_mm_));
       const double cos_incidence = std::abs(hit.normal.dot(rays[i].direction));
       const auto reflectivity =
@@ -242,6 +245,7 @@ void OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std::vector
       }
     }
   }
+  return vehicle_returns;
 }
 
 }  // namespace rsu::sim

@@ -58,8 +58,9 @@ class OusterSimulator {
   // The packet whose first column is the last one at or before t.
   std::int64_t packet_index_at(TimeNs t) const;
   // Packet k's bytes (the metadata's profile), its column timestamps on the sensor clock
-  // (simulation time + clock_offset_ns), into `out` (resized).
-  void packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out) const;
+  // (simulation time + clock_offset_ns), into `out` (resized). Returns how many of its returns are a
+  // vehicle's (the ray caster's truth: which packets hold a vehicle, for latency benchmarks).
+  std::size_t packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out) const;
 
   const lidar::ouster::Metadata& metadata() const { return metadata_; }
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <numeric>
 
 #include "perception/point_hash_grid.h"
@@ -83,6 +84,67 @@ Clustering finish(const std::vector<std::vector<std::uint32_t>>& components, con
   return out;
 }
 
+// The bounding box of a cell's points, and squared gaps to another box or a point (0 when they overlap).
+struct CellBox {
+  GridPoint lo{std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+               std::numeric_limits<float>::max()};
+  GridPoint hi{std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest(),
+               std::numeric_limits<float>::lowest()};
+  void add(const GridPoint& p) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  static float gap(float lo_a, float hi_a, float lo_b, float hi_b) {
+    return std::max({0.0F, lo_a - hi_b, lo_b - hi_a});
+  }
+  float gap2(const CellBox& o) const {
+    const float dx = gap(lo.x, hi.x, o.lo.x, o.hi.x);
+    const float dy = gap(lo.y, hi.y, o.lo.y, o.hi.y);
+    const float dz = gap(lo.z, hi.z, o.lo.z, o.hi.z);
+    return dx * dx + dy * dy + dz * dz;
+  }
+  float gap2(const GridPoint& p) const {
+    const float dx = gap(lo.x, hi.x, p.x, p.x);
+    const float dy = gap(lo.y, hi.y, p.y, p.y);
+    const float dz = gap(lo.z, hi.z, p.z, p.z);
+    return dx * dx + dy * dy + dz * dz;
+  }
+};
+
+// Each unordered pair of cells within reach is visited once: the offsets in [-2, 2]^d that are
+// lexicographically positive (12 planar, 62 spatial).
+std::vector<CellCoord> forward_offsets(bool planar) {
+  std::vector<CellCoord> forward;
+  const int z_reach = planar ? 0 : 2;
+  for (int dz = -z_reach; dz <= z_reach; ++dz) {
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        if (dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)))) {
+          forward.push_back({dx, dy, dz});
+        }
+      }
+    }
+  }
+  return forward;
+}
+
+// Whether a point of `home` lies within the tolerance of a point of `other`; home's points farther than
+// it from other's box are not compared.
+bool any_pair_within(std::span<const GridPoint> pts, const CellRun& home, const CellRun& other,
+                     const CellBox& other_box, float tol2, float prune2) {
+  for (std::uint32_t a = home.begin; a < home.end; ++a) {
+    if (other_box.gap2(pts[a]) > prune2) {
+      continue;
+    }
+    for (std::uint32_t b = other.begin; b < other.end; ++b) {
+      if (squared_distance(pts[a], pts[b]) <= tol2) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 class UnionFind {
  public:
   explicit UnionFind(std::size_t n) : parent_(n), size_(n, 1) {
@@ -155,25 +217,26 @@ Clustering cluster_grid(std::span<const lidar::LidarPoint> points, std::span<con
   const auto pts = grid.points();
   UnionFind sets(pts.size());
 
-  // Each unordered pair of cells within reach is visited once: the offsets in [-2, 2]^d that are
-  // lexicographically positive (12 planar, 62 spatial).
-  std::vector<CellCoord> forward;
-  const int z_reach = planar ? 0 : 2;
-  for (int dz = -z_reach; dz <= z_reach; ++dz) {
-    for (int dy = -2; dy <= 2; ++dy) {
-      for (int dx = -2; dx <= 2; ++dx) {
-        if (dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)))) {
-          forward.push_back({dx, dy, dz});
-        }
-      }
-    }
-  }
+  const std::vector<CellCoord> forward = forward_offsets(planar);
+  // Each cell's bounding box: a pair of cells whose boxes lie farther apart than the tolerance cannot
+  // connect, and of the two, only points within the tolerance of the other's box can. Without it two
+  // dense cells two apart diagonally (whose nearest corners are 0.999 x the tolerance apart) were checked
+  // point pair by point pair: a dense sensor's car 10 m away put hundreds of points in a cell, and that
+  // product led the 128-ring pipeline's profile (issue 16). A margin against float rounding keeps the
+  // pruning exact.
+  std::vector<CellBox> boxes(grid.cell_count());
+  std::vector<std::uint32_t> box_of_run_start(pts.size());  // cell of a run's first point
   for (std::size_t c = 0; c < grid.cell_count(); ++c) {
     const CellRun run = grid.cell_run(c);
+    box_of_run_start[run.begin] = static_cast<std::uint32_t>(c);
+    for (std::uint32_t a = run.begin; a < run.end; ++a) {
+      boxes[c].add(pts[a]);
+    }
     for (std::uint32_t a = run.begin + 1; a < run.end; ++a) {
       sets.unite(sets.find(run.begin), sets.find(a));
     }
   }
+  const float prune2 = tol2 * 1.0001F;
   for (std::size_t c = 0; c < grid.cell_count(); ++c) {
     const CellRun home = grid.cell_run(c);
     const CellCoord hc = grid.cell_coord(c);
@@ -187,15 +250,12 @@ Clustering cluster_grid(std::span<const lidar::LidarPoint> points, std::span<con
       if (ra == rb) {
         continue;  // already one component
       }
-      bool linked = false;
-      for (std::uint32_t a = home.begin; a < home.end && !linked; ++a) {
-        for (std::uint32_t b = other->begin; b < other->end; ++b) {
-          if (squared_distance(pts[a], pts[b]) <= tol2) {
-            sets.unite(ra, rb);
-            linked = true;
-            break;
-          }
-        }
+      const CellBox& other_box = boxes[box_of_run_start[other->begin]];
+      if (boxes[c].gap2(other_box) > prune2) {
+        continue;
+      }
+      if (any_pair_within(pts, home, *other, other_box, tol2, prune2)) {
+        sets.unite(ra, rb);
       }
     }
   }

@@ -105,7 +105,8 @@ def run(args):
             h.make_keys()
             h.write_trust_list(extra=args.vehicles - len(IN_VIEW))
         h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=args.verifier_thread,
-                       learning_frames=3 if args.ouster else None)
+                       learning_frames=3 if args.ouster else None,
+                       extra="" if args.mount_integrity == "on" else "mount_integrity: {enabled: false}\n")
         if args.ouster:
             # rsud learns the background from the scene without its vehicles, streamed for the 3 s before
             # scenario time 0 (the Velodyne runs load rsu-sim simulate's frames instead); the stream
@@ -250,6 +251,9 @@ def main():
                          "street's VLP-32C; rsud learns the background from the first 3 s of stream")
     ap.add_argument("--lidar-mode", default="2048x10", help="with --ouster: columns x Hz (2048x10, 1024x20, ...)")
     ap.add_argument("--profile", default="RNG19_RFL8_SIG16_NIR16", help="with --ouster: the packet profile")
+    ap.add_argument("--mount-integrity", choices=("on", "off"), default="on",
+                    help="off: rsud does not check its mount (the load street holds the LiDAR weakly along the "
+                         "street, and a false stop there withholds every fix after it)")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.smoke:
