@@ -201,6 +201,10 @@ RsuCoreConfig bench_config(const std::string& model) {
   if (is_ouster(model))
     c.sensor_options.metadata_text = ouster_metadata();
   c.mount = kMount;
+  // The mount check runs (its cost is on the path measured) but never stops the fixes: this street
+  // holds the LiDAR weakly along it (two facades, two poles), and its false stops (suspected motions of
+  // 5-6 cm at 50 m) withheld 40-95 % of the corrections whose latency is measured here.
+  c.mount_monitor.max_position_error_m = 1e3;
   c.background.learning_frames = kLearnRotations - 2;  // the first rotation is partial
   // Unsigned: this measures the LiDAR path and the registry; bench/v2i measures signing and verifying.
   c.security.mode = v2i::SecurityMode::kInsecure;
