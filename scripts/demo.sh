@@ -8,6 +8,8 @@
 #      out/corridor/keys/; prints the paper's table and writes the figures;
 #   2. the same experiment in the degraded corridor, the paper's street as it describes it (a road between
 #      two tall buildings where NDT degrades along the road): its table beside the paper's, its figures;
+#      then that street with traffic (six more vehicles both ways, two of them connected, trucks that hide
+#      the car): the same table, and every correction rsud sent to the wrong vehicle;
 #   3. the V2I link impaired there: a relay between rsud and the vehicle delays, loses, jitters and
 #      reorders datagrams both ways (the one-factor sweeps and 200 ms with 30 % loss); a table, a figure;
 #   4. the paper's pilot experiment (Sec. 3.1): heat maps over distance x yaw, both LiDAR models;
@@ -23,7 +25,7 @@ PY=/usr/bin/python3  # Debian's python3, which has python3-matplotlib and python
 scripts/install-deps.sh
 echo "== building (Release) =="
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle rsu-keygen rsu-relay
+cmake --build build -j "$(nproc)" --target rsu-sim rsu-pilot rsu-corridor rsud rsu-vehicle rsu-keygen rsu-relay rsu-fleet
 
 echo "== 1. realistic experiment: corridor street, NDT vs RSU vs fused (paper Sec. 4) =="
 $PY eval/corridor/run_experiment.py --build build --out "$OUT/corridor"
@@ -31,6 +33,9 @@ $PY eval/corridor/run_experiment.py --build build --out "$OUT/corridor"
 echo "== 2. realistic experiment in the degraded corridor: NDT degrades between two tall buildings =="
 $PY eval/corridor/run_experiment.py --build build --experiment scenarios/corridor_degraded_experiment.yaml \
   --out "$OUT/corridor_degraded"
+echo "-- the degraded corridor with traffic (issue 13 item 3) --"
+$PY eval/corridor/run_experiment.py --build build --experiment scenarios/corridor_degraded_traffic_experiment.yaml \
+  --out "$OUT/corridor_traffic"
 
 echo "== 3. the V2I link impaired between rsud and the vehicle, degraded corridor (12 live runs) =="
 $PY eval/corridor/run_link_impairment.py --build build --quick --out "$OUT/link_impairment" | tail -1
@@ -50,7 +55,7 @@ $PY tests/integration/handover_integration.py --rsud build/daemon/rsud --rsu-sim
   tee "$OUT/handover_summary.txt"
 echo "every correction: $OUT/handover/corrections.csv; logs and stats of both rsud: $OUT/handover/"
 
-for street in corridor corridor_degraded; do
+for street in corridor corridor_degraded corridor_traffic; do
   echo
   echo "== the realistic experiment in the street $street (also $OUT/$street/table.txt, paper_comparison.txt) =="
   cat "$OUT/$street/table.txt" "$OUT/$street/paper_comparison.txt"
