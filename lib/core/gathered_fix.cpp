@@ -20,6 +20,8 @@ void count(const GatheredFix& f, LidarStats& stats) {
     ++stats.clusters_out_of_coverage;
   else if (f.outcome == GatheredFixOutcome::inconsistent)
     ++stats.corrections_inconsistent;
+  else if (f.outcome == GatheredFixOutcome::no_assigned_cluster)
+    ++stats.corrections_unassigned;
   else if (!f.ok())
     ++stats.corrections_failed;  // no assigned cluster, no rectangle, or the correction refused it
 }
@@ -85,20 +87,33 @@ GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::Vehicl
     out.outcome = GatheredFixOutcome::doubtful_cluster;
     return out;
   }
+  // Every part was only gathered (it lay mostly inside the footprint grown by up to 2 m), none given to
+  // this vehicle by the association's gate: unless each lay in its lane (the footprint grown across
+  // it by the minimum margin and one sigma only), none is known to be this vehicle's rather than a
+  // neighbour's, one part or several. Seen from 6 m up, an unconnected car 1.6 m beside a connected one
+  // showed its top mostly inside the grown footprint, after the connected car's own cluster had been
+  // assigned, fixed and refused earlier in the sweep: its place, 3.5 m off, went out as the connected car's
+  // (README, "An elevated RSU"); at 4 m, so did the unconnected car queueing ahead of a connected one, in its
+  // lane. So neither a part outside its lane nor one after its assigned detection was judged in this
+  // rotation. A vehicle whose clock is 0.8 s behind is predicted 2.4 m ahead, beyond the gate, while
+  // its own cluster still lies in its lane: it is fixed from it.
+  if (held.assigned_size == 0 && (!held.gathered_own || held.after_assigned_release)) {
+    out.fragments_unmatched = held.parts;
+    out.outcome = GatheredFixOutcome::no_assigned_cluster;
+    return out;
+  }
   out.sweep_time = held.sweep_time();
   out.fix = fix_announced(held.points, a, out.sweep_time, lidar);
   if (held.parts > 1 && fits_vehicle(out.fix.fit, a, out.sweep_time)) {
     out.fragments_merged = held.parts - 1;
+  } else if (held.parts > 1 && held.assigned_size == 0) {
+    out.fragments_unmatched = held.parts;  // several parts, none assigned, not one vehicle
+    out.outcome = GatheredFixOutcome::no_assigned_cluster;
+    return out;
   } else if (held.parts > 1) {
     // The union is not one vehicle of this size (something else was inside the footprint): the
-    // detection the assignment chose, alone; the correction's consistency check guards it. Without
-    // one, every part was only gathered (inside the grown footprint): none is known to be this
-    // vehicle's rather than a neighbour's, so no fix.
+    // detection the assignment chose, alone; the correction's consistency check guards it.
     out.fragments_unmatched = held.parts - 1;
-    if (held.assigned_size == 0) {
-      out.outcome = GatheredFixOutcome::no_assigned_cluster;
-      return out;
-    }
     out.sweep_time = held.assigned_time;
     out.fix = fix_announced(held.assigned_points(), a, out.sweep_time, lidar);
   }

@@ -23,7 +23,7 @@ namespace rsu::core {
 enum class GatheredFixOutcome {
   fixed,
   doubtful_cluster,     // a near vehicle held for a doubtful assigned cluster got none of its own
-  no_assigned_cluster,  // the gathered union is not one vehicle, and no part was assigned to it
+  no_assigned_cluster,  // its parts were only gathered, none assigned: not all its own, or not one vehicle
   fit_failed,           // no rectangle could be fitted
   out_of_coverage,      // beyond RsuCoreConfig::coverage_radius_m
   inconsistent,         // the known-size box contradicts the points, or they do not place it

@@ -23,6 +23,7 @@ GrownFootprint::GrownFootprint(const tracking::VehicleHypothesis& h, const Gathe
   half_ = {0.5 * h.size.length_m + margin, 0.5 * h.size.width_m + margin};
   const double tight_margin = g.min_margin_m + bounded_centre_sigma;
   tight_half_ = {0.5 * h.size.length_m + tight_margin, 0.5 * h.size.width_m + tight_margin};
+  lane_half_ = {half_.x(), tight_half_.y()};
   const Eigen::Rotation2Dd r(h.yaw);
   std::size_t k = 0;
   for (const double sx : {-1.0, 1.0}) {
@@ -49,6 +50,10 @@ double GrownFootprint::inside_fraction(const perception::Detection& detection) c
 
 bool GrownFootprint::tightly_inside(const perception::Detection& detection) const {
   return fraction_inside(detection, tight_half_) >= min_inside_fraction_;
+}
+
+bool GrownFootprint::inside_lane(const perception::Detection& detection) const {
+  return fraction_inside(detection, lane_half_) >= min_inside_fraction_;
 }
 
 }  // namespace rsu::core

@@ -26,6 +26,10 @@ class GrownFootprint {
   // minimum margin and one sigma of the predicted centre only: the vehicle's own, rather than a
   // neighbour's inside the wider margin (a vehicle that knows it is lost may be found farther off).
   bool tightly_inside(const perception::Detection& detection) const;
+  // The same with the tight margin across the vehicle only and the grown one along it: within its lane.
+  // A vehicle's timing or speed error moves its prediction along its heading (an announcement 0.8 s
+  // stale is predicted 2.4 m ahead), never sideways; a neighbour side by side is off across it.
+  bool inside_lane(const perception::Detection& detection) const;
 
   const std::array<Eigen::Vector2d, 4>& corners() const { return corners_; }
 
@@ -36,6 +40,7 @@ class GrownFootprint {
   double yaw_;
   Eigen::Vector2d half_;        // grown half extents along and across the vehicle
   Eigen::Vector2d tight_half_;  // the same grown by the minimum margin and one centre sigma
+  Eigen::Vector2d lane_half_;   // grown along, tight across
   double min_inside_fraction_;
   std::array<Eigen::Vector2d, 4> corners_;
 };

@@ -30,6 +30,7 @@ void report(const lidar::PacketOrderStats& o, const perception::SweepClustererSt
   out.add("lidar", "fragments_merged", l.fragments_merged);
   out.add("lidar", "corrections_failed", l.corrections_failed);
   out.add("lidar", "corrections_inconsistent", l.corrections_inconsistent);
+  out.add("lidar", "corrections_unassigned", l.corrections_unassigned);
   out.add("lidar", "corrections_encode_failed", l.corrections_encode_failed);
   out.add("lidar", "corrections", l.corrections);
   out.add("lidar", "corrections_withheld_mount", l.corrections_withheld_mount);

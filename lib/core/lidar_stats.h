@@ -22,6 +22,10 @@ struct LidarStats {
   std::uint64_t corrections_failed = 0;   // size correction refused the matched cluster
   // the known-size box contradicts the points, or the points do not decide where it sits: no fix
   std::uint64_t corrections_inconsistent = 0;
+  // a vehicle's clusters were only gathered (inside its grown footprint), none assigned to it by the
+  // association's gate, and some lay beyond its tighter footprint (maybe a neighbour's) or together
+  // they are not one vehicle: no fix (gathered_fix.h, no_assigned_cluster)
+  std::uint64_t corrections_unassigned = 0;
   std::uint64_t corrections_encode_failed = 0;
   std::uint64_t corrections = 0;
   std::uint64_t corrections_withheld_mount = 0;  // fixed, not sent: the LiDAR moved (MountMonitor)

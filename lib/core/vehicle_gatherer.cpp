@@ -2,6 +2,7 @@
 #include "core/vehicle_gatherer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 #include <limits>
 #include <utility>
@@ -58,7 +59,8 @@ VehicleGatherer::Members VehicleGatherer::members(std::span<const perception::De
   return m;
 }
 
-HeldVehicle& VehicleGatherer::held_for(std::uint64_t vehicle_id, TimeNs first_time) {
+HeldVehicle& VehicleGatherer::held_for(std::uint64_t vehicle_id, TimeNs first_time,
+                                       const SweepPosition& sweep) {
   auto it = std::find_if(held_.begin(), held_.end(),
                          [vehicle_id](const HeldVehicle& h) { return h.vehicle_id == vehicle_id; });
   if (it != held_.end())
@@ -66,6 +68,10 @@ HeldVehicle& VehicleGatherer::held_for(std::uint64_t vehicle_id, TimeNs first_ti
   HeldVehicle fresh;
   fresh.vehicle_id = vehicle_id;
   fresh.first_time = first_time;
+  fresh.after_assigned_release = std::any_of(
+      released_assigned_.begin(), released_assigned_.end(), [&](const std::pair<std::uint64_t, TimeNs>& r) {
+        return r.first == vehicle_id && std::abs(first_time - r.second) < sweep.rotation_period_ns() / 2;
+      });
   held_.push_back(std::move(fresh));
   return held_.back();
 }
@@ -105,7 +111,7 @@ std::size_t VehicleGatherer::gather(std::vector<perception::Detection>&& detecti
     const std::vector<std::size_t>& parts = m.of_vehicle[j];
     if (parts.empty())
       continue;
-    HeldVehicle& held = held_for(vehicles[j].vehicle_id, detections[parts.front()].sweep_time_ns);
+    HeldVehicle& held = held_for(vehicles[j].vehicle_id, detections[parts.front()].sweep_time_ns, sweep);
     const bool assigned = m.assigned_distance[j] >= 0.0;  // then parts.front() is the assigned one
     std::vector<Eigen::Vector2d> outline(footprints[j].corners().begin(), footprints[j].corners().end());
     for (const std::size_t c : parts) {
@@ -117,6 +123,8 @@ std::size_t VehicleGatherer::gather(std::vector<perception::Detection>&& detecti
         held.assigned_time = part.sweep_time_ns;
         held.assigned_distance_sq = m.assigned_distance[j];
         held.assigned_own = footprints[j].tightly_inside(part);
+      } else if (c != parts.front() || !assigned) {
+        held.gathered_own = held.gathered_own && footprints[j].inside_lane(part);
       }
       held.points.insert(held.points.end(), part.points.begin(), part.points.end());
       held.weighted_offset +=
@@ -134,8 +142,18 @@ std::size_t VehicleGatherer::gather(std::vector<perception::Detection>&& detecti
 
 std::vector<HeldVehicle> VehicleGatherer::release(bool everything, const SweepPosition& sweep) {
   std::vector<HeldVehicle> out;
+  if (sweep.known()) {
+    std::erase_if(released_assigned_, [&](const std::pair<std::uint64_t, TimeNs>& r) {
+      return sweep.time() - r.second > sweep.rotation_period_ns();
+    });
+  }
   for (auto it = held_.begin(); it != held_.end();) {
     if (everything || !sweep.known() || it->release_at <= sweep.time()) {
+      if (it->assigned_size > 0) {
+        std::erase_if(released_assigned_,
+                      [&](const std::pair<std::uint64_t, TimeNs>& r) { return r.first == it->vehicle_id; });
+        released_assigned_.emplace_back(it->vehicle_id, it->assigned_time);
+      }
       out.push_back(std::move(*it));
       it = held_.erase(it);
     } else {

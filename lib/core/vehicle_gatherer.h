@@ -18,6 +18,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -48,8 +49,15 @@ struct HeldVehicle {
   TimeNs assigned_time = 0;
   double assigned_distance_sq = 0.0;
   bool assigned_own = false;  // it lay in the footprint grown by the minimum margin + 1 sigma
-  bool far = false;           // beyond GatheringConfig::hold_beyond_m (held for its fragments)
-  TimeNs release_at = 0;      // firing time when the sweep has passed the footprint and its detections
+  // Every detection gathered without being assigned lay mostly in the vehicle's lane (grown_footprint.h,
+  // inside_lane): a vehicle whose announced clock is 0.8 s off fails the gate while its own cluster
+  // still lies there; a neighbour's beside it does not.
+  bool gathered_own = true;
+  // Held after the vehicle was released with an assigned detection earlier in this rotation (fixed or
+  // refused): what is gathered for it now lies beside or ahead of what was judged its own.
+  bool after_assigned_release = false;
+  bool far = false;       // beyond GatheringConfig::hold_beyond_m (held for its fragments)
+  TimeNs release_at = 0;  // firing time when the sweep has passed the footprint and its detections
 
   // The points' mean firing time: when the LiDAR swept the vehicle.
   TimeNs sweep_time() const { return first_time + weighted_offset / static_cast<TimeNs>(points.size()); }
@@ -83,7 +91,7 @@ class VehicleGatherer {
                   std::span<const tracking::VehicleHypothesis> vehicles,
                   std::span<const GrownFootprint> footprints,
                   const tracking::AssociationResult& association) const;
-  HeldVehicle& held_for(std::uint64_t vehicle_id, TimeNs first_time);
+  HeldVehicle& held_for(std::uint64_t vehicle_id, TimeNs first_time, const SweepPosition& sweep);
   // When a vehicle that got detections in this batch may be released (file comment of the .cpp).
   TimeNs release_time(const HeldVehicle& held, const tracking::VehicleHypothesis& vehicle,
                       const GrownFootprint& footprint, std::span<const Eigen::Vector2d> outline, bool own,
@@ -93,6 +101,8 @@ class VehicleGatherer {
   tracking::AssociationConfig association_;
   Eigen::Vector2d lidar_xy_;
   std::vector<HeldVehicle> held_;
+  // The vehicles released with an assigned detection within the last rotation: the sweep time of it.
+  std::vector<std::pair<std::uint64_t, TimeNs>> released_assigned_;
 };
 
 }  // namespace rsu::core

@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+
+#include <Eigen/Geometry>
 
 #include "common/angles.h"
 
@@ -68,6 +71,24 @@ UnseenSpread unseen_half_extent(const perception::RectangleFit& c, const Vehicle
   return {any ? Eigen::Vector2d(0.5 * spread) : Eigen::Vector2d::Zero(), axis_yaw};
 }
 
+// d^T S^-1 d with the closed-form 2x2 inverse; empty when S is not positive definite.
+std::optional<double> mahalanobis_sq(const Eigen::Vector2d& d, const Eigen::Matrix2d& s) {
+  const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
+  if (!(det > 0.0) || !(s(0, 0) > 0.0))
+    return std::nullopt;
+  return (s(1, 1) * d.x() * d.x() - (s(0, 1) + s(1, 0)) * d.x() * d.y() + s(0, 0) * d.y() * d.y()) / det;
+}
+
+// The part of the centre offset `d` beyond the unseen-extent bound along each of its axes (map frame).
+Eigen::Vector2d offset_beyond_bound(const Eigen::Vector2d& d, const UnseenSpread& spread) {
+  const Eigen::Rotation2Dd to_axes(-spread.axis_yaw);
+  const Eigen::Vector2d along = to_axes * d;
+  Eigen::Vector2d beyond;
+  for (int i = 0; i < 2; ++i)
+    beyond[i] = std::copysign(std::max(0.0, std::abs(along[i]) - spread.half[i]), along[i]);
+  return to_axes.inverse() * beyond;
+}
+
 bool size_consistent(const perception::RectangleFit& c, const v2i::BoxSize& size,
                      const AssociationConfig& cfg) {
   const double longer = std::max(c.length0, c.length1);
@@ -88,8 +109,9 @@ PairCheck check_pair(const perception::RectangleFit& cluster, const VehicleHypot
     out.verdict = PairGate::kSizeMismatch;
     return out;
   }
-  Eigen::Matrix2d s = vehicle.covariance.topLeftCorner<2, 2>();
-  s += config.fit_sigma_floor_m * config.fit_sigma_floor_m * Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d noise = vehicle.covariance.topLeftCorner<2, 2>();
+  noise += config.fit_sigma_floor_m * config.fit_sigma_floor_m * Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d s = noise;
   if (config.inflate_for_unseen_extent) {
     const UnseenSpread spread = unseen_half_extent(cluster, vehicle, config);
     const Eigen::Vector2d& half = spread.half;
@@ -99,15 +121,25 @@ PairCheck check_pair(const perception::RectangleFit& cluster, const VehicleHypot
     axes << c, -sn, sn, c;
     s += axes * half.cwiseProduct(half).asDiagonal() * axes.transpose();
   }
-  const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
-  if (!(det > 0.0) || !(s(0, 0) > 0.0)) {
-    return out;  // kInvalid: the vehicle's covariance is not positive semi-definite
-  }
   const Eigen::Vector2d d = cluster.center - vehicle.centre;
-  // d^T S^-1 d with the closed-form 2x2 inverse.
-  out.distance_sq =
-      (s(1, 1) * d.x() * d.x() - (s(0, 1) + s(1, 0)) * d.x() * d.y() + s(0, 0) * d.y() * d.y()) / det;
+  const std::optional<double> distance_sq = mahalanobis_sq(d, s);
+  if (!distance_sq)
+    return out;  // kInvalid: the vehicle's covariance is not positive semi-definite
+  out.distance_sq = *distance_sq;
   out.verdict = out.distance_sq <= config.gate_chi2 ? PairGate::kPass : PairGate::kTooFar;
+  // The spread above is a bound, not a noise: a part of the vehicle lies INSIDE its footprint, so its
+  // fitted centre sits at most half the unseen extent from the vehicle's (per axis), never beyond.
+  // Spread as a variance it lets a small cluster pass up to three times that far: a neighbour's
+  // bonnet or a van's sill a whole car length outside the footprint, seen from 4-6 m up, joined a
+  // car and pulled its fix 2 m (README, "An elevated RSU"). So a cluster must also lie within the
+  // gate of the footprint itself: the offset beyond the bound, against the vehicle's and the fit's
+  // own noise.
+  if (out.verdict == PairGate::kPass && config.inflate_for_unseen_extent) {
+    const Eigen::Vector2d beyond = offset_beyond_bound(d, unseen_half_extent(cluster, vehicle, config));
+    const std::optional<double> beyond_sq = mahalanobis_sq(beyond, noise);
+    if (!beyond_sq || *beyond_sq > config.gate_chi2)
+      out.verdict = PairGate::kTooFar;
+  }
   return out;
 }
 
