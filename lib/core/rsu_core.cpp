@@ -345,6 +345,8 @@ void RsuCore::add_background_frame(std::span<const lidar::LidarPoint> sensor_poi
   background_frames_.emplace_back(sensor_points.begin(), sensor_points.end());
   mount_.to_map_frame(sensor_points, map_scratch_);
   background_.add_background_frame(map_scratch_);
+  const perception::GroundHeightFilterConfig& ground = config_.perception.ground;
+  occluders_.add_static(map_scratch_, ground.ground_z + ground.min_height);
   ++lidar_stats_.background_frames;
 }
 
@@ -389,6 +391,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
     fresh.background_ = std::move(background_);
     fresh.background_ready_ = background_ready_;
     fresh.background_frames_ = std::move(background_frames_);
+    fresh.occluders_.take_static(std::move(occluders_));
     fresh.monitor_ = std::move(monitor_);
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }

@@ -14,11 +14,37 @@ namespace {
 // extreme point (box_axis.h: observation_probe_m past it, two azimuth steps of tolerance): a few degrees
 // at the ranges a vehicle gets fixed.
 constexpr double kAzimuthMarginRad = deg_to_rad(5.0);
+// The static points are kept one per 0.1 m cell (a pole's returns of every laser and background rotation
+// hide no more than one of them), in buckets of one degree of azimuth.
+constexpr double kStaticCellM = 0.1;
+constexpr int kAzimuthBuckets = 360;
+constexpr double kBucketRad = 2.0 * kPi / kAzimuthBuckets;
+
+int azimuth_bucket(double azimuth) {
+  const int b = static_cast<int>(std::floor((azimuth + kPi) / kBucketRad));
+  return ((b % kAzimuthBuckets) + kAzimuthBuckets) % kAzimuthBuckets;
+}
 
 }  // namespace
 
 SweepOccluders::SweepOccluders(const Eigen::Vector2d& lidar_xy, TimeNs rotation_period)
-    : lidar_xy_(lidar_xy), rotation_period_(rotation_period) {}
+    : lidar_xy_(lidar_xy), rotation_period_(rotation_period), static_by_azimuth_(kAzimuthBuckets) {}
+
+void SweepOccluders::add_static(std::span<const lidar::LidarPoint> points_in_map_frame, double min_z) {
+  for (const lidar::LidarPoint& p : points_in_map_frame) {
+    if (!(static_cast<double>(p.z) >= min_z) || !std::isfinite(p.x) || !std::isfinite(p.y))
+      continue;
+    const Eigen::Vector2d xy(p.x, p.y);
+    const auto ix = static_cast<std::int32_t>(std::lround(xy.x() / kStaticCellM));
+    const auto iy = static_cast<std::int32_t>(std::lround(xy.y() / kStaticCellM));
+    const std::uint64_t cell =
+        (static_cast<std::uint64_t>(static_cast<std::uint32_t>(ix)) << 32) | static_cast<std::uint32_t>(iy);
+    if (!static_cells_.insert(cell).second)
+      continue;
+    const Eigen::Vector2d r = xy - lidar_xy_;
+    static_by_azimuth_[azimuth_bucket(std::atan2(r.y(), r.x()))].push_back(xy);
+  }
+}
 
 void SweepOccluders::add(std::span<const perception::Detection> detections) {
   TimeNs newest = std::numeric_limits<TimeNs>::min();
@@ -39,6 +65,11 @@ void SweepOccluders::add(std::span<const perception::Detection> detections) {
   std::erase_if(kept_, [&](const Kept& k) { return k.sweep_time < newest - rotation_period_; });
 }
 
+void SweepOccluders::take_static(SweepOccluders&& from) {
+  static_by_azimuth_ = std::move(from.static_by_azimuth_);
+  static_cells_ = std::move(from.static_cells_);
+}
+
 std::vector<Eigen::Vector2d> SweepOccluders::of(const HeldVehicle& held) const {
   std::vector<Eigen::Vector2d> out;
   if (held.points.empty())
@@ -54,18 +85,25 @@ std::vector<Eigen::Vector2d> SweepOccluders::of(const HeldVehicle& held) const {
     hi = std::max(hi, a);
     farthest = std::max(farthest, r.norm());
   }
-  const TimeNs when = held.sweep_time();
-  for (const Kept& k : kept_) {
-    if (std::abs(k.sweep_time - when) > rotation_period_ / 2 ||
-        std::find(held.points.begin(), held.points.end(), k.first) != held.points.end())
-      continue;  // another rotation's, or one of its own detections
-    for (const Eigen::Vector2d& xy : k.xy) {
+  const auto take_nearer_within_span = [&](std::span<const Eigen::Vector2d> points) {
+    for (const Eigen::Vector2d& xy : points) {
       const Eigen::Vector2d r = xy - lidar_xy_;
       const double a = wrap_angle(std::atan2(r.y(), r.x()) - ref_azimuth);
       if (r.norm() < farthest && a >= lo - kAzimuthMarginRad && a <= hi + kAzimuthMarginRad)
         out.push_back(xy);
     }
+  };
+  const TimeNs when = held.sweep_time();
+  for (const Kept& k : kept_) {
+    if (std::abs(k.sweep_time - when) > rotation_period_ / 2 ||
+        std::find(held.points.begin(), held.points.end(), k.first) != held.points.end())
+      continue;  // another rotation's, or one of its own detections
+    take_nearer_within_span(k.xy);
   }
+  const int first = azimuth_bucket(ref_azimuth + lo - kAzimuthMarginRad);
+  const int buckets = static_cast<int>(std::ceil((hi - lo + 2.0 * kAzimuthMarginRad) / kBucketRad)) + 1;
+  for (int i = 0; i < std::min(buckets, kAzimuthBuckets); ++i)
+    take_nearer_within_span(static_by_azimuth_[(first + i) % kAzimuthBuckets]);
   return out;
 }
 

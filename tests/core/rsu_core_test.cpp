@@ -59,6 +59,33 @@ TEST(SweepOccluders, OtherObjectsNearerInTheVehiclesDirection) {
   EXPECT_EQ(occluders.detections_kept(), 1U);
 }
 
+// The static scene's objects (a background rotation's returns above the road) hide vehicles too, kept
+// once per 0.1 m cell; the road's returns do not.
+TEST(SweepOccluders, StaticObjectsAboveTheRoad) {
+  SweepOccluders occluders(Eigen::Vector2d::Zero(), 100'000'000);
+  std::vector<lidar::LidarPoint> background;
+  for (int pass = 0; pass < 2; ++pass) {  // two rotations of the same scene
+    for (double z = 0.5; z <= 3.0; z += 0.5)
+      background.push_back({.x = 10.0f, .y = 0.5f, .z = static_cast<float>(z)});  // a post in front
+    background.push_back({.x = 10.0f, .y = -0.5f, .z = 0.05f});                   // the road
+    background.push_back({.x = 30.0f, .y = 0.0f, .z = 1.0f});                     // a wall behind
+    background.push_back({.x = -10.0f, .y = 0.0f, .z = 1.0f});                    // behind the LiDAR
+  }
+  occluders.add_static(background, 0.2);
+  EXPECT_EQ(occluders.static_points(), 3U);
+  HeldVehicle held;
+  held.points = detection_at(20.0, -1.0, 2.0, 0).points;
+  const std::vector<Eigen::Vector2d> got = occluders.of(held);
+  ASSERT_EQ(got.size(), 1U);
+  EXPECT_NEAR(got[0].x(), 10.0, 1e-6);
+  EXPECT_NEAR(got[0].y(), 0.5, 1e-6);
+  // A reload that keeps the background keeps them.
+  SweepOccluders reloaded(Eigen::Vector2d::Zero(), 100'000'000);
+  reloaded.take_static(std::move(occluders));
+  EXPECT_EQ(reloaded.static_points(), 3U);
+  EXPECT_EQ(reloaded.of(held).size(), 1U);
+}
+
 using testing::announce;
 using testing::counter;
 using testing::SimStream;
@@ -94,6 +121,16 @@ void announce_between(RsuCore& core, std::uint64_t id, const Pose2& pose, const 
 
 double distance(const v2i::Correction& c, const Pose2& truth) {
   return std::hypot(c.pose.x - truth.x, c.pose.y - truth.y);
+}
+
+// At least `at_least` corrections, each within 0.10 m of the truth and fixed from the body (not a
+// fragment of it).
+void expect_fixed_from_the_body(const SimStream& stream, const Pose2& truth, std::size_t at_least) {
+  ASSERT_GE(stream.corrections().size(), at_least);
+  for (const auto& [out, emitted_at] : stream.corrections()) {
+    EXPECT_LT(distance(out.correction, truth), 0.10) << out.correction.quality.points_used << " points";
+    EXPECT_GT(out.correction.quality.points_used, 60U);
+  }
 }
 
 TEST(RsuCore, AnnouncementsEnterTheRegistry) {
@@ -349,11 +386,7 @@ TEST(RsuCore, RoofFragmentIsFittedWithTheBodyNotInsteadOfIt) {
   announce_between(core, 1, {truth.x + 0.4, truth.y - 0.3, truth.yaw + 0.05}, "192.0.2.10",
                    t1 - 100 * kNsPerMs, t1);
   stream.run_until(core, t1 + 11 * stream.rotation_ns());
-  ASSERT_GE(stream.corrections().size(), 9U);
-  for (const auto& [out, emitted_at] : stream.corrections()) {
-    EXPECT_LT(distance(out.correction, truth), 0.10) << out.correction.quality.points_used << " points";
-    EXPECT_GT(out.correction.quality.points_used, 60U);
-  }
+  expect_fixed_from_the_body(stream, truth, 9);
   EXPECT_GT(core.lidar_stats().fragments_merged, 0U);  // the geometry does produce roof fragments
 }
 
@@ -420,6 +453,33 @@ TEST(RsuCore, TwoVehiclesSideBySideAreNotSwapped) {
   }
   EXPECT_GE(for_a, 2);
   EXPECT_GE(for_b, 2);
+}
+
+// The fault street (tests/integration/scenarios/fault_street.yaml): a VLP-16 2 m up, a lamp post 6.7 m
+// away, an SUV 16 m away behind it. The post's shadow cuts the car's rear corner off as a fragment of
+// ~13 points, which the sweep releases first; the shadow's edge is not the car's end. Fixed from it as if
+// it were, the correction was 3.5 m off stating 0.19 m (fault_rsud_stream_restart): the static scene's
+// objects hide parts of vehicles as the sweep's other objects do.
+TEST(RsuCore, LampPostShadowIsNotTheVehiclesEnd) {
+  sim::Scene scene;
+  scene.ground.half_extent_m = 60.0;
+  scene.buildings.push_back({.x = 0.0, .y = 22.0, .yaw = 0.0, .length = 50.0, .width = 8.0, .height = 10.0});
+  scene.buildings.push_back({.x = 0.0, .y = -20.0, .yaw = 0.0, .length = 50.0, .width = 8.0, .height = 12.0});
+  scene.poles.push_back({.x = -6.0, .y = 3.0, .radius = 0.15, .height = 6.0});
+  scene.poles.push_back({.x = 9.0, .y = -3.0, .radius = 0.15, .height = 6.0});
+  const Pose3 mount{.x = 0.0, .y = 0.0, .z = 2.0, .roll = 0.0, .pitch = 0.0, .yaw = 0.0};
+  const Pose2 truth{-13.83, 8.0, 0.0};
+  SimStream stream(scene, {static_vehicle(1, truth)}, lidar::make_vlp16(), mount,
+                   sim::NoiseModel{.range_sigma_m = 0.02, .angle_sigma_rad = 0.001, .seed = 5},
+                   kEmptyRotations);
+  RsuCoreConfig config = test_config();
+  config.mount = mount;
+  RsuCore core(config);
+  const TimeNs t1 = kEmptyRotations * stream.rotation_ns();
+  announce_between(core, 1, {truth.x + 0.3, truth.y - 0.2, truth.yaw + 0.03}, "192.0.2.10",
+                   t1 - 100 * kNsPerMs, t1);
+  stream.run_until(core, t1 + 6 * stream.rotation_ns());
+  expect_fixed_from_the_body(stream, truth, 4);
 }
 
 TEST(RsuCore, FlushReleasesTheClusterStillOpenAtShutdown) {
