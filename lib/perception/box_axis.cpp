@@ -93,7 +93,10 @@ bool observable_beyond(const AxisContext& ctx, int a, double sign, const Extreme
   Eigen::Vector2d probe = p.local;
   probe[a] += sign * config.observation_probe_m;
   const double range = (probe - ctx.lidar_local).norm();
-  return lidar.sees_surface(range, config.lowest_body_m, ctx.vehicle_height);
+  // Towards the front or back the body may go on only bonnet high (a laser passing above the bonnet
+  // sees nothing of it): only a laser meeting it below that would have seen it.
+  const double top = a == ctx.length_axis ? std::min(ctx.end_height, ctx.vehicle_height) : ctx.vehicle_height;
+  return lidar.sees_surface(range, config.lowest_body_m, top);
 }
 
 // Beyond an extreme on the side facing away from the LiDAR the body hides what lies behind it, but not

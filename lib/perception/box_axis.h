@@ -62,6 +62,7 @@ struct AxisContext {
   Eigen::Vector2d dims = Eigen::Vector2d::Zero();    // the known size along axis 0 and axis 1
   int length_axis = 0;                               // which of them is the vehicle's length
   double vehicle_height = 1.7;
+  double end_height = 1.0;    // up to which the body surely reaches at its front and back (the bonnet)
   double noise_sigma = 0.03;  // the points' noise across a face
   double yaw_sigma = 0.0;     // how uncertain the frame's direction is (rad)
 };

@@ -96,6 +96,7 @@ Placement place_box(const View& view, const Frame& frame, const std::vector<BoxP
   ctx.dims = dims;
   ctx.length_axis = length_axis;
   ctx.vehicle_height = view.vehicle_height;
+  ctx.end_height = view.end_height;
   ctx.noise_sigma = view.noise_sigma;
   ctx.yaw_sigma = yaw_sigma;
   Placement out;
