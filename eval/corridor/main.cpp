@@ -116,6 +116,7 @@ int run_placement(const eval::CorridorExperimentConfig& config, const std::files
                config.scenario.source.c_str());
   const auto results = eval::run_placement_study(config.scenario, study);
   std::ofstream(out / "placement.csv") << eval::placement_csv(results);
+  std::ofstream(out / "placement_samples.csv") << eval::placement_samples_csv(results);
   const std::string table = eval::placement_table(results, study);
   std::ofstream(out / "placement_table.md") << table;
   std::ofstream(out / "summary.json") << eval::placement_json(results, study, config.scenario.source);

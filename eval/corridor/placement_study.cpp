@@ -292,6 +292,20 @@ std::string placement_csv(const std::vector<PlacementResult>& results) {
   return out.str();
 }
 
+std::string placement_samples_csv(const std::vector<PlacementResult>& results) {
+  std::ostringstream out;
+  out << "model,lateral,height_m,vehicle_id,along_road_m,lane_y_m,points,occluded,status,error_m,nees\n";
+  for (const PlacementResult& r : results) {
+    for (const PlacementSample& s : r.samples) {
+      out << r.model << ',' << r.lateral << ',' << r.height_m << ',' << s.vehicle_id << ','
+          << fmt(s.along_road_m, 2) << ',' << fmt(s.lane_y_m, 2) << ',' << s.points << ','
+          << (s.occluded ? 1 : 0) << ',' << s.status << ',' << (s.fixed ? fmt(s.error_m, 4) : "") << ','
+          << (s.fixed ? fmt(s.nees, 2) : "") << '\n';
+    }
+  }
+  return out.str();
+}
+
 std::string placement_table(const std::vector<PlacementResult>& results, const PlacementStudyConfig& config) {
   std::ostringstream out;
   out << "| LiDAR | lateral | height | coverage (m of " << fmt(2 * config.coverage_radius_m, 0)

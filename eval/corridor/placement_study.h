@@ -67,8 +67,10 @@ struct PlacementResult {
 std::vector<PlacementResult> run_placement_study(const sim::Scenario& scenario,
                                                  const PlacementStudyConfig& config);
 
-// Every placement as a CSV row, the table (Markdown) and summary.json.
+// Every placement as a CSV row, every vehicle-rotation of every placement as a CSV row, the table
+// (Markdown) and summary.json.
 std::string placement_csv(const std::vector<PlacementResult>& results);
+std::string placement_samples_csv(const std::vector<PlacementResult>& results);
 std::string placement_table(const std::vector<PlacementResult>& results, const PlacementStudyConfig& config);
 std::string placement_json(const std::vector<PlacementResult>& results, const PlacementStudyConfig& config,
                            const std::string& scenario_source);
