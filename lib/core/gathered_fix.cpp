@@ -95,9 +95,11 @@ GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::Vehicl
   // assigned, fixed and refused earlier in the sweep: its place, 3.5 m off, went out as the connected car's
   // (README, "An elevated RSU"); at 4 m, so did the unconnected car queueing ahead of a connected one, in its
   // lane. So neither a part outside its lane nor one after its assigned detection was judged in this
-  // rotation. A vehicle whose clock is 0.8 s behind is predicted 2.4 m ahead, beyond the gate, while
-  // its own cluster still lies in its lane: it is fixed from it.
-  if (held.assigned_size == 0 && (!held.gathered_own || held.after_assigned_release)) {
+  // rotation, nor when packets were lost near it (a loaded rsud at 2 m lost the connected car's own
+  // packets and sent the car queueing ahead of it in its lane, 5.6 m off). A vehicle whose clock is
+  // 0.8 s behind is predicted 2.4 m ahead, beyond the gate, while its own cluster still lies in its
+  // lane: it is fixed from it.
+  if (held.assigned_size == 0 && (!held.gathered_own || held.after_assigned_release || lost_nearby)) {
     out.fragments_unmatched = held.parts;
     out.outcome = GatheredFixOutcome::no_assigned_cluster;
     return out;
