@@ -307,10 +307,10 @@ void RsuCore::watch_mount(std::span<const lidar::LidarPoint> points, bool whole_
   // counted (mount.rotations_gappy). A few lost packets (network loss) leave it checked on what it has.
   const std::uint64_t missing = packets_.order_stats().lost + lidar_stats_.packets_too_late;
   const TimeNs packet_period = packets_.decoder().geometry().packet_period_ns;
+  const double packets_per_rotation = packet_period > 0 ? static_cast<double>(sweep_.rotation_period_ns()) /
+                                                              static_cast<double>(packet_period)
+                                                        : 0.0;
   for (lidar::LidarFrame& rotation : monitor_assembler_.add(monitor_scratch_)) {
-    const double packets_per_rotation = packet_period > 0 ? static_cast<double>(sweep_.rotation_period_ns()) /
-                                                                static_cast<double>(packet_period)
-                                                          : 0.0;
     const double lacked = static_cast<double>(missing - missing_at_last_rotation_);
     missing_at_last_rotation_ = missing;
     if (lacked > config_.mount_monitor.max_missing_fraction * packets_per_rotation) {

@@ -112,14 +112,11 @@ PairCheck check_pair(const perception::RectangleFit& cluster, const VehicleHypot
   Eigen::Matrix2d noise = vehicle.covariance.topLeftCorner<2, 2>();
   noise += config.fit_sigma_floor_m * config.fit_sigma_floor_m * Eigen::Matrix2d::Identity();
   Eigen::Matrix2d s = noise;
+  std::optional<UnseenSpread> spread;
   if (config.inflate_for_unseen_extent) {
-    const UnseenSpread spread = unseen_half_extent(cluster, vehicle, config);
-    const Eigen::Vector2d& half = spread.half;
-    const double c = std::cos(spread.axis_yaw);
-    const double sn = std::sin(spread.axis_yaw);
-    Eigen::Matrix2d axes;
-    axes << c, -sn, sn, c;
-    s += axes * half.cwiseProduct(half).asDiagonal() * axes.transpose();
+    spread = unseen_half_extent(cluster, vehicle, config);
+    const Eigen::Matrix2d axes = Eigen::Rotation2Dd(spread->axis_yaw).toRotationMatrix();
+    s += axes * spread->half.cwiseProduct(spread->half).asDiagonal() * axes.transpose();
   }
   const Eigen::Vector2d d = cluster.center - vehicle.centre;
   const std::optional<double> distance_sq = mahalanobis_sq(d, s);
@@ -134,8 +131,8 @@ PairCheck check_pair(const perception::RectangleFit& cluster, const VehicleHypot
   // car and pulled its fix 2 m (README, "An elevated RSU"). So a cluster must also lie within the
   // gate of the footprint itself: the offset beyond the bound, against the vehicle's and the fit's
   // own noise.
-  if (out.verdict == PairGate::kPass && config.inflate_for_unseen_extent) {
-    const Eigen::Vector2d beyond = offset_beyond_bound(d, unseen_half_extent(cluster, vehicle, config));
+  if (out.verdict == PairGate::kPass && spread) {
+    const Eigen::Vector2d beyond = offset_beyond_bound(d, *spread);
     const std::optional<double> beyond_sq = mahalanobis_sq(beyond, noise);
     if (!beyond_sq || *beyond_sq > config.gate_chi2)
       out.verdict = PairGate::kTooFar;
