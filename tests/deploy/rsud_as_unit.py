@@ -32,6 +32,7 @@ import socket
 import stat
 import subprocess
 import sys
+import tempfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "python"))
 from rsu_processes import Children, free_udp_port, read_text, wait_for  # noqa: E402
@@ -112,18 +113,47 @@ def main():
     if os.geteuid() != 0:
         print("SKIP: not root: making root-only key files and running rsud as another uid need root")
         return 77
+    # The service's uid must reach rsud and its files. A checkout inside a directory closed to other users
+    # (mktemp -d makes 0700) leaves the build tree unreachable: the work folder then goes under the system's
+    # temporary directory, and the programs run as that uid are copied into it.
     work = args.work
+    moved = not reachable_by_others(os.path.dirname(os.path.abspath(work)))
+    if moved:
+        work = tempfile.mkdtemp(prefix="rsud_as_unit.")
+        print("NOTE: %s is not reachable by other users: working in %s" % (args.work, work))
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     os.chmod(work, 0o755)
-    for d in (os.path.dirname(args.rsud), work):  # the service's uid must reach rsud and its files
-        assert os.stat(d).st_mode & 0o005 == 0o005, "%s is not reachable by other users" % d
+    for name in ("rsud", "sandbox_exec"):
+        program = getattr(args, name)
+        if program != "none" and not reachable_by_others(os.path.dirname(os.path.abspath(program))):
+            os.makedirs(os.path.join(work, "bin"), mode=0o755, exist_ok=True)
+            copy = os.path.join(work, "bin", os.path.basename(program))
+            shutil.copy2(program, copy)
+            os.chmod(copy, 0o755)
+            setattr(args, name, copy)
+    assert reachable_by_others(work) and reachable_by_others(os.path.dirname(args.rsud))
     lines = unit_lines(args.unit)
     children = Children()
     try:
-        return run(args, work, lines, children)
+        result = run(args, work, lines, children)
     finally:
         children.kill_all()
+    if moved and result == 0:
+        shutil.rmtree(work, ignore_errors=True)
+    return result
+
+
+def reachable_by_others(directory):
+    """Whether a user outside the owner's and group can enter the directory: every ancestor searchable."""
+    path = os.path.abspath(directory)
+    while True:
+        if os.stat(path).st_mode & 0o001 == 0:
+            return False
+        parent = os.path.dirname(path)
+        if parent == path:
+            return True
+        path = parent
 
 
 def keygen(args, *words):
