@@ -23,10 +23,9 @@ struct ValidSubset {
 ValidSubset valid_subset(std::span<const lidar::LidarPoint> points, std::span<const std::uint32_t> subset,
                          const ClusteringConfig& config) {
   const bool planar = config.distance == ClusterDistance::planar;
-  const float tol = static_cast<float>(config.tolerance_m);
-  const float max_abs = tol / std::sqrt(3.0F) * 0.99F * static_cast<float>((1 << 20) - 4);
+  const float max_abs = clustering_max_abs_coordinate(config);
   ValidSubset out;
-  if (!(tol > 0.0F) || !std::isfinite(tol)) {  // no meaningful tolerance: nothing can be clustered
+  if (!(max_abs > 0.0F)) {  // no meaningful tolerance: nothing can be clustered
     out.invalid = subset.size();
     return out;
   }
@@ -172,6 +171,19 @@ class UnionFind {
 
 }  // namespace
 
+float clustering_max_abs_coordinate(const ClusteringConfig& config) {
+  const float tol = static_cast<float>(config.tolerance_m);
+  if (!(tol > 0.0F) || !std::isfinite(tol))
+    return 0.0F;
+  return tol / std::sqrt(3.0F) * 0.99F * static_cast<float>((1 << 20) - 4);
+}
+
+float clustering_cell_size(const ClusteringConfig& config) {
+  const float tol = static_cast<float>(config.tolerance_m);
+  const bool planar = config.distance == ClusterDistance::planar;
+  return tol / std::sqrt(planar ? 2.0F : 3.0F) * 0.999F;
+}
+
 Clustering cluster_reference(std::span<const lidar::LidarPoint> points, std::span<const std::uint32_t> subset,
                              const ClusteringConfig& config) {
   const ValidSubset valid = valid_subset(points, subset, config);
@@ -212,7 +224,7 @@ Clustering cluster_grid(std::span<const lidar::LidarPoint> points, std::span<con
   // of a cell are within the tolerance of each other, so a cell is connected without distance checks,
   // and two cells need checking only until one pair connects them. Points within the tolerance are then
   // at most 2 cells apart per axis.
-  const float cell = tol / std::sqrt(planar ? 2.0F : 3.0F) * 0.999F;
+  const float cell = clustering_cell_size(config);
   const PointHashGrid grid(valid.xyz, cell, planar ? GridDims::planar : GridDims::spatial);
   const auto pts = grid.points();
   UnionFind sets(pts.size());

@@ -50,4 +50,12 @@ Clustering cluster_reference(std::span<const lidar::LidarPoint> points, std::spa
 Clustering cluster_grid(std::span<const lidar::LidarPoint> points, std::span<const std::uint32_t> subset,
                         const ClusteringConfig& config = {});
 
+// What cluster_grid's grid is built on, shared with the incremental clustering of the sweep
+// (incremental_clustering.h) so that both connect exactly the same points:
+// the largest |coordinate| clustered (points beyond are invalid), and the grid's cell size (diagonal
+// just under the tolerance: a cell's points are connected by construction; points within the tolerance
+// are at most 2 cells apart per axis). 0 for a tolerance that is not finite and positive.
+float clustering_max_abs_coordinate(const ClusteringConfig& config);
+float clustering_cell_size(const ClusteringConfig& config);
+
 }  // namespace rsu::perception

@@ -16,9 +16,9 @@ void PerceptionPipeline::add_background_frame(std::span<const lidar::LidarPoint>
 }
 
 // The paper's per-frame steps with rsud's parts, each one call: foreground, clusters, a rectangle
-// fitted to each. A whole frame clusters with cluster_grid directly: what the SweepClusterer runs on
-// the points it releases, and released whole it releases exactly these clusters (test_pipeline checks
-// it), without its per-point sweep bookkeeping, which a whole frame does not need.
+// fitted to each. A whole frame clusters with cluster_grid directly: the SweepClusterer grows the same
+// components point by point (incremental_clustering.h), and released whole it releases exactly these
+// clusters (test_pipeline checks it), with per-point sweep bookkeeping a whole frame does not need.
 PerceptionResult PerceptionPipeline::process(std::span<const lidar::LidarPoint> points) const {
   const ForegroundSelection foreground = background_.select_foreground(points);
   const Clustering clusters = cluster_grid(points, foreground.indices, config_.clustering);

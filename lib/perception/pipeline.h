@@ -2,7 +2,7 @@
 // The RSU's perception of one whole frame, as the paper runs it (Sec. 3-4): remove the static
 // background, cluster what is left, fit a rectangle to each cluster (L-shape fitting). It is a thin
 // composition of the parts rsud runs batch by batch (rsu::core::RsuCore::process, docs/architecture.md):
-// BackgroundModel, the grid clustering the SweepClusterer runs (a whole frame clustered at once gives
+// BackgroundModel, the grid clustering whose components the SweepClusterer grows (a whole frame gives
 // the clusters rsud's SweepClusterer releases for it, as for a PCD frame), perception::detect and, per
 // matched vehicle, fix_vehicle (vehicle_fix.h). Association with the vehicles that announced their
 // size is tracking's job; the caller calls correct() per matched vehicle.

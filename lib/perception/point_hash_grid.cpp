@@ -14,13 +14,6 @@ namespace {
 constexpr std::int32_t kCoordBias = 1 << 20;  // 21 bits per axis: [-2^20, 2^20)
 constexpr std::uint64_t kAxisMask = (std::uint64_t{1} << 21) - 1;
 
-std::uint64_t pack_key(CellCoord c) {
-  const auto ux = static_cast<std::uint64_t>(c.x + kCoordBias) & kAxisMask;
-  const auto uy = static_cast<std::uint64_t>(c.y + kCoordBias) & kAxisMask;
-  const auto uz = static_cast<std::uint64_t>(c.z + kCoordBias) & kAxisMask;
-  return ux | (uy << 21) | (uz << 42);
-}
-
 float squared_distance(const GridPoint& a, const GridPoint& b, GridDims dims) {
   const float dx = a.x - b.x;
   const float dy = a.y - b.y;
@@ -29,6 +22,13 @@ float squared_distance(const GridPoint& a, const GridPoint& b, GridDims dims) {
 }
 
 }  // namespace
+
+std::uint64_t cell_key(CellCoord c) {
+  const auto ux = static_cast<std::uint64_t>(c.x + kCoordBias) & kAxisMask;
+  const auto uy = static_cast<std::uint64_t>(c.y + kCoordBias) & kAxisMask;
+  const auto uz = static_cast<std::uint64_t>(c.z + kCoordBias) & kAxisMask;
+  return ux | (uy << 21) | (uz << 42);
+}
 
 PointHashGrid::PointHashGrid(std::span<const GridPoint> points, float cell_size, GridDims dims)
     : cell_size_(cell_size > 0.0F && std::isfinite(cell_size) ? cell_size : 0.0F),
@@ -48,7 +48,7 @@ PointHashGrid::PointHashGrid(std::span<const GridPoint> points, float cell_size,
       ++skipped_;
       continue;
     }
-    keyed.emplace_back(pack_key(*cell), static_cast<std::uint32_t>(i));
+    keyed.emplace_back(cell_key(*cell), static_cast<std::uint32_t>(i));
   }
   std::sort(keyed.begin(), keyed.end());
 
@@ -71,7 +71,7 @@ PointHashGrid::PointHashGrid(std::span<const GridPoint> points, float cell_size,
   slot_key_.assign(capacity, 0);
   slot_cell_.assign(capacity, -1);
   for (std::size_t c = 0; c < cells_.size(); ++c) {
-    const std::uint64_t key = pack_key(cells_[c]);
+    const std::uint64_t key = cell_key(cells_[c]);
     std::uint64_t slot = mix64(key) & slot_mask_;
     while (slot_cell_[slot] >= 0) {
       slot = (slot + 1) & slot_mask_;
@@ -113,7 +113,7 @@ std::optional<std::uint32_t> PointHashGrid::find_slot(std::uint64_t key) const {
 }
 
 std::optional<CellRun> PointHashGrid::find(CellCoord c) const {
-  const auto cell = find_slot(pack_key(c));
+  const auto cell = find_slot(cell_key(c));
   if (!cell) {
     return std::nullopt;
   }

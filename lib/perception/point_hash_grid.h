@@ -29,6 +29,9 @@ struct CellCoord {
   std::int32_t z = 0;
 };
 
+// A cell's coordinates packed into one key, 21 bits per axis (the grid's domain, with a margin).
+std::uint64_t cell_key(CellCoord c);
+
 struct CellRun {
   std::uint32_t begin = 0;  // range in points()
   std::uint32_t end = 0;

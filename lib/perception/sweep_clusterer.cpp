@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <stdexcept>
 
 #include "common/angles.h"
@@ -27,7 +26,8 @@ SweepClusterer::SweepClusterer(const SweepConfig& config, const perception::Clus
       min_points_(clustering.min_points),
       max_points_(clustering.max_points),
       lidar_xy_(lidar_xy),
-      laser_offset_rad_(laser_azimuth_offsets_rad.begin(), laser_azimuth_offsets_rad.end()) {
+      laser_offset_rad_(laser_azimuth_offsets_rad.begin(), laser_azimuth_offsets_rad.end()),
+      clusters_(clustering) {
   if (laser_offset_rad_.empty() || !std::all_of(laser_offset_rad_.begin(), laser_offset_rad_.end(),
                                                 [](double o) { return std::isfinite(o); })) {
     throw std::invalid_argument("SweepClusterer: the laser azimuth offsets must be finite, one per laser");
@@ -47,7 +47,8 @@ SweepClusterer::SweepClusterer(const SweepConfig& config, const perception::Clus
       clustering_(clustering),
       min_points_(clustering.min_points),
       max_points_(clustering.max_points),
-      lidar_xy_(lidar_xy) {
+      lidar_xy_(lidar_xy),
+      clusters_(clustering) {
   if (!std::isfinite(azimuth_spread_rad) || azimuth_spread_rad < 0.0 || azimuth_spread_rad > kPi / 2.0) {
     throw std::invalid_argument("SweepClusterer: azimuth spread must be finite, in [0, 90 deg]");
   }
@@ -63,8 +64,6 @@ void SweepClusterer::init(double rotation_hz) {
       !(config_.max_gap_rotations > 0.0) || !lidar_xy_.allFinite()) {
     throw std::invalid_argument("SweepClusterer: margin, gap and LiDAR position must be finite, >= 0");
   }
-  clustering_.min_points = 1;  // every component is returned so that noise can be released (and dropped)
-  clustering_.max_points = std::numeric_limits<std::size_t>::max();
   radians_per_ns_ = kTwoPi * rotation_hz * 1e-9;
   max_gap_ns_ = static_cast<TimeNs>(config_.max_gap_rotations / rotation_hz * 1e9);
   lag_rad_ += deg_to_rad(config_.release_margin_deg);
@@ -79,10 +78,8 @@ void SweepClusterer::set_rotation_hz(double rotation_hz) {
 }
 
 void SweepClusterer::restart() {
-  stats_.points_dropped_restart += points_.size();
-  points_.clear();
-  azimuth_.clear();
-  range_.clear();
+  stats_.points_dropped_restart += clusters_.size();
+  clusters_.take_all();
   running_ = false;
   ++stats_.restarts;
 }
@@ -124,50 +121,38 @@ void SweepClusterer::add(const lidar::LidarPoint& p, bool foreground) {
     return;
   }
   ++stats_.foreground_points;
-  if (points_.size() >= config_.max_pending_points) {
-    // Drop the oldest (the front is roughly the smallest azimuth). Rare: only a foreground flood.
-    const std::size_t n = std::max<std::size_t>(1, points_.size() / 8);
-    points_.erase(points_.begin(), points_.begin() + static_cast<std::ptrdiff_t>(n));
-    azimuth_.erase(azimuth_.begin(), azimuth_.begin() + static_cast<std::ptrdiff_t>(n));
-    range_.erase(range_.begin(), range_.begin() + static_cast<std::ptrdiff_t>(n));
+  if (!clusters_.accepts(p)) {
+    ++stats_.invalid_points;
+    return;
+  }
+  if (clusters_.size() >= config_.max_pending_points) {
+    // Drop the oldest (the first arrived: roughly the smallest azimuth). Rare: only a foreground
+    // flood. What remains is clustered again, as dropping part of a component may split it.
+    const std::size_t n = std::max<std::size_t>(1, clusters_.size() / 8);
+    const std::vector<PendingPoint> pending = clusters_.take_all();
+    for (std::size_t i = n; i < pending.size(); ++i)
+      clusters_.add(pending[i]);
     stats_.points_dropped_overflow += n;
   }
-  points_.push_back(p);
-  azimuth_.push_back(u);
-  range_.push_back(
-      std::hypot(static_cast<double>(p.x) - lidar_xy_.x(), static_cast<double>(p.y) - lidar_xy_.y()));
-}
-
-std::vector<SweepClusterer::ComponentState> SweepClusterer::component_states(const Clustering& components,
-                                                                             double a_future) const {
+  PendingPoint pending{.point = p, .azimuth = u, .seq = next_seq_++};
+  pending.range =
+      std::hypot(static_cast<double>(p.x) - lidar_xy_.x(), static_cast<double>(p.y) - lidar_xy_.y());
+  // The closing rule of the file comment for this point: r sin(a_future - u) > d once a_future is past
+  // u + asin(d / r); never while r <= d.
   const double tolerance = clustering_.tolerance_m;
-  std::vector<ComponentState> state(components.clusters.size());
-  for (std::size_t c = 0; c < components.clusters.size(); ++c) {
-    ComponentState& s = state[c];
-    for (const std::uint32_t i : components.clusters[c]) {
-      s.min_u = std::min(s.min_u, azimuth_[i]);
-      s.max_u = std::max(s.max_u, azimuth_[i]);
-      if (s.closed && a_future != -kInf) {
-        const double behind = a_future - azimuth_[i];
-        const double distance = behind <= 0.0         ? 0.0
-                                : behind >= kPi / 2.0 ? range_[i]
-                                                      : range_[i] * std::sin(behind);
-        s.closed = distance > tolerance;
-      }
-    }
-  }
-  return state;
+  pending.close_at = pending.range > tolerance ? u + std::asin(tolerance / pending.range) : kInf;
+  clusters_.add(pending);
 }
 
-bool SweepClusterer::cut_at_start(const Cluster& members) const {
-  // The mirror of the closing rule (component_states): a point nearer the start line than the
-  // clustering tolerance may have neighbours that went by before the stream began.
-  for (const std::uint32_t i : members) {
-    const double ahead = azimuth_[i] - start_u_;
+bool SweepClusterer::cut_at_start(std::span<const PendingPoint> members) const {
+  // The mirror of the closing rule: a point nearer the start line than the clustering tolerance may
+  // have neighbours that went by before the stream began.
+  for (const PendingPoint& m : members) {
+    const double ahead = m.azimuth - start_u_;
     if (ahead >= kPi / 2.0) {
       continue;
     }
-    if (ahead <= 0.0 || range_[i] * std::sin(ahead) <= clustering_.tolerance_m) {
+    if (ahead <= 0.0 || m.range * std::sin(ahead) <= clustering_.tolerance_m) {
       return true;
     }
   }
@@ -176,11 +161,19 @@ bool SweepClusterer::cut_at_start(const Cluster& members) const {
 
 void SweepClusterer::drop_stale() {
   const double oldest_allowed = sweep_ - kPi;
-  compact_pending([&](std::size_t i) {
-    const bool stale = azimuth_[i] < oldest_allowed;
-    stats_.points_dropped_stale += stale ? 1 : 0;
-    return stale;
-  });
+  const auto components = clusters_.components();
+  if (std::none_of(components.begin(), components.end(),
+                   [&](std::uint32_t c) { return clusters_.summary(c).min_azimuth < oldest_allowed; })) {
+    return;
+  }
+  // Rare (points within the tolerance of the LiDAR itself): dropping part of a component may split
+  // it, so what remains is clustered again.
+  for (const PendingPoint& m : clusters_.take_all()) {
+    if (m.azimuth < oldest_allowed)
+      ++stats_.points_dropped_stale;
+    else
+      clusters_.add(m);
+  }
 }
 
 std::vector<SweptCluster> SweepClusterer::release_closed() {
@@ -196,7 +189,7 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   if (!everything) {
     drop_stale();
   }
-  if (points_.empty()) {
+  if (clusters_.size() == 0) {
     // Nothing pending: bring the unwrapped sweep back near [0, 2 pi) so it never loses precision
     // (the start line, once a whole turn behind, no longer cuts anything).
     const double shift = sweep_ - std::fmod(sweep_, kTwoPi);
@@ -204,37 +197,32 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     sweep_ -= shift;
     return out;
   }
+  // Closed: no later point can join (file comment); at the end of the stream, every component.
   const double a_future = sweep_ - lag_rad_;
-  if (!everything) {
-    // Cheap exit for the common case (a packet that closes nothing): no point is behind a_future.
-    const double min_u = *std::min_element(azimuth_.begin(), azimuth_.end());
-    if (min_u >= a_future) {
-      return out;
-    }
+  std::vector<std::uint32_t> closed;
+  std::vector<std::pair<double, double>> open_spans;
+  for (const std::uint32_t c : clusters_.components()) {
+    const ComponentSummary& s = clusters_.summary(c);
+    if (everything || a_future > s.close_at)
+      closed.push_back(c);
+    else
+      open_spans.emplace_back(s.min_azimuth, s.max_azimuth);
   }
-
-  std::vector<std::uint32_t> all(points_.size());
-  std::iota(all.begin(), all.end(), 0U);
-  const Clustering components = cluster_grid(points_, all, clustering_);
-  const std::vector<ComponentState> state = component_states(components, everything ? -kInf : a_future);
-
-  std::vector<bool> take(points_.size(), false);
-  for (std::size_t c = 0; c < components.clusters.size(); ++c) {
-    if (!state[c].closed) {
-      continue;
-    }
-    bool overlaps_open = false;
-    for (std::size_t o = 0; o < components.clusters.size() && !overlaps_open; ++o) {
-      overlaps_open =
-          !state[o].closed && state[o].min_u <= state[c].max_u && state[o].max_u >= state[c].min_u;
-    }
+  if (closed.empty()) {
+    return out;
+  }
+  std::sort(closed.begin(), closed.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return clusters_.summary(a).first_seq < clusters_.summary(b).first_seq;
+  });
+  for (const std::uint32_t c : closed) {
+    const ComponentSummary& s = clusters_.summary(c);
+    const bool overlaps_open = std::any_of(open_spans.begin(), open_spans.end(), [&](const auto& o) {
+      return o.first <= s.max_azimuth && o.second >= s.min_azimuth;
+    });
     if (overlaps_open) {
       continue;
     }
-    const Cluster& members = components.clusters[c];
-    for (const std::uint32_t i : members) {
-      take[i] = true;
-    }
+    const std::vector<PendingPoint> members = clusters_.take(c);
     if (cut_at_start(members)) {
       ++stats_.clusters_dropped_cut_at_start;
       continue;
@@ -249,20 +237,11 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     }
     SweptCluster cluster;
     cluster.points.reserve(members.size());
-    for (const std::uint32_t i : members) {
-      cluster.points.push_back(points_[i]);
+    for (const PendingPoint& m : members) {
+      cluster.points.push_back(m.point);
     }
     out.push_back(std::move(cluster));
     ++stats_.clusters_released;
-  }
-  // Points cluster_grid refused (none should remain: every pending point is finite) are left pending
-  // and age out as stale.
-  compact_pending([&](std::size_t i) { return static_cast<bool>(take[i]); });
-  if (everything) {
-    stats_.invalid_points += points_.size();
-    points_.clear();
-    azimuth_.clear();
-    range_.clear();
   }
   return out;
 }
