@@ -13,7 +13,7 @@ namespace {
 
 using Column = NdtCsvParser::Column;
 
-constexpr std::array<std::pair<const char*, Column>, 11> kColumnNames = {{
+constexpr std::array<std::pair<const char*, Column>, 12> kColumnNames = {{
     {"time_ns", Column::kTime},
     {"x", Column::kX},
     {"y", Column::kY},
@@ -25,6 +25,7 @@ constexpr std::array<std::pair<const char*, Column>, 11> kColumnNames = {{
     {"iterations", Column::kIterations},
     {"fitness", Column::kFitness},
     {"degeneracy", Column::kDegeneracy},
+    {"weak_axis", Column::kWeakAxis},
 }};
 
 const char* name_of(Column column) {
@@ -93,7 +94,7 @@ void NdtCsvParser::parse_header(const std::vector<std::string_view>& fields, std
     if (!in_place || (i >= 4 && static_cast<int>(known->second) < 4)) {
       throw NdtCsvError(line_number_,
                         "expected a header \"time_ns,x,y,yaw\" followed by any of sxx,syy,syaw (all three), "
-                        "converged, iterations, fitness, degeneracy; got \"" +
+                        "converged, iterations, fitness, degeneracy, weak_axis; got \"" +
                             std::string(line) + "\"");
     }
     if (std::find(columns.begin(), columns.end(), known->second) != columns.end()) {
@@ -161,6 +162,9 @@ void NdtCsvParser::parse_field(Column column, std::string_view field, NdtPoseRow
         throw NdtCsvError(line_number_, "degeneracy must be at least 1, got " + std::string(field));
       }
       row.quality.degeneracy = *value;
+      return;
+    case Column::kWeakAxis:
+      row.quality.weak_axis_rad = *value;
       return;
     default:
       if (!(*value > 0.0)) {

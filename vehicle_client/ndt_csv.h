@@ -5,6 +5,8 @@
 //   converged,iterations,fitness,degeneracy   the match's quality indicator (vehicle/ndt_quality.h),
 //                                each optional: converged 0 or 1, iterations a count, fitness PCL's
 //                                score in m^2, degeneracy a ratio >= 1 ("inf": no curvature at all)
+//   weak_axis                    the direction the match holds the vehicle most weakly (rad, map frame,
+//                                modulo pi), optional: a degenerate pose is then weakened along it only
 // in any order. time_ns: the common clock (ns); x, y: map frame ENU, m; yaw: rad CCW from east. Blank
 // lines and lines starting with '#' are skipped. Every error names the line. Pure parsing: the caller
 // reads the lines.
@@ -62,7 +64,8 @@ class NdtCsvParser {
     kConverged,
     kIterations,
     kFitness,
-    kDegeneracy
+    kDegeneracy,
+    kWeakAxis
   };
 
  private:

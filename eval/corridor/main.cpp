@@ -38,14 +38,15 @@ int run_ndt(const eval::CorridorExperimentConfig& config, const std::filesystem:
   });
   std::fprintf(stderr, "\n");
   std::ofstream csv(out / "ndt.csv");
-  csv << "time_ns,x,y,yaw,sxx,syy,syaw,converged,iterations,fitness,degeneracy,truth_x,truth_y,truth_yaw\n";
+  csv << "time_ns,x,y,yaw,sxx,syy,syaw,converged,iterations,fitness,degeneracy,weak_axis,truth_x,truth_y,"
+         "truth_yaw\n";
   csv.precision(10);
   int converged = 0;
   for (const auto& s : samples) {
     csv << s.time_ns << ',' << s.pose.x << ',' << s.pose.y << ',' << s.pose.yaw << ',' << s.covariance(0, 0)
         << ',' << s.covariance(1, 1) << ',' << s.covariance(2, 2) << ',' << (s.converged ? 1 : 0) << ','
-        << s.iterations << ',' << s.fitness << ',' << s.degeneracy << ',' << s.truth.x << ',' << s.truth.y
-        << ',' << s.truth.yaw << '\n';
+        << s.iterations << ',' << s.fitness << ',' << s.degeneracy << ',' << s.weak_axis_rad << ','
+        << s.truth.x << ',' << s.truth.y << ',' << s.truth.yaw << '\n';
     converged += s.converged ? 1 : 0;
   }
   std::fprintf(stderr, "  %zu poses (%d converged) -> %s\n", samples.size(), converged,

@@ -34,15 +34,28 @@ class NdtWithHessian : public pcl::NormalDistributionsTransform<pcl::PointXYZ, p
 // How much worse the match constrains the vehicle in its weakest horizontal direction than in its
 // strongest: sqrt(lambda_max / lambda_min) of the score's curvature in x, y (the information -H, the
 // inverse of a Laplace covariance). 1: equally well both ways; a street with nothing along it: large.
-double horizontal_degeneracy(const Eigen::Matrix<double, 6, 6>& hessian) {
+// Also the direction of that weakest hold (rad, map frame, modulo pi): the eigenvector of the smallest
+// eigenvalue (SelfAdjointEigenSolver sorts them in increasing order).
+struct HorizontalHold {
+  double degeneracy = std::numeric_limits<double>::infinity();
+  double weak_axis_rad = 0.0;
+};
+
+HorizontalHold horizontal_hold(const Eigen::Matrix<double, 6, 6>& hessian) {
   const Eigen::Matrix2d information = -hessian.topLeftCorner<2, 2>();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(information);
-  const double weakest = eigen.eigenvalues().minCoeff();
-  const double strongest = eigen.eigenvalues().maxCoeff();
-  if (eigen.info() != Eigen::Success || !(weakest > 0.0)) {
-    return std::numeric_limits<double>::infinity();  // no curvature at all along some direction
+  HorizontalHold hold;
+  if (eigen.info() != Eigen::Success) {
+    return hold;
   }
-  return std::sqrt(strongest / weakest);
+  const Eigen::Vector2d weak = eigen.eigenvectors().col(0);
+  hold.weak_axis_rad = std::atan2(weak.y(), weak.x());
+  const double weakest = eigen.eigenvalues()(0);
+  const double strongest = eigen.eigenvalues()(1);
+  if (weakest > 0.0) {
+    hold.degeneracy = std::sqrt(strongest / weakest);
+  }  // else no curvature at all along some direction: infinite
+  return hold;
 }
 
 // Autoware's LAPLACE_APPROXIMATION: the score near its maximum as a Gaussian, whose covariance is the
@@ -173,7 +186,9 @@ NdtResult NdtLocalizer::align(const std::vector<lidar::LidarPoint>& scan, const 
   result.converged = impl_->ndt.hasConverged() && result.iterations < config_.max_iterations;
   result.fitness = impl_->ndt.getFitnessScore();
   const Eigen::Matrix<double, 6, 6> hessian = impl_->ndt.hessian_at(aligned);
-  result.degeneracy = horizontal_degeneracy(hessian);
+  const HorizontalHold hold = horizontal_hold(hessian);
+  result.degeneracy = hold.degeneracy;
+  result.weak_axis_rad = hold.weak_axis_rad;
   result.pose = Pose2{t(0, 3), t(1, 3), std::atan2(t(1, 0), t(0, 0))};
   result.fixed_covariance.diagonal() << config_.output_sigma_xy_m * config_.output_sigma_xy_m,
       config_.output_sigma_xy_m * config_.output_sigma_xy_m,

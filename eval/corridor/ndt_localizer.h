@@ -71,6 +71,9 @@ struct NdtResult {
   // street with nothing along it: large). The fitness cannot see that: sliding along a uniform facade
   // fits it as well.
   double degeneracy = 1.0;
+  // The direction of that weakest hold (map frame, rad, modulo pi): where the match may slide (along the
+  // street). The vehicle weakens a degenerate pose along it only (vehicle/ndt_quality.h).
+  double weak_axis_rad = 0.0;
   std::size_t scan_points = 0;
 };
 

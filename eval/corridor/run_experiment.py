@@ -177,8 +177,8 @@ def shift_ndt_to_host_clock(ndt_path, shifted, epoch):
     first_ndt_ns = None
     with open(ndt_path) as src, open(shifted, "w") as dst:
         header = src.readline().strip().split(",")
-        columns = ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw", "converged", "iterations", "fitness",
-                   "degeneracy")
+        columns = tuple(c for c in ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw", "converged", "iterations",
+                                    "fitness", "degeneracy", "weak_axis") if c in header)
         idx = [header.index(c) for c in columns]
         dst.write(",".join(columns) + "\n")
         for line in src:

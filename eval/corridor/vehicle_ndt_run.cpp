@@ -101,6 +101,7 @@ std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
     s.iterations = r.iterations;
     s.fitness = r.fitness;
     s.degeneracy = r.degeneracy;
+    s.weak_axis_rad = r.weak_axis_rad;
     s.truth = sim::pose_at(vehicle.trajectory, t_ref);
     samples.push_back(s);
     if (progress)

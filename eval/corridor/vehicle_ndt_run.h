@@ -18,9 +18,10 @@ struct NdtSample {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   bool converged = false;
   int iterations = 0;
-  double fitness = 0.0;     // m^2 (NdtResult)
-  double degeneracy = 1.0;  // NdtResult
-  Pose2 truth;              // the true pose at time_ns
+  double fitness = 0.0;        // m^2 (NdtResult)
+  double degeneracy = 1.0;     // NdtResult
+  double weak_axis_rad = 0.0;  // NdtResult
+  Pose2 truth;                 // the true pose at time_ns
 };
 
 // progress(done, total) is called after each frame.

@@ -235,8 +235,8 @@ def rsu_free_run(run, out, ndt_path):
     path = os.path.join(out, "fused_rsu_free.csv")
     with open(ndt_path) as src, open(os.path.join(out, "ndt_rsu_free.csv"), "w") as dst:
         header = src.readline().strip().split(",")
-        columns = ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw", "converged", "iterations", "fitness",
-                   "degeneracy")
+        columns = tuple(c for c in ("time_ns", "x", "y", "yaw", "sxx", "syy", "syaw", "converged", "iterations",
+                                    "fitness", "degeneracy", "weak_axis") if c in header)
         idx = [header.index(c) for c in columns]
         dst.write(",".join(columns) + "\n")
         for line in src:

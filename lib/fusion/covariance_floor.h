@@ -32,4 +32,15 @@ inline bool raise_to_floor(Eigen::Matrix3d& c, double sigma_xy, double sigma_yaw
   return raised;
 }
 
+// Weakens a pose covariance (x, y, yaw) along one horizontal direction only (`axis_rad`, modulo pi): its
+// variance there times `variance_scale` (>= 1), and at least sigma_along^2; across it and in yaw it stays
+// as it was. For a match that slides along a street but holds across it (vehicle/vehicle_core.cpp).
+inline void weaken_along_axis(Eigen::Matrix3d& c, double axis_rad, double variance_scale,
+                              double sigma_along) {
+  const Eigen::Vector2d u(std::cos(axis_rad), std::sin(axis_rad));
+  const double along = u.dot(c.topLeftCorner<2, 2>() * u);
+  const double wanted = std::max(std::max(variance_scale, 1.0) * along, sigma_along * sigma_along);
+  c.topLeftCorner<2, 2>() += (wanted - along) * u * u.transpose();
+}
+
 }  // namespace rsu::fusion

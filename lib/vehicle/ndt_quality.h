@@ -22,6 +22,11 @@ struct NdtQuality {
   // strongest. The fitness cannot see a street with nothing along it (sliding along a uniform facade fits
   // as well); this can.
   std::optional<double> degeneracy;
+  // The direction of that weakest hold (rad, map frame, modulo pi): the eigenvector of the curvature's
+  // smallest eigenvalue, along the street where nothing holds the match. A pose degraded by its
+  // degeneracy alone is weakened along it only: across it and in yaw the match still holds (the
+  // degraded corridor's NDT: 0.157 m MAE along the road, 0.026 m across).
+  std::optional<double> weak_axis_rad;
 };
 
 struct NdtQualityLimits {
@@ -39,15 +44,22 @@ struct NdtQualityLimits {
 
 enum class NdtHealth { kUnknown, kHealthy, kDegraded };
 
+// The match itself failed: stopped at the iteration cap, or the scan does not fit the map there.
+inline bool match_failed(const NdtQuality& q, const NdtQualityLimits& limits) {
+  return (q.converged && !*q.converged) || (q.iterations && *q.iterations >= limits.max_iterations) ||
+         (q.fitness_m2 && !(*q.fitness_m2 <= limits.max_fitness_m2));
+}
+
+// The match holds the vehicle too weakly in some direction.
+inline bool too_degenerate(const NdtQuality& q, const NdtQualityLimits& limits) {
+  return q.degeneracy && !(*q.degeneracy <= limits.max_degeneracy);
+}
+
 inline NdtHealth assess(const NdtQuality& q, const NdtQualityLimits& limits) {
   if (!q.converged && !q.iterations && !q.fitness_m2 && !q.degeneracy) {
     return NdtHealth::kUnknown;
   }
-  const bool degraded = (q.converged && !*q.converged) ||
-                        (q.iterations && *q.iterations >= limits.max_iterations) ||
-                        (q.fitness_m2 && !(*q.fitness_m2 <= limits.max_fitness_m2)) ||
-                        (q.degeneracy && !(*q.degeneracy <= limits.max_degeneracy));
-  return degraded ? NdtHealth::kDegraded : NdtHealth::kHealthy;
+  return match_failed(q, limits) || too_degenerate(q, limits) ? NdtHealth::kDegraded : NdtHealth::kHealthy;
 }
 
 }  // namespace rsu::vehicle

@@ -28,7 +28,17 @@ NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
   const bool flagged = assess(ndt.quality, config_.ndt_quality) == NdtHealth::kDegraded;
   const bool degraded = flagged || (last_degraded_ndt_ && ndt.time >= *last_degraded_ndt_ &&
                                     ndt.time - *last_degraded_ndt_ <= config_.degraded_ndt_persistence);
-  if (degraded) {
+  if (flagged) {
+    last_flag_failed_match_ = match_failed(ndt.quality, config_.ndt_quality);
+  }
+  if (degraded && config_.weaken_along_weak_axis && ndt.quality.weak_axis_rad && !last_flag_failed_match_ &&
+      !match_failed(ndt.quality, config_.ndt_quality)) {
+    // The match slides along the street but holds across it and in yaw: weakened along it only.
+    fusion::weaken_along_axis(weakened, *ndt.quality.weak_axis_rad, config_.degraded_ndt_variance_scale,
+                              config_.degraded_ndt_min_sigma_m);
+    ++stats_.ndt_degraded;
+    ++stats_.ndt_weakened_along_axis;
+  } else if (degraded) {
     // The match says it failed: its pose is no 3 cm (or 0.15 m) estimate.
     weakened *= config_.degraded_ndt_variance_scale;
     fusion::raise_to_floor(weakened, config_.degraded_ndt_min_sigma_m, 0.0);

@@ -52,6 +52,13 @@ struct VehicleCoreConfig {
   // the VLP-16's fused MAE there 0.102 m, 0.45 m: 0.054 m; replayed, README).
   double degraded_ndt_variance_scale = 4.0;
   double degraded_ndt_min_sigma_m = 0.45;
+  // A pose degraded by its degeneracy alone (the match converged and fits the map, but holds the vehicle
+  // weakly along one direction: NdtQuality::weak_axis_rad) is weakened so along that direction only;
+  // across it and in yaw it keeps its covariance. Weakened in every direction, the fused filter threw
+  // away what NDT knows across the road and in yaw, and between a sweep and its late correction carried
+  // the pose on its own motion model alone: through the degraded corridor's lane change it lagged
+  // 5-8 cm across the road with corrections 200 ms late (replayed, README "The V2I link impaired").
+  bool weaken_along_weak_axis = true;
   // The own estimate (the integrity reference) always takes a degraded pose so. The fused filter only
   // while an RSU is admitted and was heard within ndt_degraded_hold: with no outside source to take over,
   // the NDT pose is the best the vehicle has, and weakening it only makes the filter lag NDT's own wander
@@ -101,10 +108,11 @@ struct CorrectionStep {
 
 struct VehicleCoreStats {
   std::uint64_t ndt_poses = 0;
-  std::uint64_t ndt_degraded = 0;           // poses whose quality said the match failed (or just had)
-  std::uint64_t ndt_weakened_in_fused = 0;  // ... of them weakened in the fused filter (an RSU admitted)
-  std::uint64_t fixes_own_failed = 0;       // fixes checked while the own estimate counted as failed
-  std::uint64_t fixes_without_own = 0;      // fixes before the own estimate existed
+  std::uint64_t ndt_degraded = 0;             // poses whose quality said the match failed (or just had)
+  std::uint64_t ndt_weakened_in_fused = 0;    // ... of them weakened in the fused filter (an RSU admitted)
+  std::uint64_t ndt_weakened_along_axis = 0;  // ... of them weakened along their weak axis only
+  std::uint64_t fixes_own_failed = 0;         // fixes checked while the own estimate counted as failed
+  std::uint64_t fixes_without_own = 0;        // fixes before the own estimate existed
   std::uint64_t fixes_fused_after_probation = 0;  // held back on probation, fused once admitted
   std::uint64_t restarts_after_exclusion = 0;     // fused filter restarted from the own estimate
   std::uint64_t fixes_covariance_raised = 0;      // fixes claiming less than min_rsu_sigma_*
@@ -147,6 +155,7 @@ class VehicleCore {
   IntegrityMonitor monitor_;
   VehicleCoreStats stats_;
   std::optional<TimeNs> last_degraded_ndt_;
+  bool last_flag_failed_match_ = false;  // the last flagged pose's match failed (not only degenerate)
   bool previous_degraded_ = false;
   std::optional<TimeNs> peers_against_own_until_;
   std::map<std::uint64_t, std::deque<v2i::Correction>> held_back_;  // per RSU on probation

@@ -5,9 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <deque>
 
+#include "common/angles.h"
 #include "common/random.h"
+#include "fusion/covariance_floor.h"
 
 namespace rsu::vehicle {
 namespace {
@@ -122,6 +126,142 @@ TEST(VehicleCore, BeforeAnyNdtPoseNothingIsFusedAndTheNdtPoseItselfIsAnnounced) 
   ASSERT_TRUE(step.fused.has_value());
   EXPECT_DOUBLE_EQ(step.announce.pose.x, ndt.pose.x);  // the filter starts at the first pose
   EXPECT_DOUBLE_EQ(step.announce.pose.y, ndt.pose.y);
+}
+
+// The degraded corridor's NDT in miniature: its match converges and fits the map but slides along the
+// street (degeneracy 8.3 along x, the weak axis), 0.4 m off along the road and 2 cm across, while it
+// claims Autoware's fixed 0.15 m; the vehicle changes lanes (3.5 m over 3 s at 11 m/s). The RSU's fixes
+// (3 cm) arrive `delay` late. Scored at the NDT poses' times from 3 s on, against the test's truth.
+struct LaneChange {
+  static constexpr double kSpeedMps = 11.0;
+  static Eigen::Vector3d truth(TimeNs t) {  // x, y, heading
+    const double s = to_seconds(t - kStart);
+    const double phase = std::clamp((s - 4.0) / 3.0, 0.0, 1.0);
+    const double y = -1.75 + 1.75 * (1.0 - std::cos(kPi * phase));
+    const double dy = (s > 4.0 && s < 7.0) ? 1.75 * kPi / 3.0 * std::sin(kPi * phase) : 0.0;
+    return {kSpeedMps * s, y, std::atan2(dy, kSpeedMps)};
+  }
+};
+
+struct LateDriveResult {
+  double ndt_mae = 0.0, fused_mae = 0.0, ndt_max = 0.0, fused_max = 0.0;
+  VehicleCoreStats stats;
+};
+
+LateDriveResult drive_with_late_fixes(const VehicleCoreConfig& config, TimeNs delay) {
+  VehicleCore core(config);
+  std::deque<std::pair<TimeNs, v2i::Correction>> in_flight;  // arrival time, fix
+  LateDriveResult r;
+  int scored = 0;
+  for (int k = 0; k < 120; ++k) {
+    const TimeNs t = kStart + k * kStep;
+    while (!in_flight.empty() && in_flight.front().first <= t) {
+      core.on_correction(in_flight.front().second);
+      in_flight.pop_front();
+    }
+    const Eigen::Vector3d truth = LaneChange::truth(t);
+    const NormalPair n = standard_normal_pair(13, 0, static_cast<std::uint64_t>(k));
+    const NormalPair m = standard_normal_pair(13, 1, static_cast<std::uint64_t>(k));
+    NdtPose ndt{t,
+                {truth.x() + 0.4 + 0.05 * n.a, truth.y() + 0.02 * n.b, truth.z() + 0.005 * m.a},
+                Eigen::Vector3d(0.15 * 0.15, 0.15 * 0.15, 0.025 * 0.025).asDiagonal(),
+                {}};
+    ndt.quality = {true, 4, 0.04, 8.3, 0.0};
+    const NdtStep step = core.on_ndt(ndt);
+    if (step.fused && t >= kStart + 3 * kNsPerSecond) {
+      const Eigen::Vector2d p = truth.head<2>();
+      const double e_ndt = (Eigen::Vector2d(ndt.pose.x, ndt.pose.y) - p).norm();
+      const double e_fused =
+          (Eigen::Vector2d(step.fused->state(fusion::kX), step.fused->state(fusion::kY)) - p).norm();
+      r.ndt_mae += e_ndt;
+      r.fused_mae += e_fused;
+      r.ndt_max = std::max(r.ndt_max, e_ndt);
+      r.fused_max = std::max(r.fused_max, e_fused);
+      ++scored;
+    }
+    const TimeNs sweep = t + 40 * kNsPerMs;
+    const Eigen::Vector3d at_sweep = LaneChange::truth(sweep);
+    v2i::Correction fix;
+    fix.rsu_id = 1;
+    fix.vehicle_id = 1;
+    fix.sequence = static_cast<std::uint32_t>(k);
+    fix.sweep_time = sweep;
+    fix.pose = {at_sweep.x() + 0.03 * m.b, at_sweep.y() + 0.03 * n.b, at_sweep.z()};
+    fix.pose_covariance = Eigen::Vector3d(0.03 * 0.03, 0.03 * 0.03, 0.01 * 0.01).asDiagonal();
+    in_flight.emplace_back(sweep + 4 * kNsPerMs + delay, fix);
+  }
+  r.ndt_mae /= std::max(scored, 1);
+  r.fused_mae /= std::max(scored, 1);
+  r.stats = core.stats();
+  return r;
+}
+
+TEST(VehicleCore, ADegenerateNdtIsWeakenedAlongItsWeakAxisOnlySoLateCorrectionsCostLittle) {
+  VehicleCoreConfig along;
+  VehicleCoreConfig everywhere;
+  everywhere.weaken_along_weak_axis = false;
+  const TimeNs late = 200 * kNsPerMs;
+  const LateDriveResult on_time = drive_with_late_fixes(along, 0);
+  const LateDriveResult delayed = drive_with_late_fixes(along, late);
+  const LateDriveResult delayed_everywhere = drive_with_late_fixes(everywhere, late);
+  std::printf(
+      "NDT MAE %.3f m; fused, weak axis only: %.3f m on time, %.3f m 200 ms late (%.2fx); weakened "
+      "everywhere: %.3f m 200 ms late\n",
+      on_time.ndt_mae, on_time.fused_mae, delayed.fused_mae, delayed.fused_mae / on_time.fused_mae,
+      delayed_everywhere.fused_mae);
+  EXPECT_GT(delayed.stats.ndt_weakened_along_axis, 100U);
+  EXPECT_EQ(delayed_everywhere.stats.ndt_weakened_along_axis, 0U);
+  // The RSU takes over along the road: at least 80 % below NDT, late or not.
+  EXPECT_LT(on_time.fused_mae, 0.2 * on_time.ndt_mae);
+  EXPECT_LT(delayed.fused_mae, 0.2 * delayed.ndt_mae);
+  // What NDT knows across the road carries the pose through the lane change until the late fix comes.
+  EXPECT_LT(delayed.fused_mae, 1.5 * on_time.fused_mae);
+  EXPECT_LT(delayed.fused_mae, delayed_everywhere.fused_mae);
+  // A late correction never makes the pose worse than NDT alone.
+  EXPECT_LT(delayed.fused_max, delayed.ndt_max);
+}
+
+// The weakening itself: along the axis the variance is scaled and floored, across it and in yaw it stays.
+TEST(VehicleCore, WeakeningAlongAnAxisLeavesTheOtherDirectionAndYaw) {
+  Eigen::Matrix3d c;
+  c << 0.0225, 0.004, 0.001, 0.004, 0.0100, 0.0005, 0.001, 0.0005, 0.000625;
+  const double axis = deg_to_rad(30.0);
+  const Eigen::Vector2d u(std::cos(axis), std::sin(axis));
+  const Eigen::Vector2d v(-u.y(), u.x());
+  for (const double scale : {4.0, 1000.0}) {
+    Eigen::Matrix3d w = c;
+    fusion::weaken_along_axis(w, axis + kPi, scale, 0.45);  // modulo pi
+    const double along = u.dot(c.topLeftCorner<2, 2>() * u);
+    EXPECT_NEAR(u.dot(w.topLeftCorner<2, 2>() * u), std::max(scale * along, 0.45 * 0.45), 1e-12);
+    EXPECT_NEAR(v.dot(w.topLeftCorner<2, 2>() * v), v.dot(c.topLeftCorner<2, 2>() * v), 1e-12);
+    EXPECT_NEAR(u.dot(w.topLeftCorner<2, 2>() * v), u.dot(c.topLeftCorner<2, 2>() * v), 1e-12);
+    EXPECT_EQ(w.col(2), c.col(2));
+  }
+}
+
+// A pose whose match failed (not converged) is weakened in every direction even when it names a weak
+// axis: its pose across the axis is no better than along it.
+TEST(VehicleCore, AFailedMatchIsWeakenedInEveryDirection) {
+  for (const bool converged : {true, false}) {
+    VehicleCore core;
+    for (int k = 0; k < 5; ++k) {
+      NdtPose ndt = ndt_at(k);
+      ndt.covariance = Eigen::Vector3d(0.15 * 0.15, 0.15 * 0.15, 0.025 * 0.025).asDiagonal();
+      ndt.quality = {converged, converged ? 4 : 30, 0.04, 8.3, 0.0};
+      core.on_ndt(ndt);
+    }
+    const auto own = core.own_pose_at(kStart + 4 * kStep);
+    ASSERT_TRUE(own.has_value());
+    // Across the weak axis (y): NDT's own 0.15 m when only degenerate; at least 0.45 m when failed.
+    if (converged) {
+      EXPECT_LT(std::sqrt(own->covariance(fusion::kY, fusion::kY)), 0.15);
+      EXPECT_EQ(core.stats().ndt_weakened_along_axis, 5U);
+    } else {
+      EXPECT_GT(std::sqrt(own->covariance(fusion::kY, fusion::kY)), 0.2);
+      EXPECT_EQ(core.stats().ndt_weakened_along_axis, 0U);
+    }
+    EXPECT_GT(std::sqrt(own->covariance(fusion::kX, fusion::kX)), 0.2);
+  }
 }
 
 }  // namespace

@@ -95,6 +95,17 @@ TEST(NdtCsv, QualityColumnsAreReadByName) {
   EXPECT_EQ(vehicle::assess(flat->quality, {}), vehicle::NdtHealth::kDegraded);
   EXPECT_EQ(vehicle::assess(degenerate.parse_line("7,1,2,3,0.04,5.2")->quality, {}),
             vehicle::NdtHealth::kHealthy);
+  EXPECT_FALSE(sliding->quality.weak_axis_rad);
+
+  NdtCsvParser with_axis;  // the direction the match slides along (rad, map frame)
+  with_axis.parse_line("time_ns,x,y,yaw,weak_axis,degeneracy,converged");
+  const auto along_road = with_axis.parse_line("5,1,2,3,-3.1405,8.3,1");
+  ASSERT_TRUE(along_road && along_road->quality.weak_axis_rad);
+  EXPECT_DOUBLE_EQ(*along_road->quality.weak_axis_rad, -3.1405);
+  EXPECT_TRUE(vehicle::too_degenerate(along_road->quality, {}));
+  EXPECT_FALSE(vehicle::match_failed(along_road->quality, {}));
+  EXPECT_THROW(with_axis.parse_line("6,1,2,3,inf,8.3,1"), NdtCsvError);
+  EXPECT_THROW(with_axis.parse_line("6,1,2,3,nan,8.3,1"), NdtCsvError);
 
   NdtCsvParser only_converged;
   only_converged.parse_line("time_ns,x,y,yaw,converged");

@@ -113,7 +113,8 @@ void write_stats_file(const std::string& path, const VehicleClientStats& c,
       << "\nfuser.rsu_rejected_yaw_branch " << f.rsu_rejected_yaw_branch << "\nfuser.rsu_reanchors "
       << f.rsu_reanchors << "\nfuser.ndt_restarts " << f.ndt_restarts << "\n";
   out << "ndt.poses " << core.stats().ndt_poses << "\nndt.degraded " << core.stats().ndt_degraded
-      << "\nndt.weakened_in_fused " << core.stats().ndt_weakened_in_fused << "\nintegrity.fixes_own_failed "
+      << "\nndt.weakened_in_fused " << core.stats().ndt_weakened_in_fused << "\nndt.weakened_along_axis "
+      << core.stats().ndt_weakened_along_axis << "\nintegrity.fixes_own_failed "
       << core.stats().fixes_own_failed << "\n";
   const vehicle::IntegrityTotals& t = core.integrity().totals();
   for (std::size_t i = 0; i < static_cast<std::size_t>(vehicle::FixVerdict::kCount); ++i) {
