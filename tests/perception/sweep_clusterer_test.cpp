@@ -731,12 +731,12 @@ TEST(SweepClusterer, ExactAgainstOfflineClusteringVlp32c) {
     check_exact_against_offline(lidar::make_vlp32c(), layout);
 }
 
-// A dense sensor's near cars (issue 16): 128 rings x 1808 columns, cars at 3.6-10 m, tens of thousands
-// of points each, joined point by point (incremental_clustering.h) while the sweep runs.
+// A dense sensor's near cars (issue 16): 128 rings x 1808 columns, cars at 3.6 and 6 m, thousands of
+// points each, joined point by point (incremental_clustering.h) while the sweep runs. (Two cars: the
+// batch reference re-clusters every pending point on each packet, ~5 s under ASan with four.)
 TEST(SweepClusterer, ExactAgainstOfflineClusteringDenseNearCars) {
   // (Each car clear of the frame's start at 60 deg: one seen on both sides of it is two objects.)
-  check_exact_against_offline(lidar::make_generic(128),
-                              {{3.6, 120.0, 0.0}, {6.0, 220.0, 1.0}, {10.0, 290.0, 0.5}, {4.5, 350.0, 1.6}});
+  check_exact_against_offline(lidar::make_generic(128), {{3.6, 120.0, 0.0}, {6.0, 220.0, 1.0}});
 }
 
 }  // namespace
