@@ -41,19 +41,26 @@ FaceEnvelope outer_envelope(std::span<const double> s, double noise_sigma, doubl
   double f = sorted[static_cast<std::size_t>(0.9 * static_cast<double>(sorted.size() - 1))];
   double face_weight = 0.5;
   constexpr double kStray = 0.02;  // share of returns outside the face (spray, a mirror's edge)
-  std::vector<double> r(s.size());
+  // A point's share of the face is face / (face + ...), and face is 0 beyond kTail sigma of f: only the
+  // points within that window of the sorted coordinates add to the sums (a near car on a dense sensor
+  // gives a face thousands of points, most of them inside the body, metres from it).
+  double n_face = 0.0;
   for (int iteration = 0; iteration < 30; ++iteration) {
     double sum_r = 0.0, sum_rs = 0.0;
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      const double face = face_weight * normal_pdf(s[i] - f, sigma);
+    const auto first = std::lower_bound(sorted.begin(), sorted.end(), f - kTail * sigma);
+    const auto last = std::upper_bound(first, sorted.end(), f + kTail * sigma);
+    for (auto it = first; it != last; ++it) {
+      const double si = *it;
+      const double face = face_weight * normal_pdf(si - f, sigma);
       // Behind the face: uniform over [f - band, f], blurred by the same noise.
       const double inside = (1.0 - face_weight - kStray) / band *
-                            (normal_cdf((f - s[i]) / sigma) - normal_cdf((f - band - s[i]) / sigma));
+                            (normal_cdf((f - si) / sigma) - normal_cdf((f - band - si) / sigma));
       const double stray = kStray / (2.0 * band);
-      r[i] = face / (face + inside + stray);
-      sum_r += r[i];
-      sum_rs += r[i] * s[i];
+      const double r = face / (face + inside + stray);
+      sum_r += r;
+      sum_rs += r * si;
     }
+    n_face = sum_r;
     if (!(sum_r > 1e-9))
       break;
     const double next = sum_rs / sum_r;
@@ -63,9 +70,6 @@ FaceEnvelope outer_envelope(std::span<const double> s, double noise_sigma, doubl
     if (converged)
       break;
   }
-  double n_face = 0.0;
-  for (const double w : r)
-    n_face += w;
   out.position = f;
   out.face_points = n_face;
   out.sigma = sigma / std::sqrt(std::max(n_face, 1.0));

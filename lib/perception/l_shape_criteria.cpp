@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "perception/l_shape_criteria.h"
 
+#include "perception/convex_hull.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace rsu::perception {
 namespace {
@@ -13,6 +16,15 @@ namespace {
 // the edge on the side of the points' mean, one comparison instead of a pass over the points.
 bool nearer_min_edge(float sum, Eigen::Index n, float c_min, float c_max) {
   return 2.0F * sum <= static_cast<float>(n) * (c_min + c_max);
+}
+
+// One direction's distance to its chosen edge as a linear function of the point, d = a x + b y + o, for
+// the projection c = px x + py y: c - c_min, or c_max - c (the same float operations as computing c first).
+struct EdgeDistance {
+  float a, b, o;
+};
+EdgeDistance edge_distance(float px, float py, float sum, Eigen::Index n, float c_min, float c_max) {
+  return nearer_min_edge(sum, n, c_min, c_max) ? EdgeDistance{px, py, -c_min} : EdgeDistance{-px, -py, c_max};
 }
 
 // Distances of each point to the chosen edge of one direction.
@@ -40,8 +52,23 @@ CriterionEvaluator::CriterionEvaluator(std::span<const double> x, std::span<cons
     x_[i] = static_cast<float>(x[static_cast<std::size_t>(i)]);
     y_[i] = static_cast<float>(y[static_cast<std::size_t>(i)]);
   }
-  c1_.resize(n);
-  c2_.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    x_sum_ += static_cast<double>(x_[i]);
+    y_sum_ += static_cast<double>(y_[i]);
+  }
+  const std::vector<std::size_t> hull = convex_hull_vertices({x_.data(), static_cast<std::size_t>(n)},
+                                                             {y_.data(), static_cast<std::size_t>(n)});
+  hull_x_.resize(static_cast<Eigen::Index>(hull.size()));
+  hull_y_.resize(static_cast<Eigen::Index>(hull.size()));
+  for (std::size_t k = 0; k < hull.size(); ++k) {
+    hull_x_[static_cast<Eigen::Index>(k)] = x_[static_cast<Eigen::Index>(hull[k])];
+    hull_y_[static_cast<Eigen::Index>(k)] = y_[static_cast<Eigen::Index>(hull[k])];
+  }
+}
+
+void CriterionEvaluator::project(float c, float s) {
+  c1_ = x_ * c + y_ * s;
+  c2_ = y_ * c - x_ * s;
 }
 
 double CriterionEvaluator::operator()(double theta) {
@@ -51,14 +78,14 @@ double CriterionEvaluator::operator()(double theta) {
   }
   const auto c = static_cast<float>(std::cos(theta));
   const auto s = static_cast<float>(std::sin(theta));
-  c1_ = x_ * c + y_ * s;
-  c2_ = y_ * c - x_ * s;
-  c1_min_ = c1_.minCoeff();
-  c1_max_ = c1_.maxCoeff();
-  c2_min_ = c2_.minCoeff();
-  c2_max_ = c2_.maxCoeff();
-  c1_sum_ = c1_.sum();
-  c2_sum_ = c2_.sum();
+  cos_ = c;
+  sin_ = s;
+  c1_min_ = (hull_x_ * c + hull_y_ * s).minCoeff();
+  c1_max_ = (hull_x_ * c + hull_y_ * s).maxCoeff();
+  c2_min_ = (hull_y_ * c - hull_x_ * s).minCoeff();
+  c2_max_ = (hull_y_ * c - hull_x_ * s).maxCoeff();
+  c1_sum_ = static_cast<float>(static_cast<double>(c) * x_sum_ + static_cast<double>(s) * y_sum_);
+  c2_sum_ = static_cast<float>(static_cast<double>(c) * y_sum_ - static_cast<double>(s) * x_sum_);
   switch (config_.criterion) {
     case LShapeCriterion::area:
       return area();
@@ -77,13 +104,16 @@ double CriterionEvaluator::area() const {
 }
 
 double CriterionEvaluator::closeness_zhang() const {
-  const Eigen::ArrayXf d1 = edge_distances(c1_, c1_sum_, c1_min_, c1_max_);
-  const Eigen::ArrayXf d2 = edge_distances(c2_, c2_sum_, c2_min_, c2_max_);
+  // c1 = x cos + y sin, c2 = y cos - x sin = x (-sin) + y cos.
+  const EdgeDistance d1 = edge_distance(cos_, sin_, c1_sum_, x_.size(), c1_min_, c1_max_);
+  const EdgeDistance d2 = edge_distance(-sin_, cos_, c2_sum_, x_.size(), c2_min_, c2_max_);
   const auto d0 = static_cast<float>(config_.closeness_d0_m);
-  return static_cast<double>(d1.min(d2).max(d0).inverse().sum());
+  return static_cast<double>(
+      (x_ * d1.a + y_ * d1.b + d1.o).min(x_ * d2.a + y_ * d2.b + d2.o).max(d0).inverse().sum());
 }
 
-double CriterionEvaluator::variance() const {
+double CriterionEvaluator::variance() {
+  project(cos_, sin_);
   const Eigen::ArrayXf d1 = edge_distances(c1_, c1_sum_, c1_min_, c1_max_);
   const Eigen::ArrayXf d2 = edge_distances(c2_, c2_sum_, c2_min_, c2_max_);
   // E1 = {D1(i) : D1(i) < D2(i)}, E2 = {D2(i) : D2(i) < D1(i)}; ties belong to neither.
@@ -98,7 +128,8 @@ double CriterionEvaluator::variance() const {
   return -v1 - v2;
 }
 
-double CriterionEvaluator::closeness_autoware() const {
+double CriterionEvaluator::closeness_autoware() {
+  project(cos_, sin_);
   // Element-wise nearer edge, squared.
   const Eigen::ArrayXf v1 = (c1_max_ - c1_).min(c1_ - c1_min_);
   const Eigen::ArrayXf v2 = (c2_max_ - c2_).min(c2_ - c2_min_);

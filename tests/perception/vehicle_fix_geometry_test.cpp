@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -16,6 +18,8 @@
 #include "common/angles.h"
 #include "common/pose.h"
 #include "lidar/sensor_model.h"
+#include "perception/face_envelope.h"
+#include "perception/l_shape_criteria.h"
 #include "perception/vehicle_fix.h"
 #include "sim/lidar_simulator.h"
 #include "sim/scene.h"
@@ -271,6 +275,166 @@ TEST(VehicleFixGeometry, TruncatedFaceBehindAnOccluder) {
     }
   }
   EXPECT_GE(fixed, cases / 2);
+}
+
+// The L-shape criteria by their definitions (Zhang et al. 2017, Alg. 3-5; Autoware), in double over
+// every point: the reference for the evaluator's one pass over the points with the edges from the hull.
+double reference_criterion(const std::vector<double>& x, const std::vector<double>& y, double theta,
+                           const CriterionConfig& config) {
+  const std::size_t n = x.size();
+  std::vector<double> c1(n), c2(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    c1[i] = x[i] * std::cos(theta) + y[i] * std::sin(theta);
+    c2[i] = -x[i] * std::sin(theta) + y[i] * std::cos(theta);
+  }
+  const auto [min1, max1] = std::minmax_element(c1.begin(), c1.end());
+  const auto [min2, max2] = std::minmax_element(c2.begin(), c2.end());
+  if (config.criterion == LShapeCriterion::area)
+    return -(*max1 - *min1) * (*max2 - *min2);
+  // D: the distances to whichever edge the distance vector is shorter to (squared 2-norms compared).
+  auto distances = [&](const std::vector<double>& c, double lo, double hi) {
+    double to_lo = 0.0, to_hi = 0.0;
+    for (const double v : c) {
+      to_lo += (v - lo) * (v - lo);
+      to_hi += (hi - v) * (hi - v);
+    }
+    std::vector<double> d(c.size());
+    for (std::size_t i = 0; i < c.size(); ++i)
+      d[i] = to_lo <= to_hi ? c[i] - lo : hi - c[i];
+    return d;
+  };
+  double q = 0.0;
+  if (config.criterion == LShapeCriterion::closeness) {
+    const auto d1 = distances(c1, *min1, *max1), d2 = distances(c2, *min2, *max2);
+    for (std::size_t i = 0; i < n; ++i)
+      q += 1.0 / std::max(std::min(d1[i], d2[i]), config.closeness_d0_m);
+  } else if (config.criterion == LShapeCriterion::variance) {
+    const auto d1 = distances(c1, *min1, *max1), d2 = distances(c2, *min2, *max2);
+    std::array<double, 2> sum{}, sum_sq{}, count{};
+    for (std::size_t i = 0; i < n; ++i) {
+      if (d1[i] == d2[i])
+        continue;
+      const std::size_t e = d1[i] < d2[i] ? 0 : 1;
+      const double d = e == 0 ? d1[i] : d2[i];
+      sum[e] += d;
+      sum_sq[e] += d * d;
+      count[e] += 1.0;
+    }
+    for (std::size_t e = 0; e < 2; ++e) {
+      if (count[e] > 0.0)
+        q -= sum_sq[e] / count[e] - (sum[e] / count[e]) * (sum[e] / count[e]);
+    }
+  } else {
+    const double max_sq = config.autoware_max_dist_m * config.autoware_max_dist_m;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v1 = std::min(*max1 - c1[i], c1[i] - *min1), v2 = std::min(*max2 - c2[i], c2[i] - *min2);
+      const double d = std::min(v1 * v1, v2 * v2);
+      if (d <= max_sq)
+        q += 1.0 / std::max(d, config.autoware_min_sq_m2);
+    }
+  }
+  return q;
+}
+
+// A near car on a dense sensor (issue 16: rsud fits such clusters of 7,300-16,700 points) and a far one
+// on a sparse sensor: the evaluator equals the criteria's definitions, to float rounding, at every angle.
+TEST(VehicleFixGeometry, CriteriaEvaluatedInOnePassEqualTheirDefinitionsOnNearDenseAndFarSparseCars) {
+  struct Case {
+    lidar::SensorModel model;
+    double height;  // the generic sensor looks down 25 deg at most: a low mount sees a near car whole
+    Pose2 truth;
+    std::size_t min_points, max_points;
+  };
+  const std::vector<Case> cases = {{lidar::make_generic(128), 2.0, {1.5, 3.6, deg_to_rad(8.0)}, 5000, 100000},
+                                   {lidar::make_vlp16(), 4.0, {31.0, 4.0, deg_to_rad(30.0)}, 20, 600}};
+  for (const Case& c : cases) {
+    const View view = look(c.model, c.height, sim::VehicleShape{}, c.truth);
+    // The claimed view: thousands of points near the dense sensor, a few dozen far from the sparse one.
+    ASSERT_GE(view.points.size(), c.min_points);
+    ASSERT_LE(view.points.size(), c.max_points);
+    Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+    for (const auto& p : view.points)
+      centroid += p.head<2>();
+    centroid /= static_cast<double>(view.points.size());
+    std::vector<double> x, y;
+    for (const auto& p : view.points) {
+      x.push_back(p.x() - centroid.x());
+      y.push_back(p.y() - centroid.y());
+    }
+    for (const auto criterion : {LShapeCriterion::closeness, LShapeCriterion::area, LShapeCriterion::variance,
+                                 LShapeCriterion::autoware_closeness}) {
+      CriterionConfig config;
+      config.criterion = criterion;
+      CriterionEvaluator evaluate(x, y, config);
+      // Variance and Autoware's closeness count a point by a comparison that float rounding may tip
+      // for a point exactly at its threshold: one such point's worth of slack.
+      const double relative =
+          criterion == LShapeCriterion::closeness || criterion == LShapeCriterion::area ? 1e-5 : 1e-3;
+      for (double deg = 0.0; deg < 90.0; deg += 0.7) {
+        const double theta = deg_to_rad(deg);
+        const double expected = reference_criterion(x, y, theta, config);
+        EXPECT_NEAR(evaluate(theta), expected, relative * std::abs(expected) + 1e-9)
+            << "criterion " << static_cast<int>(criterion) << " at " << deg << " deg, " << x.size()
+            << " points";
+      }
+    }
+  }
+}
+
+// The face envelope's EM by its definition (face_envelope.h), every point in every iteration: the
+// reference for the envelope's sums over the points within reach of the face only.
+FaceEnvelope reference_envelope(std::vector<double> s, double noise_sigma, double band) {
+  const double sigma = std::max(noise_sigma, 1e-4);
+  band = std::max(band, 4.0 * sigma);
+  std::vector<double> sorted = s;
+  std::sort(sorted.begin(), sorted.end());
+  double f = sorted[static_cast<std::size_t>(0.9 * static_cast<double>(sorted.size() - 1))];
+  double weight = 0.5, n_face = 0.0;
+  constexpr double kStray = 0.02;
+  auto cdf = [](double v) { return 0.5 * std::erfc(-v / std::numbers::sqrt2); };
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    double sum_r = 0.0, sum_rs = 0.0;
+    for (const double v : s) {
+      const double face = weight * std::exp(-0.5 * (v - f) * (v - f) / (sigma * sigma)) /
+                          (sigma * std::sqrt(2.0 * std::numbers::pi));
+      const double inside =
+          (1.0 - weight - kStray) / band * (cdf((f - v) / sigma) - cdf((f - band - v) / sigma));
+      const double r = face / (face + inside + kStray / (2.0 * band));
+      sum_r += r;
+      sum_rs += r * v;
+    }
+    n_face = sum_r;
+    if (!(sum_r > 1e-9))
+      break;
+    const double next = sum_rs / sum_r;
+    weight = std::clamp(sum_r / static_cast<double>(s.size()), 0.05, 1.0 - kStray - 0.01);
+    const bool converged = std::abs(next - f) < 1e-5;
+    f = next;
+    if (converged)
+      break;
+  }
+  return {f, sigma / std::sqrt(std::max(n_face, 1.0)), n_face};
+}
+
+// The near car's side towards a dense sensor, along its outward normal: thousands of points, most of
+// them inside the body (glasshouse, wheels, roof), metres from the face.
+TEST(VehicleFixGeometry, FaceEnvelopeOfANearCarsSideEqualsItsEmOverEveryPoint) {
+  const Pose2 truth{1.5, 3.6, 0.0};
+  const View view = look(lidar::make_generic(128), 2.0, sim::VehicleShape{}, truth);
+  ASSERT_GE(view.points.size(), 5000U);
+  std::vector<double> s;
+  for (const auto& p : view.points)
+    s.push_back(truth.y - p.y());  // the side towards the LiDAR (at y = 0) is at + width / 2
+  for (const double noise_sigma : {0.01, 0.03}) {
+    const FaceEnvelope fast = outer_envelope(s, noise_sigma, 0.3);
+    const FaceEnvelope reference = reference_envelope(s, noise_sigma, 0.3);
+    EXPECT_NEAR(fast.position, reference.position, 1e-9);
+    EXPECT_NEAR(fast.face_points, reference.face_points, 1e-9 * reference.face_points);
+    EXPECT_NEAR(fast.sigma, reference.sigma, 1e-12);
+    // The claimed case: the face is the body's side, and most points lie behind it.
+    EXPECT_NEAR(fast.position, sim::VehicleShape{}.width / 2.0, 0.05);
+    EXPECT_LT(fast.face_points, 0.5 * static_cast<double>(s.size()));
+  }
 }
 
 }  // namespace
