@@ -24,25 +24,28 @@ VehicleCore::VehicleCore(const VehicleCoreConfig& config)
 
 NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
   ++stats_.ndt_poses;
-  Eigen::Matrix3d weakened = ndt.covariance;
   const bool flagged = assess(ndt.quality, config_.ndt_quality) == NdtHealth::kDegraded;
   const bool degraded = flagged || (last_degraded_ndt_ && ndt.time >= *last_degraded_ndt_ &&
                                     ndt.time - *last_degraded_ndt_ <= config_.degraded_ndt_persistence);
   if (flagged) {
     last_flag_failed_match_ = match_failed(ndt.quality, config_.ndt_quality);
   }
-  if (degraded && config_.weaken_along_weak_axis && ndt.quality.weak_axis_rad && !last_flag_failed_match_ &&
-      !match_failed(ndt.quality, config_.ndt_quality)) {
-    // The match slides along the street but holds across it and in yaw: weakened along it only.
-    fusion::weaken_along_axis(weakened, *ndt.quality.weak_axis_rad, config_.degraded_ndt_variance_scale,
-                              config_.degraded_ndt_min_sigma_m);
-    ++stats_.ndt_degraded;
-    ++stats_.ndt_weakened_along_axis;
-  } else if (degraded) {
-    // The match says it failed: its pose is no 3 cm (or 0.15 m) estimate.
+  // The match says it failed: its pose is no 3 cm (or 0.15 m) estimate. The own estimate, the reference
+  // the integrity checks hold an RSU to, always takes it so.
+  Eigen::Matrix3d weakened = ndt.covariance;
+  if (degraded) {
     weakened *= config_.degraded_ndt_variance_scale;
     fusion::raise_to_floor(weakened, config_.degraded_ndt_min_sigma_m, 0.0);
     ++stats_.ndt_degraded;
+  }
+  // The fused filter only along the match's weak axis when what degrades it is its degeneracy alone.
+  const bool along_axis = degraded && config_.weaken_along_weak_axis && ndt.quality.weak_axis_rad &&
+                          !last_flag_failed_match_ && !match_failed(ndt.quality, config_.ndt_quality);
+  Eigen::Matrix3d weakened_for_fused = weakened;
+  if (along_axis) {
+    weakened_for_fused = ndt.covariance;
+    fusion::weaken_along_axis(weakened_for_fused, *ndt.quality.weak_axis_rad,
+                              config_.degraded_ndt_variance_scale, config_.degraded_ndt_min_sigma_m);
   }
   if (degraded && !previous_degraded_) {
     doubt_own_at(ndt.time, weakened);
@@ -56,7 +59,8 @@ NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
   const bool weaken_in_fused =
       degraded && (!config_.weaken_degraded_ndt_only_with_rsu || rsu_admitted_near(ndt.time));
   stats_.ndt_weakened_in_fused += weaken_in_fused ? 1 : 0;
-  fuser_.add_ndt(ndt.pose, weaken_in_fused ? weakened : ndt.covariance, ndt.time);
+  stats_.ndt_weakened_along_axis += weaken_in_fused && along_axis ? 1 : 0;
+  fuser_.add_ndt(ndt.pose, weaken_in_fused ? weakened_for_fused : ndt.covariance, ndt.time);
   NdtStep step;
   step.fused = fuser_.pose_at(ndt.time);
   step.announce = state_to_announce(ndt, step.fused);
