@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -79,6 +80,13 @@ struct MountMonitorConfig {
   // A direction of the motion (metres at the coverage radius) that one rotation's points pin down no
   // better than this is not estimated (mount_monitor.cpp, held_step): what it says there is noise.
   double max_free_sigma_m = 0.025;
+  // A direction that one rotation pins down better than that but not to the tolerance over
+  // significance_sigmas (1.67 cm at the radius: a street's length between flat facades, 2.1-2.2 cm in
+  // the load street) is decided on the information-weighted mean of the rotations of this long, whose
+  // sigma shrinks as 1 / sqrt(n): a single rotation's noise there read 5-11 cm now and then, and three
+  // such rotations in a row had stopped a still sensor's fixes for good. A motion there is seen once the
+  // mean of the rotations since it, or of enough of the window, shows it (mount_monitor.cpp, decide).
+  TimeNs weak_evidence_window = 1'000'000'000;
 };
 
 // The sensor's motion since the reference: the reference frame -> the current sensor frame's pose in it.
@@ -87,6 +95,13 @@ struct MountDrift {
   Matrix6d covariance = Matrix6d::Zero();  // of (dt, w) (point_to_plane.h)
   double error_at_radius_m = 0.0;          // largest horizontal displacement of a fix at the radius
   double error_sigma_m = 0.0;              // its standard deviation, from the covariance
+  // The rotations whose information-weighted mean gives the directions one rotation pins down only
+  // weakly (MountMonitorConfig::weak_evidence_window); 0: it holds none so (the rotation alone).
+  int rotations_averaged = 0;
+  // Such directions held at the reference instead: their mean does not verify the tolerance yet.
+  bool weak_held = false;
+  // The standard deviation at the radius, along the error, of those directions' mean alone (0: none).
+  double weak_sigma_m = 0.0;
   double rms_m = 0.0;
   std::size_t matches = 0;
   std::size_t sampled = 0;         // static points of the rotation used
@@ -156,13 +171,23 @@ class MountMonitor {
   // precision along the street that no structure there gives.
   static constexpr int kScales = 3;
   static constexpr int kWeakScale = 2;
-  static constexpr std::size_t kMinFitted = 30;  // fewer fitted points: no covariance (unverifiable)
+  static constexpr std::size_t kMinFitted = 30;    // fewer fitted points: no covariance (unverifiable)
+  static constexpr std::size_t kMaxAveraged = 64;  // rotations kept over weak_evidence_window, at most
   // The plane a point (reference frame) lies on: the fine voxel's, else the coarse one's, else the line's.
   const Plane* plane_at(const Eigen::Vector3d& a) const;
   // Matches on the fitted planes; weak_matches counts those on lines (within the gate of their plane).
   std::vector<PlaneMatch> match(const std::vector<Eigen::Vector3d>& points, const Pose3& motion,
                                 double max_residual_m, std::size_t& weak_matches) const;
   Vector6d held_step(const PlaneFit& fit) const;
+  // A rotation's estimate, kept over weak_evidence_window.
+  struct Evidence {
+    TimeNs time = 0;
+    Vector6d motion = Vector6d::Zero();      // x, y, z, roll, pitch, yaw
+    Matrix6d covariance = Matrix6d::Zero();  // of (dt, w)
+  };
+  // What the monitor decides on, from the newest rotation (the last of recent_): its own estimate along
+  // the directions it pins down well, the window's mean along those it pins down only weakly.
+  MountDrift decide(const MountDrift& newest) const;
   // Serving -> moved, with the cause and reason of the last estimate (significant: confirmed).
   void stop(bool significant);
   // Moved -> serving once `calm` has held for resume_after; true when it resumed.
@@ -180,7 +205,9 @@ class MountMonitor {
   StopCause cause_ = StopCause::kNone;
   TimeNs calm_since_ = 0;  // the first of the rotations in a row within resume_fraction (while moved)
   bool calm_ = false;
-  int suspect_run_ = 0;  // rotations in a row with a suspected motion
+  int suspect_run_ = 0;          // rotations in a row with a suspected motion
+  std::deque<Evidence> recent_;  // the rotations matching the reference over weak_evidence_window
+  TimeNs first_checked_ = 0;     // the first rotation's time
   MountDrift last_;
   MountDrift stopped_by_;
   MountMonitorStats stats_;

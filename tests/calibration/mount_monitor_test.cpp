@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include <memory>
 
@@ -172,12 +173,14 @@ TEST_F(MountMonitorTest, TooFewStaticPointsDecideNothing) {
 class Street {
  public:
   Street(const char* sensor, const char* scenario = "tests/integration/scenarios/fault_street.yaml")
-      : scenario_(sim::load_scenario_file(std::string(RSU_SOURCE_DIR) + "/" + scenario)) {
+      : Street(*lidar::sensor_model_by_name(sensor), scenario) {}
+  Street(const lidar::SensorModel& model, const char* scenario, double rpm = 600.0)
+      : scenario_(sim::load_scenario_file(std::string(RSU_SOURCE_DIR) + "/" + scenario)), model_(model) {
     scenario_.scene.vehicles.clear();
     raycaster_ = std::make_unique<sim::Raycaster>(scenario_.scene);
-    model_ = *lidar::sensor_model_by_name(sensor);
-    model_.rpm = 600.0;
+    model_.rpm = rpm;
   }
+  TimeNs rotation_ns() const { return static_cast<TimeNs>(60e9 / model_.rpm); }
   const Pose3& mount() const { return scenario_.lidar.mount; }
   // Rotation k seen from the mount moved by `motion` (sensor frame); every 4th point, as rsud hands
   // the monitor.
@@ -187,7 +190,7 @@ class Street {
     const Pose3 pose{
         moved.translation().x(), moved.translation().y(), moved.translation().z(), rpy[2], rpy[1], rpy[0]};
     const sim::LidarSimulator simulator(model_, pose, scenario_.lidar.noise, *raycaster_);
-    const std::vector<lidar::LidarPoint> all = simulator.simulate_frame(k * kRotation).frame.points;
+    const std::vector<lidar::LidarPoint> all = simulator.simulate_frame(k * rotation_ns()).frame.points;
     std::vector<lidar::LidarPoint> out;
     for (std::size_t i = 0; i < all.size(); i += every)
       out.push_back(all[i]);
@@ -215,8 +218,9 @@ TEST(MountMonitorWeakStreet, Vlp16StillServesAndSmallBumpsStopTheFixes) {
     EXPECT_EQ(m.stats().stops, 0U);
     EXPECT_GT(m.stats().rotations_unverifiable, 0U);  // along the street (x): two thin poles only
   }
-  // 0.5 deg: measured to 0.05 deg (it was 0.26 deg before the coarse planes); the street cannot verify
-  // the tolerance, so it is suspected and stopped at the third rotation showing it.
+  // 0.5 deg: measured to 0.05 deg (it was 0.26 deg before the coarse planes), and stopped within three
+  // rotations: the street holds the yaw well enough to confirm it (the direction along the street, which
+  // it holds too weakly, is held at the reference and no longer adds its noise), but not the way back.
   {
     calibration::MountMonitor m = reference;
     int k = 3;
@@ -224,14 +228,13 @@ TEST(MountMonitorWeakStreet, Vlp16StillServesAndSmallBumpsStopTheFixes) {
       m.check_rotation(street.rotation(k, Pose3{0, 0, 0, 0, 0, deg_to_rad(0.5)}), k * kRotation);
       EXPECT_NEAR(rad_to_deg(m.last().motion.yaw), 0.5, 0.05);
     }
-    EXPECT_EQ(k - 3, 3) << "rotations until stopped";
-    EXPECT_EQ(m.cause(), calibration::StopCause::kSuspected);
+    EXPECT_LE(k - 3, 3) << "rotations until stopped";
     // Put back: the street cannot show it is, so the fixes stay withheld until a recalibration.
     for (; k < 33; ++k)
       m.check_rotation(street.rotation(k, {}), k * kRotation);
     EXPECT_FALSE(m.serving());
   }
-  // 0.1 deg (8.7 cm at 50 m, not significant here): suspected, stopped once three rotations show it.
+  // 0.1 deg (8.7 cm at 50 m): stopped within five rotations, the yaw measured.
   {
     calibration::MountMonitor m = reference;
     int k = 3;
@@ -239,8 +242,7 @@ TEST(MountMonitorWeakStreet, Vlp16StillServesAndSmallBumpsStopTheFixes) {
       m.check_rotation(street.rotation(k, Pose3{0, 0, 0, 0, 0, deg_to_rad(0.1)}), k * kRotation);
     EXPECT_FALSE(m.serving());
     EXPECT_LE(k - 3, 5) << "rotations until stopped";
-    EXPECT_EQ(m.stats().stops_unconfirmed, 1U);
-    EXPECT_NE(m.reason().find("not confirmed"), std::string::npos) << m.reason();
+    EXPECT_NEAR(rad_to_deg(m.last().motion.yaw), 0.1, 0.02) << m.reason();
   }
 }
 
@@ -268,6 +270,186 @@ TEST(MountMonitorWeakStreet, PartOfARotationIsNotMotion) {
   m.check_rotation(whole, 3 * kRotation);
   EXPECT_TRUE(m.serving());
   EXPECT_TRUE(m.last().observable && m.last().matches_reference);
+}
+
+// An OS1-128 as rsu-sim streams it, approximately: 128 beams evenly over 45 deg.
+lidar::SensorModel os1_128_like() {
+  lidar::SensorModel m = lidar::make_generic(128);
+  for (int i = 0; i < 128; ++i)
+    m.elevation_deg[static_cast<std::size_t>(i)] = -22.5 + 45.0 * i / 127.0;
+  return m;
+}
+
+// The load test's street (tests/load/load_street.yaml: two facades along x, one pole): one rotation pins
+// the sensor along the street to 2.0-2.2 cm at 50 m (stated), just under max_free_sigma_m, and its
+// estimates there are noisier than stated (a still VLP-32C's read 5-11 cm now and then, a 128-ring's at
+// 20 Hz 5-15 cm, runs of three and more beyond the tolerance): judged one rotation at a time, three in a
+// row stopped a still sensor's fixes for good (rsud_load.py: the VLP-32C after ~7 s, the OS1-128 at
+// 1024x20 within 1 s). Decided on their mean over a second, still rotations never read beyond the
+// tolerance; a real turn and a shift across the street still stop the fixes at once.
+struct WeakStreetRun {
+  int single_beyond = 0;       // single rotations' estimates beyond the tolerance
+  int longest_single_run = 0;  // of them in a row: the old rule stopped at 3
+};
+
+WeakStreetRun run_still(const Street& street, calibration::MountMonitor& m, int rotations) {
+  WeakStreetRun out;
+  int run = 0;
+  for (int k = 3; k < 3 + rotations; ++k) {
+    const std::vector<lidar::LidarPoint> r = street.rotation(k, {});
+    const bool single_beyond = m.estimate(r, Pose3{}).error_at_radius_m > 0.05;
+    out.single_beyond += single_beyond ? 1 : 0;
+    run = single_beyond ? run + 1 : 0;
+    out.longest_single_run = std::max(out.longest_single_run, run);
+    m.check_rotation(r, k * street.rotation_ns());
+    EXPECT_TRUE(m.serving()) << "rotation " << k << ": " << m.reason();
+  }
+  return out;
+}
+
+// Rotations (from the first moved one, 0 = at once) until a bump after `m`'s still rotations stops the
+// fixes; -1: not within 10.
+int rotations_until_stopped(const Street& street, calibration::MountMonitor m, int first, const Pose3& bump) {
+  for (int k = first; k < first + 10; ++k) {
+    m.check_rotation(street.rotation(k, bump), k * street.rotation_ns());
+    if (!m.serving())
+      return k - first;
+  }
+  return -1;
+}
+
+TEST(MountMonitorWeakStreet, LoadStreetStillVlp32cServesAndABumpStops) {
+  const Street street("vlp32c", "tests/load/load_street.yaml");
+  calibration::MountMonitor m = street.monitor();
+  const WeakStreetRun still = run_still(street, m, 100);
+  std::printf(
+      "load street, still VLP-32C: %d of 100 single rotations beyond the tolerance (longest run %d)\n",
+      still.single_beyond, still.longest_single_run);
+  EXPECT_GE(still.single_beyond, 1);  // the noise that stopped it before
+  EXPECT_EQ(m.stats().rotations_beyond_tolerance, 0U);
+  EXPECT_EQ(m.stats().stops, 0U);
+  EXPECT_GE(m.last().rotations_averaged, 10);     // along the street: the mean of a second's rotations
+  EXPECT_LE(3.0 * m.last().error_sigma_m, 0.05);  // which verifies the tolerance there
+  // 0.1 deg of yaw (8.7 cm at 50 m) and 10 cm across the street: stopped at once.
+  EXPECT_EQ(rotations_until_stopped(street, m, 103, Pose3{0, 0, 0, 0, 0, deg_to_rad(0.1)}), 0);
+  EXPECT_EQ(rotations_until_stopped(street, m, 103, Pose3{0, 0.1, 0, 0, 0, 0}), 0);
+}
+
+TEST(MountMonitorWeakStreet, LoadStreetStill128RingAt20HzServesAndABumpStops) {
+  const Street street(os1_128_like(), "tests/load/load_street.yaml", 1200.0);
+  calibration::MountMonitor m = street.monitor();
+  const WeakStreetRun still = run_still(street, m, 60);
+  std::printf(
+      "load street, still 128-ring at 20 Hz: %d of 60 single rotations beyond the tolerance (longest run "
+      "%d)\n",
+      still.single_beyond, still.longest_single_run);
+  EXPECT_GE(still.longest_single_run, 3);  // the old rule's stop
+  EXPECT_EQ(m.stats().rotations_beyond_tolerance, 0U);
+  EXPECT_EQ(m.stats().stops, 0U);
+  EXPECT_EQ(rotations_until_stopped(street, m, 63, Pose3{0, 0, 0, 0, 0, deg_to_rad(0.1)}), 0);
+}
+
+// The weak streets' measurements quoted in the README (not run by ctest): per street and sensor, still
+// rotations (RSU_STILL, default 200) judged as the monitor does and one at a time, start-ups of ten still
+// rotations (RSU_STARTS, default none), and bumps after a second of still rotations; RSU_ONLY picks the
+// cases whose name holds it. build/tests/calibration/mount_monitor_tests --gtest_also_run_disabled_tests
+// --gtest_filter='MountMonitorWeakStreet.DISABLED_MeasureWeakStreets'
+TEST(MountMonitorWeakStreet, DISABLED_MeasureWeakStreets) {
+  struct Case {
+    const char* name;
+    lidar::SensorModel model;
+    const char* path;
+    double rpm;
+  };
+  const Case cases[] = {
+      {"load street VLP-32C 10 Hz", lidar::make_vlp32c(), "tests/load/load_street.yaml", 600.0},
+      {"load street 128-ring 20 Hz", os1_128_like(), "tests/load/load_street.yaml", 1200.0},
+      {"fault street VLP-16", lidar::make_vlp16(), "tests/integration/scenarios/fault_street.yaml", 600.0},
+      {"fault street VLP-32C", lidar::make_vlp32c(), "tests/integration/scenarios/fault_street.yaml", 600.0},
+      {"corridor VLP-32C", lidar::make_vlp32c(), "tests/integration/scenarios/bump_corridor.yaml", 600.0},
+      {"corridor VLP-16", lidar::make_vlp16(), "tests/integration/scenarios/bump_corridor.yaml", 600.0},
+  };
+  const int still_rotations = std::getenv("RSU_STILL") ? std::atoi(std::getenv("RSU_STILL")) : 200;
+  const char* only = std::getenv("RSU_ONLY");
+  for (const Case& c : cases) {
+    if (only != nullptr && std::string(c.name).find(only) == std::string::npos)
+      continue;
+    const Street street(c.model, c.path, c.rpm);
+    const TimeNs dt = street.rotation_ns();
+    const calibration::MountMonitor reference = street.monitor();
+    calibration::MountMonitor still = reference;
+    double worst = 0.0;
+    double worst_single = 0.0;
+    int beyond_3_sigma = 0;
+    int single_beyond_3_sigma = 0;
+    int checked = 0;
+    double sum_sq = 0.0;
+    for (int k = 3; k < 3 + still_rotations; ++k) {
+      const std::vector<lidar::LidarPoint> r = street.rotation(k, {});
+      const calibration::MountDrift single = reference.estimate(r, Pose3{});
+      still.check_rotation(r, k * dt);
+      const calibration::MountDrift& d = still.last();
+      if (!d.matches_reference)
+        continue;
+      ++checked;
+      worst = std::max(worst, d.error_at_radius_m);
+      worst_single = std::max(worst_single, single.error_at_radius_m);
+      beyond_3_sigma += d.error_at_radius_m > 3.0 * d.error_sigma_m ? 1 : 0;
+      single_beyond_3_sigma += single.error_at_radius_m > 3.0 * single.error_sigma_m ? 1 : 0;
+      sum_sq += d.error_at_radius_m * d.error_at_radius_m;
+    }
+    std::printf(
+        "%s still: %d checked, %lu beyond the tolerance, %lu stops, %lu unverifiable; largest error "
+        "%.4f m decided (rms %.4f, sigma now %.4f, %d averaged), %.4f m single; beyond 3 sigma "
+        "%d decided, %d single\n",
+        c.name, checked, static_cast<unsigned long>(still.stats().rotations_beyond_tolerance),
+        static_cast<unsigned long>(still.stats().stops),
+        static_cast<unsigned long>(still.stats().rotations_unverifiable), worst,
+        std::sqrt(sum_sq / std::max(1, checked)), still.last().error_sigma_m, still.last().rotations_averaged,
+        worst_single, beyond_3_sigma, single_beyond_3_sigma);
+    const int starts = std::getenv("RSU_STARTS") ? std::atoi(std::getenv("RSU_STARTS")) : 0;
+    int start_stops = 0;
+    for (int s = 0; s < starts; ++s) {
+      calibration::MountMonitor m = reference;
+      for (int k = 1000 + 12 * s; k < 1010 + 12 * s && m.serving(); ++k)
+        m.check_rotation(street.rotation(k, {}), k * dt);
+      start_stops += m.serving() ? 0 : 1;
+    }
+    if (starts > 0)
+      std::printf("%s: %d stops in %d start-ups of 10 still rotations\n", c.name, start_stops, starts);
+    const std::pair<const char*, Pose3> bumps[] = {{"yaw 0.1 deg", {0, 0, 0, 0, 0, deg_to_rad(0.1)}},
+                                                   {"yaw 0.5 deg", {0, 0, 0, 0, 0, deg_to_rad(0.5)}},
+                                                   {"yaw 1 deg", {0, 0, 0, 0, 0, deg_to_rad(1.0)}},
+                                                   {"across 5 cm", {0, 0.05, 0, 0, 0, 0}},
+                                                   {"across 10 cm", {0, 0.10, 0, 0, 0, 0}},
+                                                   {"along 10 cm", {0.10, 0, 0, 0, 0, 0}},
+                                                   {"along 20 cm", {0.20, 0, 0, 0, 0, 0}},
+                                                   {"5 cm + 0.5 deg", {0, 0.05, 0, 0, 0, deg_to_rad(0.5)}}};
+    for (const auto& [name, bump] : bumps) {
+      // In steady state: a second of still rotations first, then the bump.
+      calibration::MountMonitor m = reference;
+      const int still_first = static_cast<int>(1'000'000'000 / dt) + 2;
+      for (int k = 3; k < 3 + still_first; ++k)
+        m.check_rotation(street.rotation(k, {}), k * dt);
+      const bool serving_before = m.serving();
+      int stopped_at = -1;
+      const int first = 3 + still_first;
+      for (int k = first; k < first + 25 && stopped_at < 0; ++k) {
+        m.check_rotation(street.rotation(k, bump), k * dt);
+        if (!m.serving())
+          stopped_at = k - first;
+      }
+      std::printf("  %-15s true %.3f m; estimated %.3f m (sigma %.3f, %d averaged), yaw %.3f deg; %s%s\n",
+                  name, true_error(street.mount(), bump), m.last().error_at_radius_m, m.last().error_sigma_m,
+                  m.last().rotations_averaged, rad_to_deg(m.last().motion.yaw),
+                  stopped_at < 0
+                      ? "not stopped in 25 rotations"
+                      : ("stopped at rotation " + std::to_string(stopped_at) +
+                         (m.cause() == calibration::StopCause::kSuspected ? " (suspected)" : " (confirmed)"))
+                            .c_str(),
+                  serving_before ? "" : " [STOPPED BEFORE]");
+    }
+  }
 }
 
 // The measurements quoted in the README (not run by ctest: ~20 s): bumps of 0.1-1 deg of yaw and 5-10 cm

@@ -83,8 +83,7 @@ def main():
                     help="the RSU LiDAR at this height instead of the street's 2 m (an elevated RSU, issue 12; "
                          "the street with it is written beside --work)")
     ap.add_argument("--mount-integrity", choices=("on", "off"), default="on",
-                    help="off: rsud does not check its mount (from 6 m up this street holds the LiDAR weakly "
-                         "along it, and a false stop withholds every fix after it: README, Known shortfalls)")
+                    help="off: rsud does not check its mount (to compare with: what the check withholds)")
     args = ap.parse_args()
     scenario = SCENARIO
     if args.mount_z_m is not None:

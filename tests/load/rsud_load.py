@@ -252,8 +252,8 @@ def main():
     ap.add_argument("--lidar-mode", default="2048x10", help="with --ouster: columns x Hz (2048x10, 1024x20, ...)")
     ap.add_argument("--profile", default="RNG19_RFL8_SIG16_NIR16", help="with --ouster: the packet profile")
     ap.add_argument("--mount-integrity", choices=("on", "off"), default="on",
-                    help="off: rsud does not check its mount (the load street holds the LiDAR weakly along the "
-                         "street, and a false stop there withholds every fix after it)")
+                    help="off: rsud does not check its mount (to compare with: what the check costs and "
+                         "withholds)")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.smoke:
