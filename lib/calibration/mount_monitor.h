@@ -182,11 +182,12 @@ class MountMonitor {
   // A rotation's estimate, kept over weak_evidence_window.
   struct Evidence {
     TimeNs time = 0;
-    Vector6d motion = Vector6d::Zero();      // x, y, z, roll, pitch, yaw
+    Pose3 motion;
     Matrix6d covariance = Matrix6d::Zero();  // of (dt, w)
   };
   // What the monitor decides on, from the newest rotation (the last of recent_): its own estimate along
-  // the directions it pins down well, the window's mean along those it pins down only weakly.
+  // the directions it pins down well, the window's mean along those it pins down only weakly
+  // (mount_monitor_decide.cpp).
   MountDrift decide(const MountDrift& newest) const;
   // Serving -> moved, with the cause and reason of the last estimate (significant: confirmed).
   void stop(bool significant);
