@@ -123,6 +123,9 @@ struct CorrectionConfig {
   // overconfident).
   double max_prior_disagreement_sigmas = 4.0;
   double min_prior_disagreement_rad = deg_to_rad(5.0);
+  // Faces whose yaw lies farther than this many combined sigmas from the prior's (but within the above)
+  // are taken for a wrong face fit: the box goes along the prior's yaw with its sigma, the faces' unused.
+  double prior_fallback_sigmas = 3.0;
   // On: a far, fragmented vehicle's one-fragment "faces" gave confident fixes a metre off.
   bool strict_consistency_checks = true;
   // Which part of the body a point can be on (see above): below this share of the announced height the
