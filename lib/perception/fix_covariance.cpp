@@ -89,15 +89,22 @@ Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig
   // uncertainty too: the product of two independent errors.
   pos += var_yaw * (var_v * u * u.transpose() + var_u * v * v.transpose());
 
-  // d(centre)/d(yaw): measured by placing the box again at the probes, else from the lever.
-  std::array<Eigen::Vector2d, 2> j{Eigen::Vector2d(-e.lever.y(), e.lever.x()),
-                                   Eigen::Vector2d(-e.lever.y(), e.lever.x())};
+  // d(centre)/d(yaw): from the lever, and measured by placing the box again at the probes (the lever's
+  // where a probe's box did not hold the points); the larger of the two stands.
+  const Eigen::Vector2d lever_j(-e.lever.y(), e.lever.x());
+  std::array<Eigen::Vector2d, 2> j{lever_j, lever_j};
   for (std::size_t i = 0; i < 2; ++i) {
     if (e.yaw_probe_rad[i] != 0.0 && std::isfinite(e.yaw_probe_rad[i]) && e.yaw_probe_shift[i].allFinite())
       j[i] = e.yaw_probe_shift[i] / e.yaw_probe_rad[i];
   }
-  pos += 0.5 * var_yaw * (j[0] * j[0].transpose() + j[1] * j[1].transpose());
-  const Eigen::Vector2d pos_yaw = 0.5 * var_yaw * (j[0] + j[1]);  // a yaw error moves the centre along j
+  Eigen::Matrix2d turn = 0.5 * (j[0] * j[0].transpose() + j[1] * j[1].transpose());
+  Eigen::Vector2d mean_j = 0.5 * (j[0] + j[1]);
+  if (lever_j.squaredNorm() > turn.trace()) {
+    turn = lever_j * lever_j.transpose();
+    mean_j = lever_j;
+  }
+  pos += var_yaw * turn;
+  const Eigen::Vector2d pos_yaw = var_yaw * mean_j;  // a yaw error moves the centre along j
 
   const double wrong = std::clamp(1.0 - e.assignment_confidence, 0.0, 1.0);
   pos += wrong * e.alternative_offset * e.alternative_offset.transpose();

@@ -32,13 +32,13 @@
 //  - The centre is anchor + R(yaw) * offset, so a yaw error moves it by yaw_error x lever; this adds
 //    var_yaw * J J^T with J = d(centre)/d(yaw) = (-lever_y, lever_x), and the x-yaw covariance; and,
 //    as the centre is itself uncertain along each axis, var_yaw times that variance across it.
-//    Where the box was placed again at yaw +- a probe (yaw_probe_shift), J is measured instead: the
-//    centre's shift per radian at each probe, var_yaw * (J+ J+^T + J- J-^T) / 2 (their mean is the x-yaw
-//    covariance). One anchor point is not where a placement's evidence lies when it is bounded by several
-//    points (containment by the far end, a side seen at the near end): with the prior's yaw (10 deg) such
-//    fixes were 0.3-0.6 m off while their lever carried a few cm (`rsu-pilot matrix`, a bus 6-8 m below a
-//    VLP-16); and a placement whose anchor changes within the yaw's uncertainty (a face no longer seen
-//    as one) shows that as a large shift.
+//    Where the box was placed again at yaw +- a probe (yaw_probe_shift), J is measured too: the centre's
+//    shift per radian at each probe, var_yaw * (J+ J+^T + J- J-^T) / 2 (their mean is the x-yaw
+//    covariance), used where it says more than the lever (its trace the larger). One anchor point is not
+//    where a placement's evidence lies when it is bounded by several points (containment by the far end, a
+//    side seen at the near end): with the prior's yaw (10 deg) such fixes were 0.3-0.6 m off while their
+//    lever carried a few cm (`rsu-pilot matrix`, a bus 6-8 m below a VLP-16); and a placement whose anchor
+//    changes within the yaw's uncertainty (a face no longer seen as one) shows that as a large shift.
 //  - A length/width assignment that is right only with probability c: the fix is the chosen hypothesis,
 //    the other is (1 - c) likely, so (1 - c) d d^T is added (d = other centre - chosen centre) and
 //    (1 - c) (pi/2)^2 to the yaw variance (the mean square error about the reported fix).

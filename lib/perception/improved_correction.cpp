@@ -12,6 +12,7 @@
 #include "perception/box_axis.h"
 #include "perception/box_consistency.h"
 #include "perception/face_refinement.h"
+#include "perception/informative_face.h"
 #include "perception/size_correction.h"
 
 namespace rsu::perception {
@@ -33,12 +34,6 @@ double logistic(double x) {
 // still places it within this (rsud's fault test, 5 % packet loss: such fixes were 0.23-0.66 m off,
 // where every fix of a complete sweep was within 0.1 m).
 constexpr double kMaxPositionSigmaIncompleteSweepM = 0.1;
-
-double median(std::vector<double>& v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 struct Frame {
   Eigen::Vector2d origin;
@@ -108,97 +103,6 @@ Placement place_box(const View& view, const Frame& frame, const std::vector<BoxP
     out.contained = out.contained && e.contained;
   }
   return out;
-}
-
-// The length of an evenly spread face whose direction a line fit knows as well as it does from points at
-// `along` (a least-squares slope's variance is sigma^2 / sum (s - mean)^2; evenly over l that sum is n l^2
-// / 12): sqrt(12) times their RMS spread about their mean.
-double effective_face_length(std::span<const double> along) {
-  if (along.size() < 2)
-    return 0.0;
-  double mean = 0.0;
-  for (const double s : along)
-    mean += s;
-  mean /= static_cast<double>(along.size());
-  double sum_sq = 0.0;
-  for (const double s : along)
-    sum_sq += (s - mean) * (s - mean);
-  return std::sqrt(12.0 * sum_sq / static_cast<double>(along.size()));
-}
-
-// Fitted edge `edge`'s evidence about the yaw: only its points that lie on a vertical surface of the body
-// (size_correction.h) count.
-FaceEvidence informative_face(const View& view, const RectangleFit& fit, std::size_t edge) {
-  FaceEvidence face = face_evidence(fit, edge, view.lidar.xy());
-  const Eigen::Vector2d a = fit.corners[edge % 4];
-  const Eigen::Vector2d b = fit.corners[(edge + 1) % 4];
-  const double len = (b - a).norm();
-  const Eigen::Vector2d t = (b - a) / len;
-  const double d = view.config.fit.edge_support_m;
-  std::vector<double> across, upper_heights, upper_ranges;
-  // Where along the face its informative points lie (below the bonnet; above it those that count), for
-  // the extent they span.
-  std::vector<double> along, upper_along;
-  std::size_t lower = 0;
-  for (const Eigen::Vector3d& p : view.points) {
-    const Eigen::Vector2d r = p.head<2>() - a;
-    const double s = r.dot(t);
-    const double n = r.x() * t.y() - r.y() * t.x();
-    if (s < -d || s > len + d || std::abs(n) > d)
-      continue;
-    across.push_back(n);
-    if (p.z() - view.lidar.ground_z <= view.end_height) {
-      ++lower;
-      along.push_back(s);
-    } else {
-      upper_heights.push_back(p.z());
-      upper_ranges.push_back((p.head<2>() - view.lidar.xy()).norm());
-      upper_along.push_back(s);
-    }
-  }
-  // Above the lower body a face tells the direction if it is not a laser's trace on a level surface:
-  // it rises (several heights), or its points' horizontal ranges vary (a level surface cut by one laser
-  // is an arc at one range, across the line of sight whatever the vehicle's heading).
-  std::size_t informative = lower;
-  if (upper_heights.size() >= 3) {
-    const double top = *std::max_element(upper_heights.begin(), upper_heights.end());
-    const auto rising =
-        static_cast<std::size_t>(std::count_if(upper_heights.begin(), upper_heights.end(), [&](double z) {
-          return z <= top - view.config.min_vertical_spread_m;
-        }));
-    std::sort(upper_ranges.begin(), upper_ranges.end());
-    const auto at = [&](double q) {
-      return upper_ranges[static_cast<std::size_t>(q * static_cast<double>(upper_ranges.size() - 1))];
-    };
-    const double arc_tolerance = std::max(view.config.min_range_spread_m, 4.0 * view.noise_sigma);
-    if (at(0.9) - at(0.1) >= arc_tolerance) {
-      informative += upper_heights.size();
-      along.insert(along.end(), upper_along.begin(), upper_along.end());
-    } else if (rising >= 3) {
-      informative += rising;
-      for (std::size_t i = 0; i < upper_heights.size(); ++i) {
-        if (upper_heights[i] <= top - view.config.min_vertical_spread_m)
-          along.push_back(upper_along[i]);
-      }
-    }
-  }
-  // The upper body departs from the footprint's direction more than the lower body does (sloped glass,
-  // tumblehome): its faces' direction is trusted less.
-  if (upper_heights.size() >= lower)
-    face.departure_m = view.config.upper_face_tilt_m;
-  face.points = informative;
-  // The face's direction is as well known as its informative points' spread along it makes it, not the
-  // fitted edge's length: a few points on a rounded bumper's corner made a 1.7 m "face" 24 deg off while
-  // stating 2 deg (`rsu-pilot matrix`, a VLP-16 4 m up, an SUV at 25 m).
-  face.length_m = std::min(face.length_m, effective_face_length(along));
-  if (across.size() >= 3 && informative > 0) {
-    // Robust spread (1.4826 MAD) of the face's points about their median line: the body's departure.
-    const double centre = median(across);
-    for (double& x : across)
-      x = std::abs(x - centre);
-    face.residual_spread_m = 1.4826 * median(across);
-  }
-  return face;
 }
 
 // Information of the vehicle's yaw prior, its sigma no smaller than the correction trusts a vehicle's.
@@ -342,7 +246,8 @@ FixEvidence yaw_evidence(const View& view, const RectangleFit& fit) {
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
     if (fit.edges[i].seen)
-      evidence.seen_faces[f++] = informative_face(view, fit, i);
+      evidence.seen_faces[f++] =
+          informative_face(view.points, view.lidar, view.config, view.end_height, view.noise_sigma, fit, i);
   }
   return evidence;
 }
@@ -400,9 +305,12 @@ std::optional<Placement> place_known_box(const View& view, const Frame& frame, c
 // How the box's place depends on its yaw (fix_covariance.h): placed again at the yaw +- sqrt(3) of its
 // sigma (a Gaussian's sigma points), or nearer (sigma, sigma / 2) where the box turned that far no longer
 // holds the points; the centre's shifts go into the evidence. The points are placed about the same origin,
-// so only the yaw differs.
+// so only the yaw differs. An axis whose centre lies in an interval (box_axis.h) gets the widest of the
+// probes' intervals: turned off the true heading, a long box's points spread across it and containment
+// squeezes the interval (a bus 18 m from a VLP-16 8 m up, 8 deg off: 0.09 m wide, the centre 0.59 m off;
+// 1.3 m wide at the true heading).
 void probe_yaw(const View& view, const Frame& frame, const CorrectedPose& fix, const VehicleSize& size,
-               double yaw_information, FixEvidence& evidence) {
+               double yaw_information, Placement& placed, FixEvidence& evidence) {
   constexpr double kMaxProbeRad = 0.5;
   const double yaw = std::atan2(frame.e0.y(), frame.e0.x());
   const double sigma = 1.0 / std::sqrt(std::max(yaw_information, 1e-12));
@@ -414,6 +322,11 @@ void probe_yaw(const View& view, const Frame& frame, const CorrectedPose& fix, c
       if (const std::optional<Placement> box = place_known_box(view, turned, size, yaw_information)) {
         evidence.yaw_probe_shift[i] = turned.map(box->centre) - centre;
         evidence.yaw_probe_rad[i] = step;
+        for (std::size_t a = 0; a < 2; ++a) {
+          AxisEvidence& axis = placed.evidence[a];
+          if (axis.anchor == AxisAnchor::interval && box->evidence[a].anchor == AxisAnchor::interval)
+            axis.interval_m = std::max(axis.interval_m, box->evidence[a].interval_m);
+        }
         break;
       }
     }
@@ -494,12 +407,12 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
       (yaw.decision.faces_inconsistent ? 0.0 : face_information) + yaw.decision.prior_information;
   // The known-size box along the final axes, placed axis by axis (box_axis.h).
   const Frame frame = frame_at(refined.center, yaw.decision.yaw);
-  const std::optional<Placement> box = place_known_box(view, frame, size, yaw_information);
+  std::optional<Placement> box = place_known_box(view, frame, size, yaw_information);
   if (!box)
     return refused(CorrectionStatus::inconsistent_box);
   // The fix and how far it can be trusted.
   CorrectedPose out = corrected_pose(frame, *box, yaw.decision, prior);
-  probe_yaw(view, frame, out, size, yaw_information, yaw_basis);
+  probe_yaw(view, frame, out, size, yaw_information, *box, yaw_basis);
   out.covariance = covariance_of(out, yaw_basis, *box, yaw.decision, lidar, config);
   if (!position_bounded(out, lidar, config))
     return refused(CorrectionStatus::position_unbounded);

@@ -160,6 +160,13 @@ struct CorrectionConfig {
   // lost packets or a neighbour).
   double max_position_sigma_m = 0.5;
   double upper_face_tilt_m = 0.08;
+  // A face whose informative points span less than this (an evenly spread face's length, fix_covariance.h)
+  // may lie on a rounded corner of the body (0.2-0.35 m radii), whose direction is anything between the
+  // sides' and the ends': its direction departs from the footprint's by about short_face_tilt_m over it.
+  // Without it one ring's 4-11 points over 0.4-0.7 m stated 4-7 deg and were 15-27 deg off (`rsu-pilot
+  // matrix`, 11 of the 26 HMI fixes left after the faces' spread rule).
+  double short_face_m = 1.0;
+  double short_face_tilt_m = 0.08;
   // Sides of the box along an axis (box_axis.h): the lower body's extreme within end_tolerance_m of all
   // points' is an end, the body ends within end_allowance_m (+ the azimuth step) beyond it; a higher
   // extreme bounds nothing but containment; a side counts as observed if a laser would hit a body
