@@ -144,9 +144,14 @@ std::vector<PlaneMatch> MountMonitor::match(const std::vector<Eigen::Vector3d>& 
 // whose single-rotation sigma exceeds max_free_sigma is left where the reference has it. Along a street
 // of flat facades and thin poles a step there is the noise's (a still VLP-16 had runs of rotations
 // 0.4 m off along the street, at a stated sigma of 0.04 m), and a real motion there is not seen at all.
-Vector6d MountMonitor::held_step(const PlaneFit& fit) const {
+Vector6d MountMonitor::at_radius_scale() const {
   Vector6d scale;
   scale << 1.0, 1.0, 1.0, radius_m_, radius_m_, radius_m_;
+  return scale;
+}
+
+Vector6d MountMonitor::held_step(const PlaneFit& fit) const {
+  const Vector6d scale = at_radius_scale();
   const Matrix6d information =
       scale.cwiseInverse().asDiagonal() * stated_information(fit) * scale.cwiseInverse().asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(information);

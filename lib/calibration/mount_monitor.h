@@ -178,6 +178,9 @@ class MountMonitor {
   // Matches on the fitted planes; weak_matches counts those on lines (within the gate of their plane).
   std::vector<PlaneMatch> match(const std::vector<Eigen::Vector3d>& points, const Pose3& motion,
                                 double max_residual_m, std::size_t& weak_matches) const;
+  // Metres at the coverage radius per unit of each motion parameter (x, y, z, roll, pitch, yaw): 1 for
+  // the translations, the radius for the rotations; held_step and decide weigh directions in these.
+  Vector6d at_radius_scale() const;
   Vector6d held_step(const PlaneFit& fit) const;
   // A rotation's estimate, kept over weak_evidence_window.
   struct Evidence {

@@ -40,8 +40,7 @@ Pose3 from_parameters(const Vector6d& v) {
 // sigma verifies the tolerance (start-up; a spread too wide), those directions are held at the reference
 // as a free one is, their covariance saying so: a motion along them is seen once the mean shows it.
 MountDrift MountMonitor::decide(const MountDrift& newest) const {
-  Vector6d scale;
-  scale << 1.0, 1.0, 1.0, radius_m_, radius_m_, radius_m_;
+  const Vector6d scale = at_radius_scale();
   const Matrix6d covariance = scale.asDiagonal() * newest.covariance * scale.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(covariance);
   const double tolerance = config_.max_position_error_m;
