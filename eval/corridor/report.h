@@ -53,13 +53,34 @@ struct ExperimentScores {
   std::map<std::string, TrafficScores> traffic;
 };
 
-// How the fused pose of one RSU model compares in one range with NDT alone and with the better of NDT and
-// that RSU.
+// How the fused pose of one RSU model compares in one range with NDT alone and with that RSU, frame for
+// frame (issue 13's goals: "at least 80 % lower than NDT's within the RSU's coverage, and never worse than
+// the better of NDT and RSU in any range cell"). A frame is one of the vehicle's NDT poses (10 Hz), where
+// the fused pose is scored. It is within the RSU's coverage when the RSU swept the vehicle in the frame
+// period ending at it (after the previous frame, not after this one) and sent a fix of that sweep: the
+// newest fix the fused pose of that frame could rest on. On those frames the fused pose, NDT and the
+// RSU's fix (its error at its own sweep time) are compared on the same frames; on the range's frames
+// without a fix (beyond the RSU's last fix, a fix refused or lost) the fused pose is compared with NDT
+// alone, the only other estimate there. The unpaired MAE of the table (the fused pose over every frame,
+// the RSU over its fixes) compare different frames and are not the goals' measure.
 struct FusedGoals {
   std::string rsu_model, range;
-  double fused_mae_m = 0, ndt_mae_m = 0;
-  double best_mae_m = 0;        // the better of NDT's and the RSU's MAE (NDT's if the RSU had no fix)
+  std::size_t covered_frames = 0, uncovered_frames = 0;
+  // MAE over the covered frames
+  double fused_mae_m = 0, ndt_mae_m = 0, rsu_mae_m = 0;
+  double best_mae_m = 0;        // the better of NDT's and the RSU's (NDT's if the RSU had no fix)
   double reduction_vs_ndt = 0;  // 1 - fused / NDT
+  // MAE over the frames without a fix (0 when there are none)
+  double fused_uncovered_mae_m = 0, ndt_uncovered_mae_m = 0;
+  // Every frame of the range, for reference: 1 - fused / NDT.
+  double reduction_vs_ndt_all_frames = 0;
+
+  // The goals, each compared to the millimetre as the table prints them (live runs differ in the fourth
+  // decimal): at least 80 % below NDT within the coverage (met, trivially, when there is none); no worse
+  // than the better of NDT and the RSU there; no worse than NDT on the frames without a fix.
+  bool below_ndt_met() const;
+  bool covered_no_worse() const;
+  bool uncovered_no_worse() const;
 };
 std::vector<FusedGoals> fused_goals(const ExperimentScores& scores,
                                     const std::vector<std::string>& rsu_models);

@@ -317,8 +317,25 @@ def main():
     ap.add_argument("--rsu-mount-z-m", type=float,
                     help="the RSU LiDAR at this height instead of the scenario's (issue 12: an elevated RSU); "
                          "the scenario with it is written into --out")
+    ap.add_argument("--seed", type=int,
+                    help="draw the noise anew: this seed for the vehicle's LiDAR, map and NDT sampling (the experiment "
+                         "file's seed) and for the RSU LiDAR's noise (the scenario's lidar.noise.seed); the experiment "
+                         "and scenario files with it are written into --out")
     args = ap.parse_args()
     exp, scenario_path, scenario = prepare(args)
+    if args.seed is not None:
+        scenario = dict(scenario, lidar=dict(scenario["lidar"], noise=dict(scenario["lidar"].get("noise", {}),
+                                                                           seed=args.seed)))
+        scenario_path = os.path.join(args.out, "scenario_seed_%d.yaml" % args.seed)
+        with open(scenario_path, "w") as f:
+            f.write("# the scenario of %s with the RSU LiDAR's noise seed %d (run_experiment.py --seed)\n" % (
+                args.experiment, args.seed))
+            yaml.safe_dump(scenario, f)
+        exp = dict(exp, seed=args.seed, scenario=scenario_path)
+        args.experiment = os.path.join(args.out, "experiment_seed_%d.yaml" % args.seed)
+        with open(args.experiment, "w") as f:
+            f.write("# written by run_experiment.py --seed %d\n" % args.seed)
+            yaml.safe_dump(exp, f)
     if args.rsu_mount_z_m is not None:
         scenario = dict(scenario, lidar=dict(scenario["lidar"], mount=dict(scenario["lidar"]["mount"],
                                                                            z=args.rsu_mount_z_m)))

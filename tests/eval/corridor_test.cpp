@@ -127,25 +127,57 @@ TEST(ErrorStats, ShareBeyondThreeSigmaCountsOnlyStatedCovariances) {
   EXPECT_TRUE(std::isnan(error_stats({0.1}).beyond_3sigma));
 }
 
-TEST(FusedGoals, ComparesWithNdtAndTheBetterOfNdtAndTheRsu) {
+// The goals compare the fused pose with NDT and the RSU frame for frame: a frame (an NDT pose) is within
+// the RSU's coverage when a fix was swept in the frame period ending at it (the newest such fix counts);
+// the frames without one compare the fused pose with NDT alone.
+TEST(FusedGoals, ComparesFrameForFrameWithinAndBeyondTheRsusCoverage) {
   ExperimentScores scores;
-  const auto set = [&](const std::string& method, double pm36, double pm50, std::size_t count = 10) {
-    scores.stats[method]["pm36"] = ErrorStats{count, pm36, 0, 0, 0, 0};
-    scores.stats[method]["pm50"] = ErrorStats{count, pm50, 0, 0, 0, 0};
+  const auto estimate = [](double t_ms, double along_m, double error_m) {
+    ScoredEstimate e;
+    e.time_ns = static_cast<TimeNs>(t_ms * 1e6);
+    e.along_road_m = along_m;
+    e.error_m = error_m;
+    return e;
   };
-  set("ndt", 0.20, 0.10);
-  set("rsu_vlp16", 0.02, 0.30);
-  set("fused_vlp16", 0.03, 0.08);
+  // Four frames, 100 ms apart, at 0, 10, 20 and 45 m along the road.
+  scores.estimates["ndt"] = {estimate(0, 0, 0.2), estimate(100, 10, 0.2), estimate(200, 20, 0.2),
+                             estimate(300, 45, 0.1)};
+  scores.estimates["fused_vlp16"] = {estimate(0, 0, 0.25), estimate(100, 10, 0.03), estimate(200, 20, 0.04),
+                                     estimate(300, 45, 0.05)};
+  // Fixes: one for the frame at 100 ms; two in the period before 200 ms (the newer, 0.04 m, counts); none
+  // for the first frame (swept after it) nor the last (beyond the RSU's last fix).
+  scores.estimates["rsu_vlp16"] = {estimate(50, 5, 0.02), estimate(140, 14, 0.5), estimate(160, 16, 0.04)};
   const std::vector<FusedGoals> goals = fused_goals(scores, {"vlp16", "vlp32c"});  // no vlp32c scores
   ASSERT_EQ(goals.size(), 2u);
-  EXPECT_EQ(goals[0].range, "pm36");
-  EXPECT_NEAR(goals[0].reduction_vs_ndt, 1.0 - 0.03 / 0.20, 1e-12);
-  EXPECT_NEAR(goals[0].best_mae_m, 0.02, 1e-12);  // the RSU is the better one within +-36 m
-  EXPECT_NEAR(goals[1].best_mae_m, 0.10, 1e-12);  // NDT within +-50 m
-  EXPECT_NEAR(goals[1].reduction_vs_ndt, 0.2, 1e-12);
-  // An RSU without a fix in the range does not make "the better" zero.
-  set("rsu_vlp16", 0.0, 0.0, 0);
-  EXPECT_NEAR(fused_goals(scores, {"vlp16"})[0].best_mae_m, 0.20, 1e-12);
+  const FusedGoals& pm36 = goals[0];
+  EXPECT_EQ(pm36.range, "pm36");
+  EXPECT_EQ(pm36.covered_frames, 2u);
+  EXPECT_EQ(pm36.uncovered_frames, 1u);
+  EXPECT_NEAR(pm36.fused_mae_m, 0.035, 1e-12);
+  EXPECT_NEAR(pm36.ndt_mae_m, 0.2, 1e-12);
+  EXPECT_NEAR(pm36.rsu_mae_m, 0.03, 1e-12);
+  EXPECT_NEAR(pm36.best_mae_m, 0.03, 1e-12);
+  EXPECT_NEAR(pm36.reduction_vs_ndt, 1.0 - 0.035 / 0.2, 1e-12);
+  EXPECT_TRUE(pm36.below_ndt_met());
+  EXPECT_FALSE(pm36.covered_no_worse());  // 0.035 m against the RSU's 0.030 m on the same frames
+  EXPECT_NEAR(pm36.fused_uncovered_mae_m, 0.25, 1e-12);
+  EXPECT_FALSE(pm36.uncovered_no_worse());  // the first frame: 0.25 m against NDT's 0.2 m
+  EXPECT_NEAR(pm36.reduction_vs_ndt_all_frames, 1.0 - (0.25 + 0.03 + 0.04) / 0.6, 1e-12);
+  const FusedGoals& pm50 = goals[1];
+  EXPECT_EQ(pm50.covered_frames, 2u);
+  EXPECT_EQ(pm50.uncovered_frames, 2u);
+  EXPECT_NEAR(pm50.fused_uncovered_mae_m, 0.15, 1e-12);
+  EXPECT_NEAR(pm50.ndt_uncovered_mae_m, 0.15, 1e-12);
+  EXPECT_TRUE(pm50.uncovered_no_worse());
+  // An RSU without a fix in the range leaves every frame uncovered: the fused pose is held to NDT alone.
+  scores.estimates["rsu_vlp16"].clear();
+  const FusedGoals none = fused_goals(scores, {"vlp16"})[0];
+  EXPECT_EQ(none.covered_frames, 0u);
+  EXPECT_EQ(none.uncovered_frames, 3u);
+  EXPECT_TRUE(none.below_ndt_met());
+  EXPECT_TRUE(none.covered_no_worse());
+  EXPECT_NEAR(none.fused_uncovered_mae_m, (0.25 + 0.03 + 0.04) / 3.0, 1e-12);
+  EXPECT_TRUE(none.uncovered_no_worse());  // against NDT's 0.2 m
 }
 
 // Traffic: a correction nearer another vehicle's true position than its own vehicle's is counted as the
