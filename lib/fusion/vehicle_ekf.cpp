@@ -183,6 +183,25 @@ MeasurementOutcome VehicleEkf::add(const PoseMeasurement& m) {
   return outcome;
 }
 
+std::size_t VehicleEkf::reweigh_ndt(const std::map<TimeNs, Eigen::Matrix3d>& covariances) {
+  std::optional<std::size_t> first;
+  std::size_t changed = 0;
+  for (std::size_t k = 0; k < history_.size(); ++k) {
+    PoseMeasurement& m = history_[k].measurement;
+    const auto it = covariances.find(m.time);
+    if (m.source != MeasurementSource::kNdt || it == covariances.end() || it->second == m.covariance) {
+      continue;
+    }
+    m.covariance = it->second;
+    first = first.value_or(k);
+    ++changed;
+  }
+  if (first) {
+    replay_from(*first);
+  }
+  return changed;
+}
+
 void VehicleEkf::replay_from(std::size_t index) {
   StateEstimate state = index == 0 ? anchor_ : history_[index - 1].posterior;
   for (std::size_t k = index; k < history_.size(); ++k) {

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <optional>
 
 #include "common/pose.h"
@@ -63,6 +64,11 @@ class VehicleEkf {
   // Fuses one measurement. One older than the newest processed is inserted in time order and the
   // later measurements are re-applied, so the result equals in-order processing.
   MeasurementOutcome add(const PoseMeasurement& measurement);
+
+  // Gives the kept NDT poses at the times `covariances` names the covariance it gives for them, and
+  // redoes the filter from the first one changed, as if they had come so: for a weighting decided
+  // before a late measurement showed it wrong (vehicle/vehicle_core.h). Returns how many changed.
+  std::size_t reweigh_ndt(const std::map<TimeNs, Eigen::Matrix3d>& covariances);
 
   // The estimate at time t, predicted from the latest state at or before t (backwards from the oldest
   // kept state if t is older still). Does not change the filter. Empty before initialisation.

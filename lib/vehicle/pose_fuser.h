@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 
 #include "common/pose.h"
@@ -65,6 +66,11 @@ class PoseFuser {
   // An RSU correction: box centre and box yaw (mod pi) at the correction's sweep time. A fix the gate
   // refuses re-initialises the filter only as `reanchor` allows.
   fusion::MeasurementOutcome add_rsu(const v2i::Correction& correction, Reanchor reanchor = Reanchor::kNever);
+
+  // NDT poses already fused given other covariances (fusion::VehicleEkf::reweigh_ndt).
+  std::size_t reweigh_ndt(const std::map<TimeNs, Eigen::Matrix3d>& covariances) {
+    return ekf_.reweigh_ndt(covariances);
+  }
 
   // The fused estimate at `time` (predicted from the nearest earlier state). Empty before the first NDT
   // pose.

@@ -24,6 +24,7 @@ VehicleCore::VehicleCore(const VehicleCoreConfig& config)
 
 NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
   ++stats_.ndt_poses;
+  newest_ndt_ = newest_ndt_ ? std::max(*newest_ndt_, ndt.time) : ndt.time;
   const bool flagged = assess(ndt.quality, config_.ndt_quality) == NdtHealth::kDegraded;
   const bool degraded = flagged || (last_degraded_ndt_ && ndt.time >= *last_degraded_ndt_ &&
                                     ndt.time - *last_degraded_ndt_ <= config_.degraded_ndt_persistence);
@@ -61,6 +62,11 @@ NdtStep VehicleCore::on_ndt(const NdtPose& ndt) {
   stats_.ndt_weakened_in_fused += weaken_in_fused ? 1 : 0;
   stats_.ndt_weakened_along_axis += weaken_in_fused && along_axis ? 1 : 0;
   fuser_.add_ndt(ndt.pose, weaken_in_fused ? weakened_for_fused : ndt.covariance, ndt.time);
+  if (degraded && !weaken_in_fused) {
+    unweakened_degraded_[ndt.time] = weakened_for_fused;
+  }
+  std::erase_if(unweakened_degraded_,
+                [&](const auto& entry) { return ndt.time - entry.first > config_.fuser.ekf.history_window; });
   NdtStep step;
   step.fused = fuser_.pose_at(ndt.time);
   step.announce = state_to_announce(ndt, step.fused);
@@ -94,6 +100,7 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& received) {
       hold_back(correction, *step.check);
       return step;
     }
+    last_rsu_heard_ = std::max(correction.sweep_time, newest_ndt_.value_or(correction.sweep_time));
     if (step.check->admitted_now) {
       fuse_held_back(correction.rsu_id);
     }
@@ -103,6 +110,9 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& received) {
   } else if (!own) {
     ++stats_.fixes_without_own;  // the fused filter refuses it too (not initialised)
   }
+  if (step.check) {
+    weaken_covered_by(correction.sweep_time);  // checked and usable: an admitted RSU is heard
+  }
   const std::uint64_t reanchors = fuser_.stats().rsu_reanchors;
   step.outcome = fuser_.add_rsu(correction, reanchor);
   step.reanchored = fuser_.stats().rsu_reanchors > reanchors;
@@ -110,6 +120,18 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& received) {
     step.fused = fuser_.pose_at(correction.sweep_time);
   }
   return step;
+}
+
+void VehicleCore::weaken_covered_by(TimeNs sweep) {
+  std::map<TimeNs, Eigen::Matrix3d> weakened;
+  for (auto it = unweakened_degraded_.lower_bound(sweep - config_.rsu_heard_hold);
+       it != unweakened_degraded_.end() && it->first - sweep <= config_.rsu_heard_hold;) {
+    weakened.insert(*it);
+    it = unweakened_degraded_.erase(it);
+  }
+  if (!weakened.empty()) {
+    stats_.ndt_weakened_late += fuser_.reweigh_ndt(weakened);
+  }
 }
 
 void VehicleCore::forget_excluded(std::uint64_t rsu_id, OwnEstimate status) {
@@ -148,6 +170,7 @@ void VehicleCore::fuse_held_back(std::uint64_t rsu_id) {
     return;
   }
   for (const v2i::Correction& fix : it->second) {
+    weaken_covered_by(fix.sweep_time);
     fuser_.add_rsu(fix);
     ++stats_.fixes_fused_after_probation;
   }
@@ -168,7 +191,8 @@ bool VehicleCore::rsu_admitted_near(TimeNs t) const {
   return std::any_of(monitor_.sources().begin(), monitor_.sources().end(), [&](const auto& entry) {
     const SourceRecord& s = entry.second;
     return s.state == SourceState::kAdmitted && s.fixes > 0 &&
-           std::llabs(t - s.last_time) <= config_.ndt_degraded_hold;
+           (std::llabs(t - s.last_time) <= config_.rsu_heard_hold ||
+            (last_rsu_heard_ && std::llabs(t - *last_rsu_heard_) <= config_.rsu_heard_hold));
   });
 }
 

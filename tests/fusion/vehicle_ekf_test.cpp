@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <vector>
 
 #include "common/angles.h"
@@ -160,6 +161,41 @@ TEST(VehicleEkf, LateRsuFixGivesTheInOrderResult) {
   EXPECT_NEAR((a->covariance - b->covariance).cwiseAbs().maxCoeff(), 0.0, 1e-12);
   EXPECT_EQ(a->time, b->time);
   EXPECT_EQ(in_order.stats().accepted(), late.stats().accepted());
+}
+
+// NDT poses fused at one covariance and given another afterwards (reweigh_ndt) leave the filter where
+// the stream with those covariances in the first place takes it.
+TEST(VehicleEkf, ReweighedNdtPosesGiveTheResultOfTheirNewCovariances) {
+  const std::vector<PoseMeasurement> stream = drive(30, true);
+  const Eigen::Matrix3d weak = Eigen::Vector3d(0.9 * 0.9, 0.2 * 0.2, 0.02 * 0.02).asDiagonal();
+  const auto reweighed = [&](const PoseMeasurement& m) {
+    return m.source == MeasurementSource::kNdt && m.time >= kStart + 1500 * kNsPerMs &&
+           m.time <= kStart + 2200 * kNsPerMs;
+  };
+  VehicleEkf direct(config_with_offset());
+  VehicleEkf afterwards(config_with_offset());
+  std::map<TimeNs, Eigen::Matrix3d> covariances;
+  for (const auto& m : stream) {
+    PoseMeasurement weakened = m;
+    if (reweighed(m)) {
+      weakened.covariance = weak;
+      covariances[m.time] = weak;
+    }
+    direct.add(weakened);
+    afterwards.add(m);
+  }
+  const auto before = afterwards.latest();
+  // An RSU time and an unknown time are ignored; the eight poses from 1.5 s to 2.2 s change.
+  covariances[kStart + 1550 * kNsPerMs] = weak;
+  covariances[kStart + 1234 * kNsPerMs] = weak;
+  EXPECT_EQ(afterwards.reweigh_ndt(covariances), 8U);
+  const auto a = direct.latest();
+  const auto b = afterwards.latest();
+  ASSERT_TRUE(a && b && before);
+  EXPECT_GT((before->covariance - b->covariance).cwiseAbs().maxCoeff(), 1e-6);  // it did change
+  EXPECT_NEAR((a->state - b->state).cwiseAbs().maxCoeff(), 0.0, 1e-9);
+  EXPECT_NEAR((a->covariance - b->covariance).cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_EQ(afterwards.reweigh_ndt(covariances), 0U);  // already so
 }
 
 TEST(VehicleEkf, MeasurementOlderThanTheHistoryIsRefused) {

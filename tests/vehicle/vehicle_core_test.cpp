@@ -149,7 +149,9 @@ struct LateDriveResult {
   std::uint64_t exclusions = 0;
 };
 
-LateDriveResult drive_with_late_fixes(const VehicleCoreConfig& config, TimeNs delay) {
+// lost_from, lost_count: the fixes of these ticks never arrive.
+LateDriveResult drive_with_late_fixes(const VehicleCoreConfig& config, TimeNs delay, int lost_from = 0,
+                                      int lost_count = 0) {
   VehicleCore core(config);
   std::deque<std::pair<TimeNs, v2i::Correction>> in_flight;  // arrival time, fix
   LateDriveResult r;
@@ -189,7 +191,9 @@ LateDriveResult drive_with_late_fixes(const VehicleCoreConfig& config, TimeNs de
     fix.sweep_time = sweep;
     fix.pose = {at_sweep.x() + 0.03 * m.b, at_sweep.y() + 0.03 * n.b, at_sweep.z()};
     fix.pose_covariance = Eigen::Vector3d(0.03 * 0.03, 0.03 * 0.03, 0.01 * 0.01).asDiagonal();
-    in_flight.emplace_back(sweep + 4 * kNsPerMs + delay, fix);
+    if (k < lost_from || k >= lost_from + lost_count) {
+      in_flight.emplace_back(sweep + 4 * kNsPerMs + delay, fix);
+    }
   }
   r.ndt_mae /= std::max(scored, 1);
   r.fused_mae /= std::max(scored, 1);
@@ -223,6 +227,27 @@ TEST(VehicleCore, ADegenerateNdtIsWeakenedAlongItsWeakAxisOnlySoLateCorrectionsC
   EXPECT_LT(delayed.fused_max, delayed.ndt_max);
   // The honest RSU is never excluded.
   EXPECT_EQ(on_time.exclusions + delayed.exclusions + delayed_everywhere.exclusions, 0U);
+}
+
+// Fixes 500 ms late and then none for 2 s (20 lost in a row, through the lane change): while no RSU is
+// heard the degraded NDT counts at its own covariance (the best the vehicle has), and when the fixes
+// come back, those poses within rsu_heard_hold of the returning fixes' sweeps are weakened after all,
+// so that the filter is not left on NDT's bias (and its speed on NDT's drift) while the fixes catch up.
+TEST(VehicleCore, FixesBackAfterAGapWeakenTheDegradedPosesTheyCover) {
+  const TimeNs late = 500 * kNsPerMs;
+  const LateDriveResult on_time = drive_with_late_fixes({}, 0);
+  const LateDriveResult gap = drive_with_late_fixes({}, late, 45, 20);
+  std::printf(
+      "NDT MAE %.3f max %.3f; fused on time %.3f / %.3f; 500 ms late with 20 lost: %.3f / %.3f, %llu "
+      "poses weakened late\n",
+      gap.ndt_mae, gap.ndt_max, on_time.fused_mae, on_time.fused_max, gap.fused_mae, gap.fused_max,
+      static_cast<unsigned long long>(gap.stats.ndt_weakened_late));
+  // On time, only the poses before the RSU's admission (its first fixes held back on probation).
+  EXPECT_LE(on_time.stats.ndt_weakened_late, 5U);
+  EXPECT_GT(gap.stats.ndt_weakened_late, on_time.stats.ndt_weakened_late + 5U);
+  EXPECT_LT(gap.fused_max, gap.ndt_max);
+  EXPECT_LT(gap.fused_mae, 0.5 * gap.ndt_mae);
+  EXPECT_EQ(gap.exclusions, 0U);
 }
 
 // The weakening itself: along the axis the variance is scaled and floored, across it and in yaw it stays.
