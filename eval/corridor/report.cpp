@@ -397,6 +397,11 @@ FusedGoals paired_cell(const std::vector<ScoredEstimate>& ndt, const std::vector
   g.fused_uncovered_mae_m = mean_of(fused_out);
   g.ndt_uncovered_mae_m = mean_of(ndt_out);
   g.reduction_vs_ndt_all_frames = mean_of(ndt_all) > 0 ? 1.0 - mean_of(fused_all) / mean_of(ndt_all) : 0.0;
+  g.fused_all_mae_m = mean_of(fused_all);
+  const auto all = static_cast<double>(std::max<std::size_t>(fused_all.size(), 1));
+  g.better_all_mae_m = (static_cast<double>(g.covered_frames) * g.best_mae_m +
+                        static_cast<double>(g.uncovered_frames) * g.ndt_uncovered_mae_m) /
+                       all;
   return g;
 }
 
@@ -404,6 +409,10 @@ FusedGoals paired_cell(const std::vector<ScoredEstimate>& ndt, const std::vector
 
 bool FusedGoals::below_ndt_met() const {
   return covered_frames == 0 || reduction_vs_ndt >= 0.8;
+}
+
+bool FusedGoals::no_worse_met() const {
+  return fused_all_mae_m == 0.0 || no_worse_to_the_mm(fused_all_mae_m, better_all_mae_m);
 }
 
 bool FusedGoals::covered_no_worse() const {
@@ -456,28 +465,27 @@ std::string format_paper_comparison(const ExperimentScores& scores,
   }
   out << "The vehicle's fused pose against NDT and the RSU on the same frames (MAE; a frame is within the "
          "RSU's coverage when the RSU swept the vehicle in the frame period ending at it and sent a fix;\n"
-         "the RSU's fix of that sweep is compared with the fused pose and NDT at that frame; on the frames "
-         "without a fix, the fused pose with NDT alone):\n";
+         "there the RSU's fix of that sweep is compared with the fused pose and NDT at that frame; on the "
+         "frames without a fix the better one is NDT):\n";
   for (const FusedGoals& g : fused_goals(scores, rsu_models)) {
     char line[400];
-    std::snprintf(line, sizeof line,
-                  "  fused %-7s -%2.0f m to %2.0f m: %zu frames with a fix: %5.1f %% %s NDT (%s); %.3f m vs "
-                  "NDT %.3f m, RSU %.3f m: %s; ",
-                  g.rsu_model.c_str(), range_half(g.range), range_half(g.range), g.covered_frames,
-                  100.0 * std::abs(g.reduction_vs_ndt), g.reduction_vs_ndt >= 0 ? "below" : "ABOVE",
-                  g.below_ndt_met() ? "met" : "MISSED", g.fused_mae_m, g.ndt_mae_m, g.rsu_mae_m,
-                  g.covered_no_worse() ? "no worse" : "WORSE");
+    std::snprintf(
+        line, sizeof line,
+        "  fused %-7s -%2.0f m to %2.0f m: %zu frames with a fix: %.3f m vs NDT %.3f m (%.1f %% %s, "
+        "80 %%: %s), RSU %.3f m; ",
+        g.rsu_model.c_str(), range_half(g.range), range_half(g.range), g.covered_frames, g.fused_mae_m,
+        g.ndt_mae_m, 100.0 * std::abs(g.reduction_vs_ndt), g.reduction_vs_ndt >= 0 ? "below" : "ABOVE",
+        g.below_ndt_met() ? "met" : "MISSED", g.rsu_mae_m);
     out << line;
     if (g.uncovered_frames == 0) {
       out << "no frame without one";
     } else {
-      std::snprintf(line, sizeof line, "%zu without: %.3f m vs NDT %.3f m: %s", g.uncovered_frames,
-                    g.fused_uncovered_mae_m, g.ndt_uncovered_mae_m,
-                    g.uncovered_no_worse() ? "no worse" : "WORSE");
+      std::snprintf(line, sizeof line, "%zu without: %.3f m vs NDT %.3f m", g.uncovered_frames,
+                    g.fused_uncovered_mae_m, g.ndt_uncovered_mae_m);
       out << line;
     }
-    std::snprintf(line, sizeof line, " (every frame: %.1f %% below NDT)\n",
-                  100.0 * g.reduction_vs_ndt_all_frames);
+    std::snprintf(line, sizeof line, "; every frame: %.3f m vs the better's %.3f m: %s\n", g.fused_all_mae_m,
+                  g.better_all_mae_m, g.no_worse_met() ? "no worse" : "WORSE");
     out << line;
   }
   return out.str();
@@ -521,9 +529,10 @@ std::string summary_json(const ExperimentScores& scores, const std::vector<std::
          "the "
          "frame period ending at the frame and sent a fix; on covered frames the fused, NDT and RSU (that "
          "fix) "
-         "errors are averaged over the same frames: reduction_vs_ndt = 1 - fused / ndt, "
-         "better_of_ndt_and_rsu = "
-         "min(ndt, rsu); on uncovered frames the fused pose against NDT alone; met to the millimetre\",\n";
+         "errors are averaged over the same frames: reduction_vs_ndt = 1 - fused / ndt (goal 0.8), "
+         "better_of_ndt_and_rsu = min(ndt, rsu); on uncovered frames the better is NDT; "
+         "no_worse_than_better_met: the fused MAE over all the range's frames against the better's over the "
+         "same frames, to the millimetre\",\n";
   out << "  \"fused_goals\": {";
   std::string model;
   for (const FusedGoals& g : fused_goals(scores, methods_rsu_models(methods))) {
@@ -542,9 +551,12 @@ std::string summary_json(const ExperimentScores& scores, const std::vector<std::
         << ", \"fused_uncovered_mae_m\": " << json_number(g.fused_uncovered_mae_m)
         << ", \"ndt_uncovered_mae_m\": " << json_number(g.ndt_uncovered_mae_m)
         << ", \"reduction_vs_ndt_all_frames\": " << json_number(g.reduction_vs_ndt_all_frames)
+        << ", \"fused_all_frames_mae_m\": " << json_number(g.fused_all_mae_m)
+        << ", \"better_all_frames_mae_m\": " << json_number(g.better_all_mae_m)
         << ", \"below_ndt_met\": " << (g.below_ndt_met() ? "true" : "false")
-        << ", \"no_worse_than_better_met\": " << (g.covered_no_worse() ? "true" : "false")
-        << ", \"no_worse_than_ndt_without_fix_met\": " << (g.uncovered_no_worse() ? "true" : "false") << "}";
+        << ", \"no_worse_than_better_met\": " << (g.no_worse_met() ? "true" : "false")
+        << ", \"no_worse_on_frames_with_fix\": " << (g.covered_no_worse() ? "true" : "false")
+        << ", \"no_worse_than_ndt_without_fix\": " << (g.uncovered_no_worse() ? "true" : "false") << "}";
   }
   out << (model.empty() ? "}" : "}}");
   if (!scores.traffic.empty()) {

@@ -163,12 +163,24 @@ TEST(FusedGoals, ComparesFrameForFrameWithinAndBeyondTheRsusCoverage) {
   EXPECT_NEAR(pm36.fused_uncovered_mae_m, 0.25, 1e-12);
   EXPECT_FALSE(pm36.uncovered_no_worse());  // the first frame: 0.25 m against NDT's 0.2 m
   EXPECT_NEAR(pm36.reduction_vs_ndt_all_frames, 1.0 - (0.25 + 0.03 + 0.04) / 0.6, 1e-12);
+  // The cell: fused (0.25 + 0.03 + 0.04) / 3 against the better's (2 x 0.03 + 0.2) / 3.
+  EXPECT_NEAR(pm36.fused_all_mae_m, 0.32 / 3.0, 1e-12);
+  EXPECT_NEAR(pm36.better_all_mae_m, 0.26 / 3.0, 1e-12);
+  EXPECT_FALSE(pm36.no_worse_met());
   const FusedGoals& pm50 = goals[1];
   EXPECT_EQ(pm50.covered_frames, 2u);
   EXPECT_EQ(pm50.uncovered_frames, 2u);
   EXPECT_NEAR(pm50.fused_uncovered_mae_m, 0.15, 1e-12);
   EXPECT_NEAR(pm50.ndt_uncovered_mae_m, 0.15, 1e-12);
   EXPECT_TRUE(pm50.uncovered_no_worse());
+  // (0.25 + 0.03 + 0.04 + 0.05) / 4 against (2 x 0.03 + 0.2 + 0.1) / 4: still worse, by 2.5 mm.
+  EXPECT_FALSE(pm50.no_worse_met());
+  // Had the fused pose been 4 cm better on the first frame: no worse over the cell, though worse than
+  // the RSU on its frames (0.035 against 0.030 m).
+  scores.estimates["fused_vlp16"][0].error_m = 0.21;
+  EXPECT_TRUE(fused_goals(scores, {"vlp16"})[1].no_worse_met());
+  EXPECT_FALSE(fused_goals(scores, {"vlp16"})[1].covered_no_worse());
+  scores.estimates["fused_vlp16"][0].error_m = 0.25;
   // An RSU without a fix in the range leaves every frame uncovered: the fused pose is held to NDT alone.
   scores.estimates["rsu_vlp16"].clear();
   const FusedGoals none = fused_goals(scores, {"vlp16"})[0];
