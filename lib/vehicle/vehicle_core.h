@@ -75,7 +75,8 @@ struct VehicleCoreConfig {
   // first), so that the returning fixes are not held to the degraded NDT's drift. Measured (README "The
   // V2I link impaired"): 500 ms late, half the fixes lost and 13 in a row, the fused maximum above NDT's
   // in 25 of 130 replayed cases with 1 s, 12 with 1.5 s, 10 with 2 s; the VLP-16's frames beyond its last
-  // fix (36-50 m, coasting) 0-7 mm worse with 1.5 s than with 1 s, still 29-60 % below NDT there.
+  // fix (36-50 m, coasting) 0-9 mm worse with 1.5 s than with 1 s, 40-60 % below NDT there (six noise
+  // seeds; not in the one where the RSU had been falsely excluded).
   TimeNs rsu_heard_hold = 1500 * kNsPerMs;
   // A healthy-looking pose this soon after a degraded one is taken as degraded too: the street that made
   // the match fail is still there (the degraded corridor's poses between flagged ones were as far off).
