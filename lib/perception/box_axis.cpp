@@ -27,25 +27,29 @@ bool on_footprint_outline(const AxisContext& ctx, const BoxPoint& p, int a) {
   return a == ctx.length_axis ? p.end_body : p.lower_body;
 }
 
-Extremes extremes(const AxisContext& ctx, int a) {
+// Both axes' extremes, in one pass over the points.
+std::array<Extremes, 2> extremes(const AxisContext& ctx) {
   const std::span<const BoxPoint> points = ctx.points;
-  Extremes e;
+  std::array<Extremes, 2> out;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const double t = points[i].local[a];
-    if (t < e.lo) {
-      e.lo = t;
-      e.lo_point = i;
-    }
-    if (t > e.hi) {
-      e.hi = t;
-      e.hi_point = i;
-    }
-    if (on_footprint_outline(ctx, points[i], a)) {
-      e.lower_lo = std::min(e.lower_lo, t);
-      e.lower_hi = std::max(e.lower_hi, t);
+    for (int a = 0; a < 2; ++a) {
+      Extremes& e = out[static_cast<std::size_t>(a)];
+      const double t = points[i].local[a];
+      if (t < e.lo) {
+        e.lo = t;
+        e.lo_point = i;
+      }
+      if (t > e.hi) {
+        e.hi = t;
+        e.hi_point = i;
+      }
+      if (on_footprint_outline(ctx, points[i], a)) {
+        e.lower_lo = std::min(e.lower_lo, t);
+        e.lower_hi = std::max(e.lower_hi, t);
+      }
     }
   }
-  return e;
+  return out;
 }
 
 // The lower-body face on side `sign` (-1 low, +1 high) of axis a, if the points make one there: their
@@ -151,7 +155,9 @@ std::optional<AxisEstimate> face_anchor(const AxisContext& ctx, int a, const Ext
     const std::vector<double> s = face_points(ctx, a, sign, lower_extreme, config, along_mean, lowest);
     if (s.empty())
       continue;
-    const FaceEnvelope env = outer_envelope(s, ctx.noise_sigma, config.envelope_band_m);
+    const FaceEnvelope env = ctx.envelopes != nullptr
+                                 ? (*ctx.envelopes)(s, ctx.noise_sigma, config.envelope_band_m)
+                                 : outer_envelope(s, ctx.noise_sigma, config.envelope_band_m);
     // A face seen only above the height to which every vehicle's body keeps its full plan may be set back
     // (a bus's windscreen above its low front) - unless a laser passing below it, at the face, would have
     // hit the body had it reached farther out there: up to mid_height_inset_m, the middle of that with
@@ -212,18 +218,11 @@ Side side_bound(const AxisContext& ctx, int a, double sign, const Extremes& e, c
               false};
 }
 
-}  // namespace
-
-AxisEstimate estimate_axis(const AxisContext& ctx, int a, const LidarGeometry& lidar,
-                           const CorrectionConfig& config) {
+// Axis a (0 or 1) of the box, from both axes' extremes (extremes(ctx)).
+AxisEstimate estimate_axis(const AxisContext& ctx, int a, const Extremes& e, const Extremes& other,
+                           const LidarGeometry& lidar, const CorrectionConfig& config) {
   AxisEstimate out;
   const double dim = ctx.dims[a];
-  if (ctx.points.empty()) {  // nothing bounds it: anywhere within a box's size of the frame's origin
-    out.evidence = {AxisAnchor::interval, 0, -1.0, dim};
-    return out;
-  }
-  const Extremes e = extremes(ctx, a);
-  const Extremes other = extremes(ctx, 1 - a);
   if (const auto face = face_anchor(ctx, a, e, lidar, config))
     return *face;
   const Side low = side_bound(ctx, a, -1.0, e, other, lidar, config);
@@ -257,6 +256,22 @@ AxisEstimate estimate_axis(const AxisContext& ctx, int a, const LidarGeometry& l
     centroid += p.local[1 - a];
   out.across = centroid / static_cast<double>(ctx.points.size());
   out.evidence = {AxisAnchor::interval, 0, -1.0, std::max(0.0, hi - lo)};
+  return out;
+}
+
+}  // namespace
+
+std::array<AxisEstimate, 2> estimate_axes(const AxisContext& ctx, const LidarGeometry& lidar,
+                                          const CorrectionConfig& config) {
+  std::array<AxisEstimate, 2> out;
+  if (ctx.points.empty()) {  // nothing bounds it: anywhere within a box's size of the frame's origin
+    for (int a = 0; a < 2; ++a)
+      out[static_cast<std::size_t>(a)].evidence = {AxisAnchor::interval, 0, -1.0, ctx.dims[a]};
+    return out;
+  }
+  const std::array<Extremes, 2> e = extremes(ctx);
+  out[0] = estimate_axis(ctx, 0, e[0], e[1], lidar, config);
+  out[1] = estimate_axis(ctx, 1, e[1], e[0], lidar, config);
   return out;
 }
 

@@ -20,6 +20,7 @@
 // error over it: the fix says how little the points decide instead of guessing an end.
 #pragma once
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -31,6 +32,7 @@
 namespace rsu::perception {
 
 struct CorrectionConfig;
+class FaceEnvelopeMemo;
 
 // A point in the box's frame: (along axis 0, along axis 1), its height above the road, whether it can
 // be on the lower body (whose outline is the footprint's: the sides), whether it lies low enough to be on
@@ -65,10 +67,13 @@ struct AxisContext {
   double end_height = 1.0;    // up to which the body surely reaches at its front and back (the bonnet)
   double noise_sigma = 0.03;  // the points' noise across a face
   double yaw_sigma = 0.0;     // how uncertain the frame's direction is (rad)
+  // Where the faces' envelopes are estimated: a memo shared by the placements of one correction (the same
+  // face in the same frame is not estimated twice), or none.
+  FaceEnvelopeMemo* envelopes = nullptr;
 };
 
-// Axis a (0 or 1) of the box.
-AxisEstimate estimate_axis(const AxisContext& ctx, int a, const LidarGeometry& lidar,
-                           const CorrectionConfig& config);
+// Both axes of the box (axis 0, axis 1).
+std::array<AxisEstimate, 2> estimate_axes(const AxisContext& ctx, const LidarGeometry& lidar,
+                                          const CorrectionConfig& config);
 
 }  // namespace rsu::perception

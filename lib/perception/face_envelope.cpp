@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <vector>
 
@@ -74,6 +75,18 @@ FaceEnvelope outer_envelope(std::span<const double> s, double noise_sigma, doubl
   out.face_points = n_face;
   out.sigma = sigma / std::sqrt(std::max(n_face, 1.0));
   return out;
+}
+
+FaceEnvelope FaceEnvelopeMemo::operator()(std::span<const double> s, double noise_sigma, double band) {
+  const auto same = [&](const Entry& e) {
+    return e.noise_sigma == noise_sigma && e.band == band && e.s.size() == s.size() &&
+           (s.empty() || std::memcmp(e.s.data(), s.data(), s.size_bytes()) == 0);
+  };
+  if (const auto it = std::find_if(entries_.begin(), entries_.end(), same); it != entries_.end())
+    return it->envelope;
+  const FaceEnvelope envelope = outer_envelope(s, noise_sigma, band);
+  entries_.push_back({{s.begin(), s.end()}, noise_sigma, band, envelope});
+  return envelope;
 }
 
 }  // namespace rsu::perception

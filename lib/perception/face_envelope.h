@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <span>
+#include <vector>
 
 namespace rsu::perception {
 
@@ -24,5 +25,23 @@ struct FaceEnvelope {
 // s: the points' coordinates along the face's outward normal (at least one); noise_sigma: their noise
 // across the face (> 0); band: how far inside the face other parts of the body may be counted.
 FaceEnvelope outer_envelope(std::span<const double> s, double noise_sigma, double band);
+
+// outer_envelope of inputs seen before, from the earlier result: one correction places the box in the
+// same frame more than once (both length/width hypotheses, then the chosen box along the same axes), and
+// a face's points are then the same, bit for bit; its EM is half of a near car's fix (issue 16). Inputs
+// are compared exactly, so the result is the one outer_envelope gives.
+class FaceEnvelopeMemo {
+ public:
+  FaceEnvelope operator()(std::span<const double> s, double noise_sigma, double band);
+
+ private:
+  struct Entry {
+    std::vector<double> s;
+    double noise_sigma = 0.0;
+    double band = 0.0;
+    FaceEnvelope envelope;
+  };
+  std::vector<Entry> entries_;
+};
 
 }  // namespace rsu::perception

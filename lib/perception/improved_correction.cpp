@@ -11,6 +11,7 @@
 
 #include "perception/box_axis.h"
 #include "perception/box_consistency.h"
+#include "perception/face_envelope.h"
 #include "perception/face_refinement.h"
 #include "perception/informative_face.h"
 #include "perception/size_correction.h"
@@ -58,15 +59,15 @@ struct View {
   double end_height = 0.0;    // ... and the footprint's ends (BoxPoint::end_body)
   double vehicle_height = 0.0;
   double noise_sigma = 0.0;
+  // The points as BoxPoints without their place in a frame (what does not depend on it), and the faces'
+  // envelopes estimated so far: the box is placed in several frames (box_axis.h).
+  std::vector<BoxPoint> body = {};
+  FaceEnvelopeMemo* envelopes = nullptr;
 
   std::vector<BoxPoint> in_frame(const Frame& f) const {
-    std::vector<BoxPoint> out;
-    out.reserve(points.size());
-    for (const Eigen::Vector3d& p : points) {
-      const double height = p.z() - lidar.ground_z;
-      out.push_back({f.local(p.head<2>()), height, height <= lower_height, height <= end_height,
-                     (p.head<2>() - lidar.xy()).norm()});
-    }
+    std::vector<BoxPoint> out = body;
+    for (std::size_t i = 0; i < out.size(); ++i)
+      out[i].local = f.local(points[i].head<2>());
     return out;
   }
 };
@@ -94,9 +95,11 @@ Placement place_box(const View& view, const Frame& frame, const std::vector<BoxP
   ctx.end_height = view.end_height;
   ctx.noise_sigma = view.noise_sigma;
   ctx.yaw_sigma = yaw_sigma;
+  ctx.envelopes = view.envelopes;
   Placement out;
+  const std::array<AxisEstimate, 2> axes = estimate_axes(ctx, view.lidar, view.config);
   for (int a = 0; a < 2; ++a) {
-    const AxisEstimate e = estimate_axis(ctx, a, view.lidar, view.config);
+    const AxisEstimate& e = axes[static_cast<std::size_t>(a)];
     out.centre[a] = e.centre;
     out.anchor[1 - a] = e.across;  // the point a yaw error turns the box about (fix_covariance.h lever)
     out.evidence[static_cast<std::size_t>(a)] = e.evidence;
@@ -224,18 +227,26 @@ std::vector<Eigen::Vector3d> finite_points(std::span<const Eigen::Vector3d> poin
 }
 
 View view_of(std::span<const Eigen::Vector3d> finite, const RectangleFit& fit, const VehicleSize& size,
-             const LidarGeometry& lidar, const CorrectionConfig& config) {
+             const LidarGeometry& lidar, const CorrectionConfig& config, FaceEnvelopeMemo& envelopes) {
   const double range = (fit.center - lidar.xy()).norm();
   // Without a usable announced height every point counts as the lower body (the footprint's outline).
   const bool height_known = std::isfinite(size.height) && size.height > 0.0;
-  return {finite,
-          lidar,
-          config,
-          lower_body_height(size, config),
-          end_body_height(size, config),
-          height_known ? size.height : 1e9,
-          std::sqrt(point_noise_variance(range, config.covariance) +
-                    config.covariance.face_tilt_sigma_m * config.covariance.face_tilt_sigma_m)};
+  View view{finite,
+            lidar,
+            config,
+            lower_body_height(size, config),
+            end_body_height(size, config),
+            height_known ? size.height : 1e9,
+            std::sqrt(point_noise_variance(range, config.covariance) +
+                      config.covariance.face_tilt_sigma_m * config.covariance.face_tilt_sigma_m)};
+  view.body.reserve(finite.size());
+  for (const Eigen::Vector3d& p : finite) {
+    const double height = p.z() - lidar.ground_z;
+    view.body.push_back({Eigen::Vector2d::Zero(), height, height <= view.lower_height,
+                         height <= view.end_height, (p.head<2>() - lidar.xy()).norm()});
+  }
+  view.envelopes = &envelopes;
+  return view;
 }
 
 // The yaw evidence: the (at most two) seen faces, each counting only its points on vertical surfaces of
@@ -391,7 +402,8 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   const RectangleFit refined =
       config.refine_on_faces ? refine_on_faces(fit, outline, lidar.xy(), config.fit, config.refinement) : fit;
   const std::vector<Eigen::Vector3d> finite = finite_points(points);
-  const View view = view_of(finite, refined, size, lidar, config);
+  FaceEnvelopeMemo envelopes;
+  const View view = view_of(finite, refined, size, lidar, config, envelopes);
   // Yaw: what the seen faces tell, the length/width assignment, the vehicle's own heading where they
   // tell little.
   const FixEvidence evidence = yaw_evidence(view, refined);

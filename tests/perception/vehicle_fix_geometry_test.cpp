@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -464,6 +465,32 @@ TEST(VehicleFixGeometry, FaceEnvelopeOfANearCarsSideEqualsItsEmOverEveryPoint) {
     EXPECT_NEAR(fast.position, sim::VehicleShape{}.width / 2.0, 0.05);
     EXPECT_LT(fast.face_points, 0.5 * static_cast<double>(s.size()));
   }
+}
+
+// The memo the correction shares between its placements gives outer_envelope's result for inputs it has
+// seen, and estimates again for inputs that differ in one bit or in the noise.
+TEST(VehicleFixGeometry, FaceEnvelopeMemoGivesTheEnvelopeOfExactlyTheseInputs) {
+  const Pose2 truth{1.5, 3.6, 0.0};
+  const View view = look(lidar::make_generic(128), 2.0, sim::VehicleShape{}, truth);
+  std::vector<double> s;
+  for (const auto& p : view.points)
+    s.push_back(truth.y - p.y());
+  std::vector<double> moved = s;
+  moved[moved.size() / 2] = std::nextafter(moved[moved.size() / 2], 1.0);
+  std::vector<double> first = s;
+  first[0] = sim::VehicleShape{}.width / 2.0 + 0.02;  // a point moved onto the face: a different envelope
+  FaceEnvelopeMemo memo;
+  for (int round = 0; round < 2; ++round) {
+    for (const auto& [input, noise_sigma] :
+         {std::pair{&s, 0.03}, std::pair{&s, 0.01}, std::pair{&moved, 0.03}, std::pair{&first, 0.03}}) {
+      const FaceEnvelope remembered = memo(*input, noise_sigma, 0.3);
+      const FaceEnvelope estimated = outer_envelope(*input, noise_sigma, 0.3);
+      EXPECT_EQ(remembered.position, estimated.position);
+      EXPECT_EQ(remembered.sigma, estimated.sigma);
+      EXPECT_EQ(remembered.face_points, estimated.face_points);
+    }
+  }
+  EXPECT_NE(outer_envelope(s, 0.03, 0.3).position, outer_envelope(first, 0.03, 0.3).position);
 }
 
 // Views whose points tell nothing of the heading, so that the fix carries the vehicle's own (sigma 10 deg)
