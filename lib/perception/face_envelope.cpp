@@ -2,9 +2,12 @@
 #include "perception/face_envelope.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 namespace rsu::perception {
@@ -28,6 +31,45 @@ double normal_pdf(double x, double sigma) {
   return std::exp(-0.5 * x * x / (sigma * sigma)) / (sigma * std::sqrt(2.0 * std::numbers::pi));
 }
 
+// s in ascending order (the EM sums over them in this order): a near car's face has thousands of points,
+// sorted by a radix sort on the doubles' bits (std::sort's order for finite values, ~2x faster there).
+std::vector<double> sorted_copy(std::span<const double> s) {
+  if (s.size() < 256) {  // where the radix sort's passes over its buckets cost more than the sort
+    std::vector<double> out(s.begin(), s.end());
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+  const auto key = [](double v) {
+    const auto bits = std::bit_cast<std::uint64_t>(v);
+    return (bits >> 63) != 0 ? ~bits : bits | (std::uint64_t{1} << 63);
+  };
+  std::vector<std::uint64_t> keys(s.size()), scratch(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i)
+    keys[i] = key(s[i]);
+  constexpr int kBits = 11;
+  constexpr std::size_t kBuckets = std::size_t{1} << kBits;
+  std::vector<std::size_t> count(kBuckets);
+  for (int shift = 0; shift < 64; shift += kBits) {
+    std::fill(count.begin(), count.end(), 0);
+    for (const std::uint64_t k : keys)
+      ++count[(k >> shift) & (kBuckets - 1)];
+    if (count[(keys.empty() ? 0 : keys[0] >> shift) & (kBuckets - 1)] == keys.size())
+      continue;  // every key has this digit
+    std::size_t sum = 0;
+    for (std::size_t& c : count)
+      sum += std::exchange(c, sum);
+    for (const std::uint64_t k : keys)
+      scratch[count[(k >> shift) & (kBuckets - 1)]++] = k;
+    keys.swap(scratch);
+  }
+  std::vector<double> out(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const std::uint64_t k = keys[i];
+    out[i] = std::bit_cast<double>((k >> 63) != 0 ? k & ~(std::uint64_t{1} << 63) : ~k);
+  }
+  return out;
+}
+
 }  // namespace
 
 FaceEnvelope outer_envelope(std::span<const double> s, double noise_sigma, double band) {
@@ -37,8 +79,7 @@ FaceEnvelope outer_envelope(std::span<const double> s, double noise_sigma, doubl
   const double sigma = std::max(noise_sigma, 1e-4);
   band = std::max(band, 4.0 * sigma);
   // Start near the outside: the 90th percentile, inside the few stray returns beyond it.
-  std::vector<double> sorted(s.begin(), s.end());
-  std::sort(sorted.begin(), sorted.end());
+  std::vector<double> sorted = sorted_copy(s);
   double f = sorted[static_cast<std::size_t>(0.9 * static_cast<double>(sorted.size() - 1))];
   double face_weight = 0.5;
   constexpr double kStray = 0.02;  // share of returns outside the face (spray, a mirror's edge)
