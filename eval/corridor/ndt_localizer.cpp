@@ -8,12 +8,13 @@
 #include <pcl/registration/ndt.h>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
 
+#include "common/symmetric_eigen.h"
 #include "fusion/covariance_floor.h"
 
 namespace rsu::eval {
@@ -43,7 +44,7 @@ struct HorizontalHold {
 
 HorizontalHold horizontal_hold(const Eigen::Matrix<double, 6, 6>& hessian) {
   const Eigen::Matrix2d information = -hessian.topLeftCorner<2, 2>();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(information);
+  const SymmetricEigen2 eigen(information);
   HorizontalHold hold;
   if (eigen.info() != Eigen::Success) {
     return hold;

@@ -6,10 +6,11 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
 #include "common/angles.h"
 #include "common/random.h"
+#include "common/symmetric_eigen.h"
 #include "eval/consistency.h"
 #include "eval/parallel_indices.h"
 #include "lidar/sensor_model.h"
@@ -66,7 +67,7 @@ MethodCell score(const perception::VehicleFix& fix, const Pose2& truth) {
   const Eigen::Matrix2d position_cov = fix.corrected.covariance.topLeftCorner<2, 2>();
   m.center_err_m = error.norm();
   m.yaw_err_deg = axis_error_deg(pose.yaw, truth.yaw);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(position_cov);
+  const SymmetricEigen2 eig(position_cov);
   m.sigma_m = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
   m.yaw_sigma_deg = rad_to_deg(std::sqrt(std::max(0.0, fix.corrected.covariance(2, 2))));
   m.position_nees = position_nees(error, position_cov);

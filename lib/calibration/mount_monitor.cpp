@@ -9,10 +9,11 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
 #include "calibration/coarse_search.h"
 #include "common/angles.h"
+#include "common/symmetric_eigen.h"
 
 namespace rsu::calibration {
 namespace {
@@ -84,7 +85,7 @@ MountMonitor::MountMonitor(const std::vector<std::vector<lidar::LidarPoint>>& re
         continue;
       const Eigen::Vector3d mean = c.sum / c.n;
       const Eigen::Matrix3d scatter = c.outer / c.n - mean * mean.transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+      const SymmetricEigen3 eigen(scatter);
       const Eigen::Vector3d lambda = eigen.eigenvalues();  // ascending
       if (!(lambda[1] > min_spread * min_spread) || lambda[0] > config_.max_plane_thickness * lambda[1])
         continue;
@@ -154,7 +155,7 @@ Vector6d MountMonitor::held_step(const PlaneFit& fit) const {
   const Vector6d scale = at_radius_scale();
   const Matrix6d information =
       scale.cwiseInverse().asDiagonal() * stated_information(fit) * scale.cwiseInverse().asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(information);
+  const SymmetricEigen6 eigen(information);
   const double min_information = 1.0 / (config_.max_free_sigma_m * config_.max_free_sigma_m);
   Vector6d step = scale.asDiagonal() * fit.step;
   for (int k = 0; k < 6; ++k) {
@@ -243,9 +244,9 @@ std::pair<double, double> MountMonitor::error_at_radius(const Pose3& motion,
         error > 1e-12 ? Eigen::Vector2d(moved.head<2>() / error) : Eigen::Vector2d(1, 0);
     worst = error;
     // Along the error where there is one; with none, the larger horizontal variance.
-    worst_sigma =
-        std::sqrt(std::max(0.0, error > 1e-12 ? along.dot(c.topLeftCorner<2, 2>() * along)
-                                              : c.topLeftCorner<2, 2>().eigenvalues().real().maxCoeff()));
+    worst_sigma = std::sqrt(
+        std::max(0.0, error > 1e-12 ? along.dot(c.topLeftCorner<2, 2>() * along)
+                                    : SymmetricEigen2(c.topLeftCorner<2, 2>()).eigenvalues().maxCoeff()));
   }
   return {worst, worst_sigma};
 }

@@ -6,9 +6,11 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
 #include "calibration/mount_monitor.h"
+
+#include "common/symmetric_eigen.h"
 
 namespace rsu::calibration {
 namespace {
@@ -42,7 +44,7 @@ Pose3 from_parameters(const Vector6d& v) {
 MountDrift MountMonitor::decide(const MountDrift& newest) const {
   const Vector6d scale = at_radius_scale();
   const Matrix6d covariance = scale.asDiagonal() * newest.covariance * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(covariance);
+  const SymmetricEigen6 eigen(covariance);
   const double tolerance = config_.max_position_error_m;
   const double verified_sigma = tolerance / config_.significance_sigmas;
   std::vector<int> weak;
@@ -81,10 +83,12 @@ MountDrift MountMonitor::decide(const MountDrift& newest) const {
   if (degrees > 0.0)
     mean_covariance *= std::max(1.0, chi_square / degrees);
   MountDrift d = newest;
-  const bool verified =
-      static_cast<int>(estimates.size()) >= config_.suspect_rotations &&
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(mean_covariance).eigenvalues().maxCoeff() <=
-          verified_sigma * verified_sigma;
+  // The mean's largest variance: its m x m covariance in a 6 x 6 of zeros (the same largest eigenvalue;
+  // the 6 x 6 solver is compiled once, common/symmetric_eigen.h).
+  Matrix6d padded = Matrix6d::Zero();
+  padded.topLeftCorner(m, m) = mean_covariance;
+  const bool verified = static_cast<int>(estimates.size()) >= config_.suspect_rotations &&
+                        SymmetricEigen6(padded).eigenvalues().maxCoeff() <= verified_sigma * verified_sigma;
   if (verified) {
     d.rotations_averaged = static_cast<int>(estimates.size());
   } else {

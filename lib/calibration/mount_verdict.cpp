@@ -5,9 +5,10 @@
 #include <limits>
 #include <sstream>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
 #include "common/angles.h"
+#include "common/symmetric_eigen.h"
 
 namespace rsu::calibration {
 
@@ -16,7 +17,7 @@ constexpr double kLeverArmM = 10.0;
 
 // The largest-variance direction of a 3x3 block of the (dt, w) covariance.
 void weakest(const Eigen::Matrix3d& block, Eigen::Vector3d& direction, double& sigma) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(block);
+  const SymmetricEigen3 eigen(block);
   direction = eigen.eigenvectors().col(2);
   const double variance = eigen.eigenvalues()[2];
   sigma = std::isfinite(variance) && variance >= 0.0 ? std::sqrt(variance)
@@ -48,12 +49,12 @@ MountUncertainty mount_uncertainty(const PlaneFit& fit, const Pose3& pose, const
   Matrix6d scaled = fit.information;
   scaled.bottomRows<3>() /= kLeverArmM;
   scaled.rightCols<3>() /= kLeverArmM;
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(scaled);
+  const SymmetricEigen6 eigen(scaled);
   const double largest = eigen.eigenvalues().maxCoeff();
   u.information_ratio = largest > 0.0 ? std::max(0.0, eigen.eigenvalues().minCoeff()) / largest : 0.0;
 
   // Inverse over the directions the fit holds; a free direction gets infinite variance.
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> info(fit.information);
+  const SymmetricEigen6 info(fit.information);
   const double top = info.eigenvalues().maxCoeff();
   Matrix6d covariance = Matrix6d::Zero();
   bool free_direction = !(top > 0.0);

@@ -4,10 +4,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <Eigen/Geometry>
 
 #include "common/angles.h"
+#include "common/symmetric_eigen.h"
 
 namespace rsu::calibration {
 
@@ -40,7 +41,7 @@ PlaneFit fit_planes(const std::vector<PlaneMatch>& matches, const Pose3& pose, d
   fit.scale = std::sqrt(normalized_squares / static_cast<double>(matches.size() - 6));
   // A pseudo-inverse, so that a direction nothing constrains (a featureless street) takes no step
   // instead of a wild one; the information matrix still shows it.
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(jtj);
+  const SymmetricEigen6 eigen(jtj);
   const double largest = eigen.eigenvalues().maxCoeff();
   Vector6d step = Vector6d::Zero();
   for (int i = 0; i < 6; ++i) {

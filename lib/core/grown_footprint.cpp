@@ -5,14 +5,16 @@
 #include <cmath>
 #include <cstddef>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <Eigen/Geometry>
+
+#include "common/symmetric_eigen.h"
 
 namespace rsu::core {
 
 GrownFootprint::GrownFootprint(const tracking::VehicleHypothesis& h, const GatheringConfig& g)
     : centre_(h.centre), yaw_(h.yaw), min_inside_fraction_(g.min_inside_fraction) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(h.covariance.topLeftCorner<2, 2>());
+  const SymmetricEigen2 eig(h.covariance.topLeftCorner<2, 2>());
   const double centre_sigma = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
   const double bounded_centre_sigma =
       std::isfinite(centre_sigma) ? std::min(centre_sigma, g.max_margin_m) : g.max_margin_m;

@@ -6,9 +6,10 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+
+#include "common/symmetric_eigen.h"
 
 namespace rsu::fusion {
 
@@ -17,7 +18,7 @@ namespace rsu::fusion {
 // true when it had to.
 inline bool raise_to_floor(Eigen::Matrix3d& c, double sigma_xy, double sigma_yaw) {
   bool raised = false;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(c.topLeftCorner<2, 2>());
+  const SymmetricEigen2 eigen(c.topLeftCorner<2, 2>());
   if (eigen.info() == Eigen::Success && eigen.eigenvalues().minCoeff() < sigma_xy * sigma_xy) {
     const Eigen::Vector2d floored = eigen.eigenvalues().cwiseMax(sigma_xy * sigma_xy);
     c.topLeftCorner<2, 2>() = eigen.eigenvectors() * floored.asDiagonal() * eigen.eigenvectors().transpose();

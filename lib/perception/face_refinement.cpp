@@ -7,7 +7,9 @@
 #include <numbers>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
+
+#include "common/symmetric_eigen.h"
 
 namespace rsu::perception {
 namespace {
@@ -123,7 +125,7 @@ RectangleFit refine_on_faces(const RectangleFit& fit, std::span<const Eigen::Vec
   // n: the unit normal of the e1-faces (i.e. the e2 direction).
   const Eigen::Matrix2d m = (use1 ? along_e1.centred() : Eigen::Matrix2d::Zero()) -
                             (use2 ? along_e2.centred() : Eigen::Matrix2d::Zero());
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m);
+  const SymmetricEigen2 eig(m);
   const Eigen::Vector2d n = eig.eigenvectors().col(0);
   const Eigen::Vector2d new_e1(n.y(), -n.x());
   // The change of the e1 direction, mod pi (the eigenvector's sign is arbitrary).

@@ -7,8 +7,9 @@
 #include <numbers>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
+#include "common/symmetric_eigen.h"
 #include "perception/box_axis.h"
 #include "perception/box_consistency.h"
 #include "perception/face_envelope.h"
@@ -384,7 +385,7 @@ Eigen::Matrix3d covariance_of(const CorrectedPose& fix, FixEvidence evidence, co
 
 // The covariance places the vehicle within what a fix may claim (tighter for an incomplete sweep).
 bool position_bounded(const CorrectedPose& fix, const LidarGeometry& lidar, const CorrectionConfig& config) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(fix.covariance.topLeftCorner<2, 2>());
+  const SymmetricEigen2 eig(fix.covariance.topLeftCorner<2, 2>());
   const double max_sigma =
       lidar.complete_sweep ? config.max_position_sigma_m : kMaxPositionSigmaIncompleteSweepM;
   return std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) <= max_sigma;

@@ -6,7 +6,9 @@
 #include <limits>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
+
+#include "common/symmetric_eigen.h"
 
 namespace rsu::perception {
 namespace {
@@ -29,7 +31,7 @@ bool is_degenerate(const std::vector<double>& x, const std::vector<double>& y, d
     const Eigen::Vector2d p(x[i], y[i]);
     scatter += p * p.transpose();
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter);
+  const SymmetricEigen2 eig(scatter);
   const Eigen::Vector2d minor = eig.eigenvectors().col(0);
   const Eigen::Vector2d major = eig.eigenvectors().col(1);
   Extent across;

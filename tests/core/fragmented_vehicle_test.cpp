@@ -13,9 +13,10 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
 #include "common/angles.h"
+#include "common/symmetric_eigen.h"
 #include "core/rsu_core.h"
 #include "sim/scenario.h"
 #include "sim/trajectory.h"
@@ -69,7 +70,7 @@ TEST(RsuCoreFragments, HeadOnVehicleAtLongRangeIsFixedWholeOrNotAtAll) {
     // The mean error of the fixes that claim a precise position (larger axis sigma <= 0.15 m). Fixes of
     // a front half hidden by the hedge state the spread the points leave (0.3-0.4 m across the road) and
     // are sent: their error counts against their stated covariance (below), not this mean.
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(c.pose_covariance.topLeftCorner<2, 2>());
+    const SymmetricEigen2 eig(c.pose_covariance.topLeftCorner<2, 2>());
     if (std::sqrt(eig.eigenvalues().maxCoeff()) <= 0.15) {
       sum += error;
       ++confident;

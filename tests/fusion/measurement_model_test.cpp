@@ -3,9 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "common/angles.h"
+#include "common/symmetric_eigen.h"
+#include "fusion/covariance_floor.h"
 
 namespace rsu::fusion {
 namespace {
@@ -68,6 +72,61 @@ TEST(MeasurementModel, WellFormedChecks) {
   m.covariance(2, 2) = 0.001;
   m.pose.yaw = std::numeric_limits<double>::infinity();
   EXPECT_FALSE(is_well_formed(m));
+}
+
+// The eigen-decomposition compiled once (common/symmetric_eigen.h) against matrices built from known
+// eigenvalues and an orthonormal basis (Gram-Schmidt of random vectors, done here).
+template <int N>
+void expect_decomposes_known_matrices() {
+  std::mt19937 rng(7 + N);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::Matrix<double, N, N> q;
+    for (int c = 0; c < N; ++c) {
+      Eigen::Matrix<double, N, 1> v;
+      for (int r = 0; r < N; ++r)
+        v[r] = u(rng);
+      for (int k = 0; k < c; ++k)
+        v -= v.dot(q.col(k)) * q.col(k);
+      q.col(c) = v.normalized();
+    }
+    std::vector<double> lambda;
+    for (int k = 0; k < N; ++k)
+      lambda.push_back(std::pow(10.0, 3.0 * u(rng)));  // 1e-3 .. 1e3
+    Eigen::Matrix<double, N, 1> l;
+    for (int k = 0; k < N; ++k)
+      l[k] = lambda[static_cast<std::size_t>(k)];
+    const Eigen::Matrix<double, N, N> m = q * l.asDiagonal() * q.transpose();
+    std::sort(lambda.begin(), lambda.end());
+    const SymmetricEigen<N> eig(m);
+    ASSERT_EQ(eig.info(), Eigen::Success);
+    for (int k = 0; k < N; ++k)
+      EXPECT_NEAR(eig.eigenvalues()[k], lambda[static_cast<std::size_t>(k)], 1e-9 * lambda.back());
+    const Eigen::Matrix<double, N, N> v = eig.eigenvectors();
+    EXPECT_LT((v.transpose() * v - Eigen::Matrix<double, N, N>::Identity()).norm(), 1e-12);
+    EXPECT_LT((v * eig.eigenvalues().asDiagonal() * v.transpose() - m).norm(), 1e-9 * lambda.back());
+  }
+}
+
+TEST(SymmetricEigen, DecomposesMatricesOfKnownEigenvalues) {
+  expect_decomposes_known_matrices<2>();
+  expect_decomposes_known_matrices<3>();
+  expect_decomposes_known_matrices<6>();
+}
+
+TEST(CovarianceFloor, RaisesOnlyTheAxisBelowTheFloor) {
+  // 0.5 m along 30 deg, 0.01 m across it: the floor of 0.05 m raises the across axis only.
+  const double a = deg_to_rad(30.0);
+  const Eigen::Vector2d along(std::cos(a), std::sin(a));
+  const Eigen::Vector2d across(-std::sin(a), std::cos(a));
+  Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+  c.topLeftCorner<2, 2>() = 0.25 * along * along.transpose() + 1e-4 * across * across.transpose();
+  c(2, 2) = 1.0;
+  EXPECT_TRUE(raise_to_floor(c, 0.05, 0.01));
+  EXPECT_NEAR(along.dot(c.topLeftCorner<2, 2>() * along), 0.25, 1e-12);
+  EXPECT_NEAR(across.dot(c.topLeftCorner<2, 2>() * across), 0.0025, 1e-12);
+  EXPECT_NEAR(c(2, 2), 1.0, 1e-15);
+  EXPECT_FALSE(raise_to_floor(c, 0.05, 0.01));
 }
 
 }  // namespace

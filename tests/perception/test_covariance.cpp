@@ -6,9 +6,10 @@
 #include <cmath>
 #include <random>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
 #include "common/angles.h"
+#include "common/symmetric_eigen.h"
 #include "perception/fix_covariance.h"
 #include "perception/l_shape_fitting.h"
 #include "perception/size_correction.h"
@@ -25,7 +26,7 @@ double variance_along(const Eigen::Matrix3d& cov, const Eigen::Vector2d& d) {
 }
 
 bool positive_semidefinite(const Eigen::Matrix3d& cov) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const SymmetricEigen3 eig(cov);
   return eig.eigenvalues().minCoeff() >= -1e-15 && (cov - cov.transpose()).norm() < 1e-15;
 }
 

@@ -3,12 +3,13 @@
 // quaternion rotates +x onto the heading; the 6x6 holds the 3x3 at x, y, yaw; times round-trip).
 #include <gtest/gtest.h>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 #include <numbers>
 
+#include "common/symmetric_eigen.h"
 #include "ros/correction_pose.h"
 #include "ros/ros_time.h"
 
@@ -56,7 +57,7 @@ TEST(CorrectionPose, CovarianceIsTheThreeByThreeAtXYYawAndUnknownElsewhere) {
       }
   }
   EXPECT_TRUE(m.isApprox(m.transpose()));
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(m);
+  const SymmetricEigen6 eig(m);
   EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
 }
 

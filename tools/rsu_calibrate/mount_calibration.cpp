@@ -5,10 +5,12 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <unordered_set>
+
+#include "common/symmetric_eigen.h"
 
 namespace rsu::tools {
 
@@ -74,7 +76,7 @@ class MapPlanes {
             (*cloud_)[static_cast<std::size_t>(i)].getVector3fMap().cast<double>() - mean;
         scatter += d * d.transpose();
       }
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+      const SymmetricEigen3 eigen(scatter);
       const Eigen::Vector3d lambda = eigen.eigenvalues();  // ascending
       if (!(lambda[1] > 1e-6) || lambda[0] > config.max_plane_thickness * lambda[1])
         continue;  // an edge, a corner, a thin pole, a crown: no single plane
