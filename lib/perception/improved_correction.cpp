@@ -316,11 +316,14 @@ std::optional<Placement> place_known_box(const View& view, const Frame& frame, c
 
 // How the box's place depends on its yaw (fix_covariance.h): placed again at the yaw +- sqrt(3) of its
 // sigma (a Gaussian's sigma points), or nearer (sigma, sigma / 2) where the box turned that far no longer
-// holds the points; the centre's shifts go into the evidence. The points are placed about the same origin,
-// so only the yaw differs. An axis whose centre lies in an interval (box_axis.h) gets the widest of the
-// probes' intervals: turned off the true heading, a long box's points spread across it and containment
-// squeezes the interval (a bus 18 m from a VLP-16 8 m up, 8 deg off: 0.09 m wide, the centre 0.59 m off;
-// 1.3 m wide at the true heading).
+// holds the points; the farthest probe's shift of the centre goes into the evidence. The points are placed
+// about the same origin, so only the yaw differs. An axis whose centre lies in an interval (box_axis.h)
+// gets the widest of the intervals of every probe that holds the points: turned off the true heading, a
+// long box's points spread across it and containment squeezes the interval (a bus 18 m from a VLP-16 8 m
+// up, 8 deg off: 0.09 m wide, the centre 0.59 m off; 1.3 m wide at the true heading), and the probes
+// beyond the true heading squeeze it too: a bus 9 m from a VLP-16 6 m up, the vehicle's heading 9.6 deg
+// off, had 0.36 m at its yaw and 0.25 m at the one probe that held (17 deg the other way), 1.3 m at the
+// true heading, which the sigma / 2 and sigma probes come near; the centre was 0.57 m off.
 void probe_yaw(const View& view, const Frame& frame, const CorrectedPose& fix, const VehicleSize& size,
                double yaw_information, Placement& placed, FixEvidence& evidence) {
   constexpr double kMaxProbeRad = 0.5;
@@ -331,15 +334,17 @@ void probe_yaw(const View& view, const Frame& frame, const CorrectedPose& fix, c
     for (const double sigmas : {std::sqrt(3.0), 1.0, 0.5}) {
       const double step = (i == 0 ? 1.0 : -1.0) * std::min(sigmas * sigma, kMaxProbeRad);
       const Frame turned = frame_at(frame.origin, yaw + step);
-      if (const std::optional<Placement> box = place_known_box(view, turned, size, yaw_information)) {
+      const std::optional<Placement> box = place_known_box(view, turned, size, yaw_information);
+      if (!box)
+        continue;
+      if (evidence.yaw_probe_rad[i] == 0.0) {
         evidence.yaw_probe_shift[i] = turned.map(box->centre) - centre;
         evidence.yaw_probe_rad[i] = step;
-        for (std::size_t a = 0; a < 2; ++a) {
-          AxisEvidence& axis = placed.evidence[a];
-          if (axis.anchor == AxisAnchor::interval && box->evidence[a].anchor == AxisAnchor::interval)
-            axis.interval_m = std::max(axis.interval_m, box->evidence[a].interval_m);
-        }
-        break;
+      }
+      for (std::size_t a = 0; a < 2; ++a) {
+        AxisEvidence& axis = placed.evidence[a];
+        if (axis.anchor == AxisAnchor::interval && box->evidence[a].anchor == AxisAnchor::interval)
+          axis.interval_m = std::max(axis.interval_m, box->evidence[a].interval_m);
       }
     }
   }

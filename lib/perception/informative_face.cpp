@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "perception/size_correction.h"
@@ -19,7 +21,7 @@ double median(std::vector<double>& v) {
 // The length of an evenly spread face whose direction a line fit knows as well as it does from points at
 // `along` (a least-squares slope's variance is sigma^2 / sum (s - mean)^2; evenly over l that sum is n l^2
 // / 12): sqrt(12) times their RMS spread about their mean.
-double effective_face_length(std::span<const double> along) {
+double spread_length(std::span<const double> along) {
   if (along.size() < 2)
     return 0.0;
   double mean = 0.0;
@@ -30,6 +32,96 @@ double effective_face_length(std::span<const double> along) {
   for (const double s : along)
     sum_sq += (s - mean) * (s - mean);
   return std::sqrt(12.0 * sum_sq / static_cast<double>(along.size()));
+}
+
+// ... over the longest run of points without a gap wider than `max_gap`: points on either side of such a
+// gap need not lie on one surface (a bumper's corner 4 m from a side's few points, on the line a sparse
+// fit drew between them, made a 4.9 m "face" 18 deg off while stating 3 deg: `rsu-pilot matrix`, an SUV
+// 33 m from a VLP-32C 6 m up).
+double effective_face_length(std::vector<double> along, double max_gap) {
+  std::sort(along.begin(), along.end());
+  double longest = 0.0;
+  std::size_t begin = 0;
+  for (std::size_t i = 1; i <= along.size(); ++i) {
+    if (i == along.size() || along[i] - along[i - 1] > max_gap) {
+      longest = std::max(longest, spread_length(std::span<const double>(along).subspan(begin, i - begin)));
+      begin = i;
+    }
+  }
+  return longest;
+}
+
+// Whether one laser's points (their horizontal ranges from the LiDAR) spread in range by `tolerance`: a
+// level surface cut by one laser is an arc at one range.
+bool spreads_in_range(std::vector<double> ranges, double tolerance) {
+  if (ranges.size() < 2)
+    return false;
+  std::sort(ranges.begin(), ranges.end());
+  const auto at = [&](double q) {
+    return ranges[static_cast<std::size_t>(q * static_cast<double>(ranges.size() - 1))];
+  };
+  return at(0.9) - at(0.1) >= tolerance;
+}
+
+// A face's points above the bonnet: their heights, horizontal ranges from the LiDAR, lasers and places
+// along the face.
+struct UpperPoints {
+  std::vector<double> heights, ranges, along;
+  std::vector<int> lasers;
+};
+
+// Which of them tell the face's direction, and where along it they lie.
+struct UpperInformation {
+  std::size_t points = 0;
+  std::vector<double> along;
+  // The depression of the laser whose trace alone they are (0: several lasers, or rising, or unknown).
+  double single_trace_depression = 0.0;
+};
+
+// Above the lower body a face tells the direction if it is not a laser's trace on a level surface: it
+// rises (several heights), or one laser's points' horizontal ranges vary (a level surface cut by one laser
+// is an arc at one range, across the line of sight whatever the vehicle's heading). Judged per laser:
+// several lasers' arcs across a roof lie at several ranges.
+UpperInformation informative_upper(const UpperPoints& upper, const LidarGeometry& lidar,
+                                   const CorrectionConfig& config, double noise_sigma) {
+  UpperInformation out;
+  if (upper.heights.size() < 3)
+    return out;
+  const double top = *std::max_element(upper.heights.begin(), upper.heights.end());
+  const double arc_tolerance = std::max(config.min_range_spread_m, 4.0 * noise_sigma);
+  std::vector<int> lasers = upper.lasers;
+  std::sort(lasers.begin(), lasers.end());
+  lasers.erase(std::unique(lasers.begin(), lasers.end()), lasers.end());
+  std::vector<int> spreading;  // lasers whose trace is not an arc
+  for (const int laser : lasers) {
+    std::vector<double> ranges, along;
+    for (std::size_t i = 0; i < upper.lasers.size(); ++i) {
+      if (upper.lasers[i] == laser) {
+        ranges.push_back(upper.ranges[i]);
+        along.push_back(upper.along[i]);
+      }
+    }
+    if (spreads_in_range(std::move(ranges), arc_tolerance)) {
+      spreading.push_back(laser);
+      out.along.insert(out.along.end(), along.begin(), along.end());
+    }
+  }
+  if (out.along.size() >= 3) {
+    out.points = out.along.size();
+    if (spreading.size() == 1 && spreading.front() >= 0)
+      out.single_trace_depression =
+          std::abs(lidar.elevations_rad[static_cast<std::size_t>(spreading.front())]);
+    return out;
+  }
+  out.along.clear();
+  for (std::size_t i = 0; i < upper.heights.size(); ++i) {
+    if (upper.heights[i] <= top - config.min_vertical_spread_m)
+      out.along.push_back(upper.along[i]);
+  }
+  if (out.along.size() < 3)
+    out.along.clear();
+  out.points = out.along.size();
+  return out;
 }
 
 }  // namespace
@@ -43,10 +135,11 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   const double len = (b - a).norm();
   const Eigen::Vector2d t = (b - a) / len;
   const double d = config.fit.edge_support_m;
-  std::vector<double> across, upper_heights, upper_ranges;
+  std::vector<double> across;
+  UpperPoints upper;
   // Where along the face its informative points lie (below the bonnet; above it those that count), for
   // the extent they span.
-  std::vector<double> along, upper_along;
+  std::vector<double> along;
   std::size_t lower = 0;
   for (const Eigen::Vector3d& p : points) {
     const Eigen::Vector2d r = p.head<2>() - a;
@@ -59,48 +152,42 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
       ++lower;
       along.push_back(s);
     } else {
-      upper_heights.push_back(p.z());
-      upper_ranges.push_back((p.head<2>() - lidar.xy()).norm());
-      upper_along.push_back(s);
+      upper.heights.push_back(p.z());
+      upper.ranges.push_back((p.head<2>() - lidar.xy()).norm());
+      upper.lasers.push_back(lidar.laser_of(p));
+      upper.along.push_back(s);
     }
   }
-  // Above the lower body a face tells the direction if it is not a laser's trace on a level surface:
-  // it rises (several heights), or its points' horizontal ranges vary (a level surface cut by one laser
-  // is an arc at one range, across the line of sight whatever the vehicle's heading).
-  std::size_t informative = lower;
-  if (upper_heights.size() >= 3) {
-    const double top = *std::max_element(upper_heights.begin(), upper_heights.end());
-    const auto rising =
-        static_cast<std::size_t>(std::count_if(upper_heights.begin(), upper_heights.end(), [&](double z) {
-          return z <= top - config.min_vertical_spread_m;
-        }));
-    std::sort(upper_ranges.begin(), upper_ranges.end());
-    const auto at = [&](double q) {
-      return upper_ranges[static_cast<std::size_t>(q * static_cast<double>(upper_ranges.size() - 1))];
-    };
-    const double arc_tolerance = std::max(config.min_range_spread_m, 4.0 * noise_sigma);
-    if (at(0.9) - at(0.1) >= arc_tolerance) {
-      informative += upper_heights.size();
-      along.insert(along.end(), upper_along.begin(), upper_along.end());
-    } else if (rising >= 3) {
-      informative += rising;
-      for (std::size_t i = 0; i < upper_heights.size(); ++i) {
-        if (upper_heights[i] <= top - config.min_vertical_spread_m)
-          along.push_back(upper_along[i]);
-      }
-    }
-  }
+  const UpperInformation informative_above = informative_upper(upper, lidar, config, noise_sigma);
+  const std::size_t informative = lower + informative_above.points;
+  along.insert(along.end(), informative_above.along.begin(), informative_above.along.end());
   // The upper body departs from the footprint's direction more than the lower body does (sloped glass,
   // tumblehome): its faces' direction is trusted less.
-  if (upper_heights.size() >= lower)
+  if (upper.heights.size() >= lower)
     face.departure_m = config.upper_face_tilt_m;
   face.points = informative;
   // The face's direction is as well known as its informative points' spread along it makes it, not the
   // fitted edge's length: a few points on a rounded bumper's corner made a 1.7 m "face" 24 deg off while
   // stating 2 deg (`rsu-pilot matrix`, a VLP-16 4 m up, an SUV at 25 m).
-  face.length_m = std::min(face.length_m, effective_face_length(along));
+  // A gap wider than a short face, or than a few points' spacing along the face where that is wider,
+  // splits it (a laser's returns lie R * azimuth step apart across the line of sight, farther at grazing
+  // incidence).
+  const double spacing = (0.5 * (a + b) - lidar.xy()).norm() * lidar.azimuth_step_rad /
+                         std::max(face.incidence_sin, config.covariance.min_incidence_sin);
+  face.length_m =
+      std::min(face.length_m, effective_face_length(along, std::max(config.short_face_m, 3.0 * spacing)));
   if (face.length_m < config.short_face_m)
     face.departure_m = std::max(face.departure_m, config.short_face_tilt_m);
+  // One laser's trace above the bonnet is not shown to lie on a vertical surface: across a sloped window
+  // or the roof's rounded edge (height changing along the body at a rate m) the trace runs across the
+  // gradient m u + tan(e) r of body and cone (u the body's axis, r the line of sight, e the laser's
+  // depression), turned from the body's axis towards the line of sight's normal by up to about e (m ~ 1,
+  // a windscreen's slope). Seen from 6-8 m up such traces (one VLP-16 or VLP-32C laser over an SUV's rear
+  // window at 16-24 m) were 20-23 deg off while stating 4-6 deg; a departure of tan(e) over half the face
+  // states about e.
+  if (lower == 0 && informative_above.single_trace_depression > 0.0)
+    face.departure_m =
+        std::max(face.departure_m, 0.5 * face.length_m * std::tan(informative_above.single_trace_depression));
   if (across.size() >= 3 && informative > 0) {
     // Robust spread (1.4826 MAD) of the face's points about their median line: the body's departure.
     const double centre = median(across);

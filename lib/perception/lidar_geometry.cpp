@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 namespace rsu::perception {
 
@@ -33,6 +34,19 @@ bool LidarGeometry::occluded(const Eigen::Vector2d& xy, double margin) const {
       return true;
   }
   return false;
+}
+
+int LidarGeometry::laser_of(const Eigen::Vector3d& p) const {
+  if (elevations_rad.empty())
+    return -1;
+  const double elevation = std::atan2(p.z() - position.z(), (p.head<2>() - xy()).norm());
+  int nearest = 0;
+  for (std::size_t i = 1; i < elevations_rad.size(); ++i) {
+    if (std::abs(elevations_rad[i] - elevation) <
+        std::abs(elevations_rad[static_cast<std::size_t>(nearest)] - elevation))
+      nearest = static_cast<int>(i);
+  }
+  return nearest;
 }
 
 }  // namespace rsu::perception

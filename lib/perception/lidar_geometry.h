@@ -40,6 +40,9 @@ struct LidarGeometry {
   // Whether an occluder lies nearer than xy (by more than `margin`) within the angle `margin` subtends
   // at xy's range (at least two azimuth steps) of the line of sight to it.
   bool occluded(const Eigen::Vector2d& xy, double margin) const;
+  // Which laser (index into elevations_rad) returned a point at `p` (map frame): the one whose elevation
+  // is nearest the point's as seen from the LiDAR; -1 when the elevations are unknown.
+  int laser_of(const Eigen::Vector3d& p) const;
 };
 
 }  // namespace rsu::perception
