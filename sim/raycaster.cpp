@@ -165,18 +165,18 @@ struct CheckedRay {
   double max_range = 0.0;
 };
 
-CheckedRay check_ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double max_range) {
-  CheckedRay r;
+// Written in place (the batch path checks every ray: no temporary to copy).
+inline void check_ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double max_range,
+                      CheckedRay& r) {
   const double n = direction.norm();
-  if (!origin.allFinite() || !direction.allFinite() || !(n > 0.0) || std::isnan(max_range) ||
-      !(max_range > 0.0)) {
-    return r;
+  r.valid =
+      origin.allFinite() && direction.allFinite() && n > 0.0 && !std::isnan(max_range) && max_range > 0.0;
+  if (!r.valid) {
+    return;
   }
-  r.valid = true;
   r.origin = origin;
   r.direction = direction / n;
   r.max_range = max_range;
-  return r;
 }
 
 // Does the ray segment (0, limit] pass within `radius` of `centre`?
@@ -382,8 +382,31 @@ struct Raycaster::Impl {
     }
   }
 
+  // A vehicle's pose at one time, and its rotation once a ray needs it: computed once for all the rays
+  // fired at that time that come in a row (an Ouster column's beams), by the same expressions as
+  // before, so the same bits.
+  struct PosedVehicle {
+    TimeNs time_ns = 0;
+    bool valid = false;
+    bool rotated = false;
+    Pose2 pose;
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  };
+
+  static void pose_vehicle(const VehicleEntry& v, TimeNs t, PosedVehicle& posed) {
+    if (posed.valid && posed.time_ns == t) {
+      return;
+    }
+    posed.time_ns = t;
+    posed.valid = true;
+    posed.rotated = false;
+    posed.pose = pose_at(v.trajectory, t);
+  }
+
   // Intersects one vehicle at its pose; replaces `out` if the vehicle is nearer.
-  void intersect_vehicle(const VehicleEntry& v, const Pose2& pose, const CheckedRay& ray, RayHit& out) const {
+  void intersect_vehicle(const VehicleEntry& v, PosedVehicle& posed, const CheckedRay& ray,
+                         RayHit& out) const {
+    const Pose2& pose = posed.pose;
     const double limit = std::min(out.range, ray.max_range);
     const Eigen::Vector3d position(pose.x, pose.y, 0.0);
     // Bounding-sphere reject before any trigonometry: centred over the reference point, grown by the
@@ -392,7 +415,11 @@ struct Raycaster::Impl {
     if (!ray_meets_sphere(ray, any_yaw_centre, v.bound_radius + v.bound_centre.head<2>().norm(), limit)) {
       return;
     }
-    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    if (!posed.rotated) {
+      posed.rotation = Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      posed.rotated = true;
+    }
+    const Eigen::Matrix3d& rotation = posed.rotation;
     const Eigen::Vector3d origin = rotation.transpose() * (ray.origin - position);
     const Eigen::Vector3d direction = rotation.transpose() * ray.direction;
     RTCIntersectContext context;
@@ -526,13 +553,16 @@ const TriangleMesh& Raycaster::static_mesh(SurfaceClass surface) const {
 RayHit Raycaster::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, TimeNs t,
                        double max_range) const {
   RayHit hit;
-  const CheckedRay ray = check_ray(origin, direction, max_range);
+  CheckedRay ray;
+  check_ray(origin, direction, max_range, ray);
   if (!ray.valid) {
     return hit;
   }
   impl_->intersect_static(ray, hit);
   for (const auto& v : impl_->vehicles) {
-    impl_->intersect_vehicle(v, pose_at(v.trajectory, t), ray, hit);
+    Impl::PosedVehicle posed;
+    Impl::pose_vehicle(v, t, posed);
+    impl_->intersect_vehicle(v, posed, ray, hit);
   }
   return hit;
 }
@@ -555,6 +585,7 @@ void Raycaster::cast_batch(std::span<const Ray> rays, std::span<RayHit> hits) co
   struct SweptSphere {
     Eigen::Vector3d centre;
     double radius;
+    Impl::PosedVehicle posed;  // at the last ray's time that met the sphere
   };
   std::vector<SweptSphere> swept;
   swept.reserve(impl_->vehicles.size());
@@ -570,7 +601,8 @@ void Raycaster::cast_batch(std::span<const Ray> rays, std::span<RayHit> hits) co
       spread = std::max(spread, (p - mid).norm());
     }
     swept.push_back({Eigen::Vector3d(mid.x(), mid.y(), v.bound_centre.z()),
-                     v.bound_radius + v.bound_centre.head<2>().norm() + spread});
+                     v.bound_radius + v.bound_centre.head<2>().norm() + spread,
+                     {}});
   }
   // Chunks small enough for the stack: no allocation per ray or per chunk.
   constexpr std::size_t kChunk = 64;
@@ -581,7 +613,7 @@ void Raycaster::cast_batch(std::span<const Ray> rays, std::span<RayHit> hits) co
     const std::span<RayHit> chunk_hits = hits.subspan(base, n);
     for (std::size_t i = 0; i < n; ++i) {
       const Ray& r = rays[base + i];
-      checked[i] = check_ray(r.origin, r.direction, r.max_range);
+      check_ray(r.origin, r.direction, r.max_range, checked[i]);
       chunk_hits[i] = RayHit{};
     }
     switch (impl_->config.batch_mode) {
@@ -600,12 +632,13 @@ void Raycaster::cast_batch(std::span<const Ray> rays, std::span<RayHit> hits) co
         break;
     }
     for (std::size_t j = 0; j < impl_->vehicles.size(); ++j) {
+      const auto& v = impl_->vehicles[j];
       for (std::size_t i = 0; i < n; ++i) {
         const CheckedRay& ray = checked[i];
         if (ray.valid && ray_meets_sphere(ray, swept[j].centre, swept[j].radius,
                                           std::min(chunk_hits[i].range, ray.max_range))) {
-          const auto& v = impl_->vehicles[j];
-          impl_->intersect_vehicle(v, pose_at(v.trajectory, rays[base + i].time_ns), ray, chunk_hits[i]);
+          Impl::pose_vehicle(v, rays[base + i].time_ns, swept[j].posed);
+          impl_->intersect_vehicle(v, swept[j].posed, ray, chunk_hits[i]);
         }
       }
     }

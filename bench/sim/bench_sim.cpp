@@ -17,8 +17,10 @@
 #include <vector>
 
 #include "lidar/firing_schedule.h"
+#include "lidar/ouster/ouster_metadata.h"
 #include "lidar/sensor_model.h"
 #include "sim/lidar_simulator.h"
+#include "sim/ouster_simulator.h"
 #include "sim/raycaster.h"
 #include "sim/scenario.h"
 
@@ -141,6 +143,30 @@ void BM_SimulateFrameVlp16(benchmark::State& state) {
   simulate_frames(state, lidar::make_vlp16(), true);
 }
 BENCHMARK(BM_SimulateFrameVlp16)->Unit(benchmark::kMillisecond);
+
+// The dense sensor of issue 16: a simulated Ouster OS1-128 at 2048 columns (one frame of packets, each
+// 16 columns x 128 beams cast as one batch, column by column), with the scenario's noise.
+void BM_SimulateFrameOs1_128(benchmark::State& state) {
+  const Scenario& s = corridor();
+  const Raycaster rc(s.scene);
+  const OusterSpec spec{"os1-128", "2048x10", lidar::ouster::UdpProfile::rng19_rfl8_sig16_nir16};
+  const lidar::ouster::Metadata metadata = lidar::ouster::parse_metadata(ouster_metadata_json(spec), "bench");
+  const OusterSimulator sim(metadata, s.lidar.mount, s.lidar.noise, rc);
+  const std::int64_t first = sim.packet_index_at(s.start_ns);
+  std::vector<std::uint8_t> bytes;
+  std::size_t vehicle_returns = 0;
+  for (auto _ : state) {
+    for (std::int64_t k = first; k < first + sim.packets_per_frame(); ++k) {
+      vehicle_returns += sim.packet(k, 0, bytes);
+    }
+    benchmark::DoNotOptimize(bytes.data());
+  }
+  const double rays = static_cast<double>(metadata.pixels_per_column) * metadata.columns_per_frame;
+  state.counters["rays/s"] = benchmark::Counter(rays, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["vehicle_returns"] =
+      static_cast<double>(vehicle_returns) / static_cast<double>(state.iterations());
+}
+BENCHMARK(BM_SimulateFrameOs1_128)->Unit(benchmark::kMillisecond);
 
 // Experiments that only need the sector around the vehicle (here 60 deg of the 360).
 void BM_SimulateSectorVlp32c(benchmark::State& state) {
