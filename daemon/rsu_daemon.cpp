@@ -485,8 +485,16 @@ void RsuDaemon::start_v2i_reception() {
   constexpr std::size_t kMaxWaiting = 100000;
   v2i_receiver_ = std::make_unique<V2iReceiver>(
       v2i_socket_.native_handle(), io_, [this] { on_v2i_arrival(); },
-      config_.core.security.mode == v2i::SecurityMode::kSigned, config_.core.trust_list, kMaxWaiting);
+      config_.core.security.mode == v2i::SecurityMode::kSigned, config_.core.trust_list, kMaxWaiting,
+      receiver_time_window());
   spdlog::info("V2I announcements read and their signatures checked on a thread of their own");
+}
+
+std::optional<v2i::security::ReplayConfig> RsuDaemon::receiver_time_window() const {
+  // The receiver thread reads the host's clock; replaying a capture, rsud runs on the capture's.
+  if (replaying_)
+    return std::nullopt;
+  return config_.core.security.replay;
 }
 
 void RsuDaemon::on_v2i_arrival() {
@@ -844,7 +852,7 @@ void RsuDaemon::reload() {
     config_ = std::move(next);
     if (v2i_receiver_)
       v2i_receiver_->set_trust(config_.core.security.mode == v2i::SecurityMode::kSigned,
-                               config_.core.trust_list);
+                               config_.core.trust_list, receiver_time_window());
     spdlog::set_level(spdlog::level::from_str(config_.logging.level));
     bad_input_.set_limits(config_.logging.bad_input_log_first, seconds(config_.logging.summary_interval_s));
     warn_if_insecure();

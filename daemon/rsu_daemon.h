@@ -105,6 +105,8 @@ class RsuDaemon {
   static void report_kernel_drops(CounterList& out, const char* area, boost::asio::ip::udp::socket& socket);
   // The run's clock: the host's, or during a capture replay the capture's.
   TimeNs clock_now() const;
+  // The time window the V2I receiver thread checks ahead within (none while replaying a capture).
+  std::optional<v2i::security::ReplayConfig> receiver_time_window() const;
   void log_counters(bool only_nonzero) const;
   // Insecure mode is for local development only: said loudly at start-up and every minute after.
   void warn_if_insecure();

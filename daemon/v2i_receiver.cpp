@@ -8,6 +8,8 @@
 #include <unistd.h>
 #include <boost/asio/post.hpp>
 
+#include "edge/host_clock.h"
+
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -26,13 +28,15 @@ constexpr std::size_t kDatagramBytes = 65536;
 }  // namespace
 
 V2iReceiver::V2iReceiver(int socket_fd, boost::asio::io_context& io, std::function<void()> on_arrival,
-                         bool verify, v2i::security::TrustList trust, std::size_t max_waiting)
+                         bool verify, v2i::security::TrustList trust, std::size_t max_waiting,
+                         std::optional<v2i::security::ReplayConfig> window)
     : socket_fd_(socket_fd),
       io_(io),
       on_arrival_(std::move(on_arrival)),
       max_waiting_(max_waiting),
       verify_(verify),
-      trust_(std::make_shared<const v2i::security::TrustList>(std::move(trust))) {
+      trust_(std::make_shared<const v2i::security::TrustList>(std::move(trust))),
+      window_(window) {
   wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
   if (wake_fd_ < 0)
     throw std::runtime_error(std::string("V2I receiver thread: eventfd: ") + std::strerror(errno));
@@ -53,11 +57,13 @@ void V2iReceiver::stop() {
   thread_.join();
 }
 
-void V2iReceiver::set_trust(bool verify, v2i::security::TrustList trust) {
+void V2iReceiver::set_trust(bool verify, v2i::security::TrustList trust,
+                            std::optional<v2i::security::ReplayConfig> window) {
   auto next = std::make_shared<const v2i::security::TrustList>(std::move(trust));
   const std::lock_guard lock(trust_mutex_);
   verify_ = verify;
   trust_ = std::move(next);
+  window_ = window;
 }
 
 std::vector<ReceivedDatagram> V2iReceiver::take(std::size_t at_most) {
@@ -135,11 +141,14 @@ void V2iReceiver::run() {
       }
       std::shared_ptr<const v2i::security::TrustList> trust;
       bool verify = false;
+      std::optional<v2i::security::ReplayConfig> window;
       {
         const std::lock_guard lock(trust_mutex_);
         trust = trust_;
         verify = verify_;
+        window = window_;
       }
+      const TimeNs now = edge::host_now_ns();
       for (int i = 0; i < n; ++i) {
         ReceivedDatagram d;
         const auto* data = buffers[static_cast<std::size_t>(i)].data();
@@ -149,7 +158,10 @@ void V2iReceiver::run() {
           continue;  // not an IP sender: cannot happen on a UDP socket
         std::memcpy(d.sender.data(), &senders[static_cast<std::size_t>(i)], length);
         d.sender.resize(length);
-        if (verify)
+        if (verify && window)
+          d.signature =
+              v2i::check_signature_ahead(d.bytes, *trust, {now, window->max_age, window->max_future});
+        else if (verify)
           d.signature = v2i::check_signature_ahead(d.bytes, *trust);
         batch.push_back(std::move(d));
       }

@@ -40,8 +40,12 @@ class V2iReceiver {
   // posted to `io` whenever datagrams wait and none was posted since the last take(). Signatures are
   // checked against `trust` when `verify` (signed mode). At most `max_waiting` datagrams wait; beyond
   // that they are dropped and counted (dropped_full()), so that a stalled loop cannot exhaust memory.
+  // `window`: the time window (security.max_age_s, max_future_s) on the host's clock; a datagram generated
+  // outside it is not checked ahead (the event loop refuses it before its signature). None: check all
+  // (rsud replaying a capture runs on the capture's clock).
   V2iReceiver(int socket_fd, boost::asio::io_context& io, std::function<void()> on_arrival, bool verify,
-              v2i::security::TrustList trust, std::size_t max_waiting);
+              v2i::security::TrustList trust, std::size_t max_waiting,
+              std::optional<v2i::security::ReplayConfig> window);
   ~V2iReceiver();
   V2iReceiver(const V2iReceiver&) = delete;
   V2iReceiver& operator=(const V2iReceiver&) = delete;
@@ -50,7 +54,8 @@ class V2iReceiver {
   void stop();
   // SIGHUP: later datagrams are checked against this list (RsuCore verifies again any checked against a
   // key the reloaded list no longer holds).
-  void set_trust(bool verify, v2i::security::TrustList trust);
+  void set_trust(bool verify, v2i::security::TrustList trust,
+                 std::optional<v2i::security::ReplayConfig> window);
   // Up to `at_most` of the waiting datagrams, oldest first (event loop thread). When some are left,
   // the caller is expected to come back (no new on_arrival is posted until a take() empties the queue).
   std::vector<ReceivedDatagram> take(std::size_t at_most);
@@ -72,6 +77,7 @@ class V2iReceiver {
   std::mutex trust_mutex_;
   bool verify_;
   std::shared_ptr<const v2i::security::TrustList> trust_;
+  std::optional<v2i::security::ReplayConfig> window_;
 
   std::mutex queue_mutex_;
   std::deque<ReceivedDatagram> waiting_;

@@ -177,6 +177,8 @@ void AnnouncementIntake::report(CounterList& out) const {
   // Where the Ed25519 checks ran: here, or ahead on the receiver's thread (rsud's v2i.verifier_thread).
   out.add("auth", "signatures_verified", authenticator_.signatures_verified());
   out.add("auth", "signatures_checked_ahead", authenticator_.signatures_checked_ahead());
+  // Of the auth.* refusals, those made before any signature check (time or sequence window).
+  out.add("auth", "refused_before_signature", authenticator_.refused_before_signature());
   // 1 while running without signatures: local development only (the daemon also warns).
   out.add_level("security", "insecure_mode", authenticator_.mode() == v2i::SecurityMode::kInsecure ? 1 : 0);
   out.add_all("validation", validator_.counts(),

@@ -3,11 +3,14 @@
 // comes from a trusted signer that may say what it says, and is neither stale nor replayed. Pure: the
 // trust list is parsed elsewhere from text, time is passed in. Every verdict is counted by reason.
 //
-// Order of checks (signed mode), cheapest refusal first and nothing unauthenticated parsed beyond the
-// envelope: envelope (size, protobuf, version) -> signature present and well-formed -> signer in the
-// trust list -> Ed25519 over kSigningContext || 0 || the payload bytes as received -> payload parses
-// -> signer's role and ids allow this body -> generation-time window -> per-signer sequence window
-// (only now is the signer's replay state updated, so a forger cannot move it).
+// Order of checks (signed mode), cheapest refusal first: envelope (size, protobuf, version) -> signature
+// present and well-formed -> signer in the trust list -> the payload parsed (fuzzed: fuzz/v2i_datagram_
+// fuzzer.cpp) and its generation time and sequence checked against the windows, recording nothing (what
+// they refuse is refused whatever its signature; an RSU behind with a backlog had spent most of its time
+// verifying what it then refused as stale) -> Ed25519 over kSigningContext || 0 || the payload bytes as
+// received -> payload parses -> signer's role and ids allow this body -> generation-time window ->
+// per-signer sequence window (only now is the signer's replay state updated, so a forger cannot move it).
+// Nothing in an unverified payload is returned or acted on.
 //
 // Insecure mode (local development only; the daemon and client warn loudly): any well-formed message
 // is taken without checking signature, time or sequence, and counted as accepted_unverified.
@@ -67,7 +70,7 @@ const char* to_string(AuthVerdict verdict);
 
 struct AuthenticatedMessage {
   AuthVerdict verdict = AuthVerdict::kMalformed;
-  DecodedMessage message;    // status kOk once decoded (also when a later check refused it)
+  DecodedMessage message;    // status kOk once decoded and verified (also when a later check refused it)
   security::KeyId signer{};  // when signed
 
   bool accepted() const {
@@ -88,6 +91,20 @@ struct SignatureCheck {
 // listed): authenticate() refuses those cheaply itself.
 std::optional<SignatureCheck> check_signature_ahead(std::span<const std::uint8_t> bytes,
                                                     const security::TrustList& trust);
+
+// The receiver's clock and time window (security.max_age_s, max_future_s), for checking ahead only what
+// authenticate() would not refuse by its generation time before verifying it.
+struct TimeWindow {
+  TimeNs now = 0;
+  TimeNs max_age = 0;
+  TimeNs max_future = 0;
+};
+
+// The same, but nothing for a message generated outside `window` (authenticate() refuses it before its
+// signature): a receiver thread behind with a backlog does not verify what is refused as stale anyway.
+std::optional<SignatureCheck> check_signature_ahead(std::span<const std::uint8_t> bytes,
+                                                    const security::TrustList& trust,
+                                                    const TimeWindow& window);
 
 class MessageAuthenticator {
  public:
@@ -111,6 +128,8 @@ class MessageAuthenticator {
   // Ed25519 checks done here, and results of check_signature_ahead() taken instead.
   std::uint64_t signatures_verified() const { return signatures_verified_; }
   std::uint64_t signatures_checked_ahead() const { return signatures_checked_ahead_; }
+  // Refused by the time window or the signer's sequence window before their signature was checked.
+  std::uint64_t refused_before_signature() const { return refused_before_signature_; }
 
  private:
   AuthVerdict check(std::span<const std::uint8_t> bytes, TimeNs now, const SignatureCheck* checked,
@@ -122,6 +141,7 @@ class MessageAuthenticator {
   EnumCounter<AuthVerdict> counts_;
   std::uint64_t signatures_verified_ = 0;
   std::uint64_t signatures_checked_ahead_ = 0;
+  std::uint64_t refused_before_signature_ = 0;
 };
 
 }  // namespace rsu::v2i

@@ -69,8 +69,9 @@ struct DecodedMessage {
   MessageBody body;  // set only when status is kOk; carries the envelope's protocol_version
 };
 
-// Step 1: the envelope (size, protobuf, version). Step 2: its payload. The authenticator verifies the
-// signature between the two, so nothing unauthenticated is parsed beyond the envelope in signed mode.
+// Step 1: the envelope (size, protobuf, version). Step 2: its payload. In signed mode the authenticator
+// reads the payload's time and sequence before verifying the signature (to refuse what its windows refuse
+// without the costly check) and uses nothing else of it until the signature verified.
 DecodedEnvelope decode_envelope(std::span<const std::uint8_t> bytes);
 DecodedMessage decode_payload(const Envelope& envelope);
 // Both steps, checking no signature (tests, fuzzing, tools that only look).

@@ -155,7 +155,8 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
     cs = h.corrections()
     not_rejections = ("datagram.accepted", "auth.accepted", "auth.accepted_unverified", "auth.signers_tracked",
                       "auth.sequence_restarts", "auth.signers_evicted", "auth.trusted_keys",
-                      "auth.signatures_verified", "auth.signatures_checked_ahead")
+                      "auth.signatures_verified", "auth.signatures_checked_ahead",
+                      "auth.refused_before_signature")
     rejected = {k: int(v) for k, v in s.items() if v > 0 and k not in not_rejections and k.startswith(
         ("datagram.", "auth.", "validation.", "decode.", "registry.rate_limited", "registry.registry_full",
          "registry.too_many_sources", "registry.stale_sequence", "registry.duplicate_sequence"))}
@@ -177,10 +178,11 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
     print("rsud counted: LiDAR packets accepted %s, columns lost by the Ouster decoder %s, frames complete %s" % (
         count("packet.accepted"), count("decoder.columns_skipped"), count("decoder.frames_complete")))
     print("rsud counted: v2i.kernel_drops %s, lidar.kernel_drops %s, LiDAR packets lost %s, shed too late %s; "
-          "signatures verified on the loop %s, checked ahead on the receiver thread %s, dropped with its queue "
-          "full %s (most waiting %s)" % (
+          "signatures verified on the loop %s, checked ahead on the receiver thread %s, refused before their "
+          "signature was checked %s, dropped with its queue full %s (most waiting %s)" % (
               count("v2i.kernel_drops"), count("lidar.kernel_drops"), count("packet.lost"), count("packet.too_late"),
               count("auth.signatures_verified"), count("auth.signatures_checked_ahead"),
+              count("auth.refused_before_signature"),
               count("v2i.receiver_queue_full"), count("v2i.receiver_waiting_max")))
     sent_by_rsud = int(s.get("corrections_sent", 0))
     print("corrections: rsud sent %d, vehicles received %d (lost in transport %d), to vehicles not in view %d, "

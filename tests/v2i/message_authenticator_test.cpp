@@ -145,6 +145,47 @@ TEST_F(MessageAuthenticatorTest, EveryRefusalHasItsReason) {
   EXPECT_EQ(n.total(), cases.size() + 67U);
 }
 
+// Verifying costs ~40 us: what the time or sequence window refuses anyway is refused before it (a receiver
+// behind with a backlog would otherwise spend its time verifying what it then refuses as stale), and such a
+// check records nothing, so a forgery cannot move a signer's window.
+TEST_F(MessageAuthenticatorTest, WindowRefusalsComeBeforeTheSignature) {
+  const auto forge = [](const std::vector<std::uint8_t>& bytes) {
+    return tamper(bytes, [](auto& m) { m.mutable_signature()->front() ^= 1; });
+  };
+  const std::vector<std::uint8_t> good = announcement(&keys_.car, 20);
+  ASSERT_EQ(verdict(good), AuthVerdict::kAccepted);
+  EXPECT_EQ(auth_.signatures_verified(), 1U);
+  EXPECT_EQ(verdict(forge(announcement(&keys_.car, 21, kNow - 1001 * kNsPerMs))), AuthVerdict::kStale);
+  EXPECT_EQ(verdict(forge(announcement(&keys_.car, 22, kNow + 1001 * kNsPerMs))), AuthVerdict::kFuture);
+  EXPECT_EQ(verdict(forge(good)), AuthVerdict::kDuplicate);
+  EXPECT_EQ(verdict(good), AuthVerdict::kDuplicate);
+  EXPECT_EQ(auth_.signatures_verified(), 1U);  // none of these four was verified
+  EXPECT_EQ(auth_.refused_before_signature(), 4U);
+  // A forgery the windows let through is verified and refused, and leaves the window as it was: the
+  // genuine message with that number is still fresh, once.
+  EXPECT_EQ(verdict(forge(announcement(&keys_.car, 23))), AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth_.signatures_verified(), 2U);
+  EXPECT_EQ(verdict(announcement(&keys_.car, 23)), AuthVerdict::kAccepted);  // verified: 3
+  EXPECT_EQ(verdict(announcement(&keys_.car, 23)), AuthVerdict::kDuplicate);
+  EXPECT_EQ(auth_.refused_before_signature(), 5U);
+  // Checked ahead (rsud's receiver thread) within the receiver's time window: a stale or future message
+  // is not verified there either, and authenticate() refuses it by its time.
+  const TimeWindow window{kNow, 1000 * kNsPerMs, 1000 * kNsPerMs};
+  const std::vector<std::uint8_t> stale = announcement(&keys_.car, 30, kNow - 1001 * kNsPerMs);
+  const std::vector<std::uint8_t> future = announcement(&keys_.car, 31, kNow + 1001 * kNsPerMs);
+  const std::vector<std::uint8_t> fresh = announcement(&keys_.car, 32, kNow - 999 * kNsPerMs);
+  EXPECT_FALSE(check_signature_ahead(stale, keys_.trust(), window));
+  EXPECT_FALSE(check_signature_ahead(future, keys_.trust(), window));
+  EXPECT_TRUE(check_signature_ahead(stale, keys_.trust()));  // no window: checked
+  const auto fresh_check = check_signature_ahead(fresh, keys_.trust(), window);
+  ASSERT_TRUE(fresh_check);
+  EXPECT_TRUE(fresh_check->valid);
+  EXPECT_EQ(auth_.authenticate(stale, kNow, nullptr).verdict, AuthVerdict::kStale);
+  EXPECT_EQ(auth_.authenticate(fresh, kNow, &*fresh_check).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(auth_.signatures_verified(), 3U);  // as before this block: the fresh one was checked ahead
+  EXPECT_EQ(auth_.signatures_checked_ahead(), 1U);
+}
+
 TEST_F(MessageAuthenticatorTest, SignedGarbageIsMalformedNotAccepted) {
   std::string payload = "\xFF\xFF\xFF";
   v2::SignedV2iMessage m;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <random>
 #include <set>
 
@@ -134,6 +135,49 @@ TEST(ReplayGuard, StateIsBoundedByCapacityAndExpiry) {
   guard.expire(kNow + 7 + 10 * kNsPerSecond);
   EXPECT_EQ(guard.tracked(), 0U);
   EXPECT_EQ(guard.stats().expired, 3U);
+}
+
+// check() says what admit() would, and records nothing: on a random mix of fresh, reordered, repeated,
+// old and restarted sequence numbers, stale and future times, over three signers.
+TEST(ReplayGuard, CheckPredictsAdmitWithoutRecording) {
+  ReplayConfig config;
+  config.max_age = 1000 * kMs;
+  config.max_future = 200 * kMs;
+  ReplayGuard guard(config);
+  ReplayGuard twin(config);  // sees admit() only: check() must not change what it says
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> pick(0, 99);
+  std::array<std::uint32_t, 3> highest{100, 5000, 0xFFFFFFF0U};
+  TimeNs now = kNow;
+  std::array<int, static_cast<std::size_t>(ReplayVerdict::kCount)> seen{};
+  for (int i = 0; i < 5000; ++i) {
+    now += 3 * kMs;
+    const auto k = static_cast<std::size_t>(pick(rng) % 3);
+    const int r = pick(rng);
+    std::uint32_t seq = highest[k] + 1;
+    TimeNs t = now - 10 * kMs;
+    if (r < 15) {
+      seq = highest[k] - static_cast<std::uint32_t>(pick(rng));  // reordered, repeated or too old ...
+      t = now - 300 * kMs;  // ... and generated before the newest: not a restart
+    } else if (r < 18) {
+      seq = static_cast<std::uint32_t>(pick(rng));  // a restart when newer than everything, else too old
+      t = now - static_cast<TimeNs>(pick(rng)) * 20 * kMs;
+    } else if (r < 21) {
+      t = now - 1001 * kMs;
+    } else if (r < 24) {
+      t = now + 201 * kMs;
+    }
+    const ReplayVerdict predicted = guard.check(signer(static_cast<std::uint8_t>(k)), seq, t, now);
+    ASSERT_EQ(guard.check(signer(static_cast<std::uint8_t>(k)), seq, t, now), predicted);  // nothing recorded
+    const ReplayVerdict admitted = guard.admit(signer(static_cast<std::uint8_t>(k)), seq, t, now);
+    ASSERT_EQ(predicted, admitted) << "message " << i;
+    ASSERT_EQ(twin.admit(signer(static_cast<std::uint8_t>(k)), seq, t, now), admitted) << "message " << i;
+    if (admitted == ReplayVerdict::kFresh && r >= 15)
+      highest[k] = seq;  // the next number, or a restart
+    ++seen[static_cast<std::size_t>(admitted)];
+  }
+  for (std::size_t v = 0; v < seen.size(); ++v)
+    EXPECT_GT(seen[v], 0) << to_string(static_cast<ReplayVerdict>(v));  // every verdict exercised
 }
 
 }  // namespace

@@ -117,6 +117,29 @@ ReplayVerdict ReplayGuard::admit(const KeyId& signer, std::uint32_t sequence, Ti
   return ReplayVerdict::kFresh;
 }
 
+ReplayVerdict ReplayGuard::check(const KeyId& signer, std::uint32_t sequence, TimeNs generation_time,
+                                 TimeNs now) const {
+  if (generation_time < now - config_.max_age) {
+    return ReplayVerdict::kStale;
+  }
+  if (generation_time > now + config_.max_future) {
+    return ReplayVerdict::kFuture;
+  }
+  const auto it = signers_.find(signer);
+  if (it == signers_.end()) {
+    return ReplayVerdict::kFresh;
+  }
+  const SignerState& s = it->second;
+  if (generation_time < s.restarted_at) {
+    return ReplayVerdict::kTooOld;
+  }
+  const SequenceWindow::Check c = s.window.check(sequence);
+  if (c == SequenceWindow::Check::kNew || generation_time > s.newest_generation) {
+    return ReplayVerdict::kFresh;  // new, or a restart of the signer's counter
+  }
+  return c == SequenceWindow::Check::kDuplicate ? ReplayVerdict::kDuplicate : ReplayVerdict::kTooOld;
+}
+
 void ReplayGuard::expire(TimeNs now) {
   for (auto it = signers_.begin(); it != signers_.end();) {
     if (now - it->second.last_heard > config_.signer_expiry) {

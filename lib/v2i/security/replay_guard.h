@@ -74,6 +74,9 @@ class ReplayGuard {
 
   // Checks one verified message and, when fresh, records it.
   ReplayVerdict admit(const KeyId& signer, std::uint32_t sequence, TimeNs generation_time, TimeNs now);
+  // What admit() would say now, recording nothing: lets a receiver refuse a message that admit() would
+  // refuse before paying for its signature (MessageAuthenticator). kFresh means "verify, then admit".
+  ReplayVerdict check(const KeyId& signer, std::uint32_t sequence, TimeNs generation_time, TimeNs now) const;
   // Forgets signers silent for signer_expiry (call about once a second).
   void expire(TimeNs now);
 
