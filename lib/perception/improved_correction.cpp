@@ -330,8 +330,13 @@ void probe_yaw(const View& view, const Frame& frame, const CorrectedPose& fix, c
   const double yaw = std::atan2(frame.e0.y(), frame.e0.x());
   const double sigma = 1.0 / std::sqrt(std::max(yaw_information, 1e-12));
   const Eigen::Vector2d centre(fix.pose.x, fix.pose.y);
+  // The nearer probes are placed only for an interval's width.
+  const bool interval =
+      placed.evidence[0].anchor == AxisAnchor::interval || placed.evidence[1].anchor == AxisAnchor::interval;
   for (std::size_t i = 0; i < 2; ++i) {
     for (const double sigmas : {std::sqrt(3.0), 1.0, 0.5}) {
+      if (evidence.yaw_probe_rad[i] != 0.0 && !interval)
+        break;
       const double step = (i == 0 ? 1.0 : -1.0) * std::min(sigmas * sigma, kMaxProbeRad);
       const Frame turned = frame_at(frame.origin, yaw + step);
       const std::optional<Placement> box = place_known_box(view, turned, size, yaw_information);
