@@ -5,8 +5,8 @@
 # each phase took. `scripts/test.sh --quick` runs the Release pass only.
 #
 # What runs where, and why (budget: the whole command under 30 min on 2 cores, fresh machine; measured
-# on a fresh clone: install 1 s, Release build 406 s, tests 177 s, ASan build 638 s, tests 96 s, TSan
-# build 187 s, tests ~70 s (~25 s since the pilot's long sweeps left it), fuzz ~190 s: about 29 min):
+# on a fresh clone at 9ccea79: install 1 s, Release build 429 s, tests 180 s, ASan build 583 s, tests
+# 109 s, TSan build 162 s, tests 14 s, fuzz 158 s: 27.3 min):
 #   Release     every test
 #   ASan+UBSan  every test (memory errors and UB anywhere, our parsers above all) but those labelled
 #               `throughput` (the load smoke and the mis-association run): they assert the speed of an
