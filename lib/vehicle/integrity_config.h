@@ -35,6 +35,22 @@ struct IntegrityConfig {
   // schedule (not pursued).
   double suspicious_fix_chi2 = 9.35;
   double cusum_continuing_cap = 26.5;
+  // Against a degraded own estimate (its NDT flagged), the CUSUM counts a fix within the gate as this
+  // correlation time's share of one (the time since the source's previous fix over it, at most 1); a gross
+  // fix (beyond fix_gate_chi2) counts in full. The degraded own estimate's error is not white: measured in
+  // the degraded corridor (six noise seeds, its along-road error at the VLP-32C's fixes, 10 Hz), the
+  // squared error's autocorrelation sums (1 + 2 x the lags up to its first zero) to 14-15 fixes, 1.4 s.
+  // Counted fix by fix, one NDT slide of 0.65 m lasting a second (a 3 sigma excursion of an estimate whose
+  // error RMS is 0.20-0.28 m) excluded an honest RSU (README, issue 13); the evidence it holds is about one
+  // fix's worth.
+  // Only for an admitted source whose track did not jump (its fixes fit the fused filter's estimate since
+  // its admission) and whose run of fixes agreed with the own estimate on average over at least three
+  // such correlation times (their mean innovation within the own covariance shrunk by the independent
+  // samples the run holds, chi-square 95 %, 3 dof): what it disagrees with now is then a passing
+  // excursion of the own estimate, not a constant offset of its own. A source first seen during such an
+  // excursion, or biased from the start, has no such record and counts fix by fix as before.
+  TimeNs degraded_own_correlation_time = 1400 * kNsPerMs;
+  double agreement_chi2 = 7.81;
 
   // Admission. A source is fused only once its last `admit_after_fixes` fixes (each at most
   // `max_fix_gap` after the one before) are consistent together: the sum of their NIS within the

@@ -91,8 +91,17 @@ const char* to_string(FixVerdict verdict) {
   return "unknown";
 }
 
+double fix_nis(const v2i::Correction& fix, const fusion::StateEstimate& estimate,
+               const Eigen::Vector2d& reference_offset) {
+  const fusion::PoseMeasurement m{fix.sweep_time, fusion::MeasurementSource::kRsu, fix.pose,
+                                  fix.pose_covariance};
+  const fusion::PoseInnovation innovation = fusion::pose_innovation(estimate.state, m, reference_offset);
+  const auto& h = innovation.jacobian;
+  return nis(innovation.residual, h * estimate.covariance * h.transpose() + fix.pose_covariance);
+}
+
 FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::StateEstimate& own,
-                                 OwnEstimate status, const Eigen::Vector2d& reference_offset) {
+                                 OwnEstimate status, const Eigen::Vector2d& reference_offset, bool on_track) {
   ++checks_;
   SourceRecord& s = record(fix.rsu_id);
   ++s.fixes;
@@ -100,8 +109,12 @@ FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::State
   const fusion::PoseMeasurement m{t, fusion::MeasurementSource::kRsu, fix.pose, fix.pose_covariance};
   const fusion::PoseInnovation innovation = fusion::pose_innovation(own.state, m, reference_offset);
   const auto& h = innovation.jacobian;
+  const Eigen::Matrix3d innovation_covariance = h * own.covariance * h.transpose() + fix.pose_covariance;
   FixCheck out;
-  out.nis = nis(innovation.residual, h * own.covariance * h.transpose() + fix.pose_covariance);
+  out.nis = nis(innovation.residual, innovation_covariance);
+  if (s.state == SourceState::kAdmitted && !on_track) {
+    s.track_broken = true;
+  }
   s.last_time = t;
   s.last_innovation = innovation.residual;
   s.last_covariance = fix.pose_covariance;
@@ -124,7 +137,10 @@ FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::State
     s.run.clear();
     out.verdict = FixVerdict::kUseOwnFailed;
   } else {
-    update_cusum(s, out.nis, t);
+    const bool correlated = status == OwnEstimate::kDegraded && s.state == SourceState::kAdmitted &&
+                            !s.track_broken && agreed_over_run(s, innovation_covariance);
+    update_cusum(s, out.nis, t, correlated);
+    s.run.back().innovation = innovation.residual;
     admit_or_exclude(s, out.nis, t, out);
     if (s.state == SourceState::kAdmitted) {
       out.verdict = s.last_beyond_gate                 ? FixVerdict::kInconsistent
@@ -202,26 +218,37 @@ bool IntegrityMonitor::compare_with_peers(std::uint64_t rsu_id, SourceRecord& se
   return agree_against_own;
 }
 
-void IntegrityMonitor::update_cusum(SourceRecord& s, double nis, TimeNs t) const {
+void IntegrityMonitor::update_cusum(SourceRecord& s, double nis, TimeNs t, bool correlated) const {
   // A fix counts at most cusum_cap, so that one gross fix alone never excludes a source; right after a
   // suspicious fix (the one before it, within max_fix_gap) it counts up to cusum_continuing_cap, so that
   // a gross one completes the exclusion: two bad fixes in a row, even where both covariances were wide
   // enough to keep the first one's NIS moderate. Not while excluded: there the CUSUM only paces
   // readmission.
   const bool after_suspicious = s.state != SourceState::kExcluded && !s.run.empty() &&
-                                t - s.run.back().first <= config_.max_fix_gap &&
-                                s.run.back().second > config_.suspicious_fix_chi2;
+                                t - s.run.back().time <= config_.max_fix_gap &&
+                                s.run.back().nis > config_.suspicious_fix_chi2;
   const double cap =
       after_suspicious ? std::max(config_.cusum_cap, config_.cusum_continuing_cap) : config_.cusum_cap;
-  const double step = std::min(nis, cap) - config_.cusum_drift;
+  double step = std::min(nis, cap) - config_.cusum_drift;
+  // Against a degraded own estimate, a fix of an admitted source still on its track, within the gate,
+  // counts only for the time it adds, as a share of the correlation time of that estimate's error:
+  // consecutive fixes there hold one error of the own estimate, not several
+  // (IntegrityConfig::degraded_own_correlation_time). A gross fix counts in full.
+  const bool continues_run =
+      !s.run.empty() && t > s.run.back().time && t - s.run.back().time <= config_.max_fix_gap;
+  if (correlated && nis <= config_.fix_gate_chi2 && continues_run &&
+      config_.degraded_own_correlation_time > 0) {
+    step *= std::min(1.0, static_cast<double>(t - s.run.back().time) /
+                              static_cast<double>(config_.degraded_own_correlation_time));
+  }
   if (s.cusum <= 0.0 && step > 0.0) {
     s.excursion_start = t;
   }
   s.cusum = std::max(0.0, s.cusum + step);
-  if (!s.run.empty() && t - s.run.back().first > config_.max_fix_gap) {
+  if (!s.run.empty() && t - s.run.back().time > config_.max_fix_gap) {
     s.run.clear();  // a gap breaks the run of consecutive fixes
   }
-  s.run.emplace_back(t, nis);
+  s.run.push_back({t, nis, Eigen::Vector3d::Zero()});
   while (s.run.size() > static_cast<std::size_t>(std::max(config_.max_admit_fixes, 1))) {
     s.run.pop_front();
   }
@@ -246,6 +273,22 @@ void IntegrityMonitor::admit_or_exclude(SourceRecord& s, double nis, TimeNs t, F
   }
 }
 
+bool IntegrityMonitor::agreed_over_run(const SourceRecord& s,
+                                       const Eigen::Matrix3d& innovation_covariance) const {
+  const TimeNs correlation = config_.degraded_own_correlation_time;
+  if (s.run.empty() || correlation <= 0 || s.run.back().time - s.run.front().time < 3 * correlation) {
+    return false;
+  }
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const SourceRecord::RunFix& f : s.run) {
+    mean += f.innovation;
+  }
+  mean /= static_cast<double>(s.run.size());
+  const double independent_samples =
+      static_cast<double>(s.run.back().time - s.run.front().time) / static_cast<double>(correlation);
+  return nis(mean, innovation_covariance / independent_samples) <= config_.agreement_chi2;
+}
+
 bool IntegrityMonitor::admissible(const SourceRecord& s, int fixes_needed) const {
   const auto n = static_cast<std::size_t>(std::max(fixes_needed, 1));
   if (s.run.size() < n || s.cusum > 0.5 * config_.cusum_threshold) {
@@ -253,7 +296,7 @@ bool IntegrityMonitor::admissible(const SourceRecord& s, int fixes_needed) const
   }
   double sum = 0.0;
   for (auto it = s.run.end() - static_cast<std::ptrdiff_t>(n); it != s.run.end(); ++it) {
-    sum += it->second;
+    sum += it->nis;
   }
   return sum <= chi_square_quantile(3 * static_cast<int>(n), config_.admit_z);
 }
@@ -277,6 +320,7 @@ void IntegrityMonitor::exclude(SourceRecord& s, double nis, TimeNs t, FixCheck& 
 
 void IntegrityMonitor::admit(SourceRecord& s, FixCheck& out) {
   s.state = SourceState::kAdmitted;
+  s.track_broken = false;
   out.admitted_now = true;
 }
 

@@ -81,13 +81,21 @@ struct SourceRecord {
   TimeNs excursion_start = 0;  // sweep time of the first fix of the CUSUM's current rise
   TimeNs excluded_at = 0;      // sweep time of the fix that excluded it
   int exclusions = 0;
-  std::deque<std::pair<TimeNs, double>> run;  // (sweep time, NIS) of the latest consecutive fixes
+  struct RunFix {
+    TimeNs time = 0;  // sweep time
+    double nis = 0.0;
+    Eigen::Vector3d innovation = Eigen::Vector3d::Zero();  // against the own estimate
+  };
+  std::deque<RunFix> run;  // the latest consecutive fixes
 
   // The latest fix, for the comparison between RSUs.
   TimeNs last_time = 0;
   Eigen::Vector3d last_innovation = Eigen::Vector3d::Zero();
   Eigen::Matrix3d last_covariance = Eigen::Matrix3d::Identity();
   bool last_beyond_gate = false;
+  // Since its latest admission a fix of it did not fit the fused filter's track (check's on_track): it
+  // jumped, and its fixes count in full against a degraded own estimate.
+  bool track_broken = false;
   int peer_agreements = 0;       // its latest fixes in a row that agreed with every admitted RSU compared
   std::uint64_t last_heard = 0;  // check() count, for least-recently-heard eviction
 
@@ -110,14 +118,23 @@ struct IntegrityTotals {
   TimeNs max_exclusion_latency = -1;
 };
 
+// The normalized innovation squared (3 dof: x, y, box yaw) of `fix` against `estimate` at its sweep
+// time, with both covariances (infinite when their sum is not positive definite).
+double fix_nis(const v2i::Correction& fix, const fusion::StateEstimate& estimate,
+               const Eigen::Vector2d& reference_offset);
+
 class IntegrityMonitor {
  public:
   explicit IntegrityMonitor(const IntegrityConfig& config = {}) : config_(config) {}
 
   // Checks one fix against `own` (the own estimate at the fix's sweep time) whose standing is `status`.
   // `reference_offset`: the announced reference point minus the box centre (the fix gives the centre).
+  // `on_track`: the fix fits the fused filter's estimate at its sweep (fix_fits), which this source's
+  // earlier fixes led: its own track did not jump. Only such fixes of an admitted source that never
+  // jumped are counted as correlated evidence against a degraded own estimate
+  // (IntegrityConfig::degraded_own_correlation_time).
   FixCheck check(const v2i::Correction& fix, const fusion::StateEstimate& own, OwnEstimate status,
-                 const Eigen::Vector2d& reference_offset);
+                 const Eigen::Vector2d& reference_offset, bool on_track = false);
 
   // The own estimate turns out to have been failing since `since` (its NDT has just said so, and may have
   // been failing before it did): exclusions decided against it from then on are annulled, the sources go
@@ -131,7 +148,11 @@ class IntegrityMonitor {
  private:
   SourceRecord& record(std::uint64_t rsu_id);
   bool compare_with_peers(std::uint64_t rsu_id, SourceRecord& self);
-  void update_cusum(SourceRecord& s, double nis, TimeNs t) const;
+  void update_cusum(SourceRecord& s, double nis, TimeNs t, bool correlated) const;
+  // The source's run of fixes spans at least three correlation times of a degraded own estimate's error,
+  // and their mean innovation is within that estimate's covariance `s` shrunk by the independent samples
+  // it holds (chi-square 95 %, 3 dof): it has agreed with the own estimate on average, not only now.
+  bool agreed_over_run(const SourceRecord& s, const Eigen::Matrix3d& innovation_covariance) const;
   void admit_or_exclude(SourceRecord& s, double nis, TimeNs t, FixCheck& out);
   bool admissible(const SourceRecord& s, int fixes_needed) const;
   void exclude(SourceRecord& s, double nis, TimeNs t, FixCheck& out);

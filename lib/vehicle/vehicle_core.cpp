@@ -89,7 +89,12 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& received) {
     const OwnEstimate status = own_status_at(correction.sweep_time);
     const bool own_failed = status != OwnEstimate::kHealthy;
     stats_.fixes_own_failed += own_failed ? 1 : 0;
-    step.check = monitor_.check(correction, *own, status, config_.fuser.ekf.reference_offset);
+    // The fix continues the track the fused filter holds (led by this source's earlier fixes while it
+    // is admitted): it did not jump.
+    const auto fused = fuser_.pose_at(correction.sweep_time);
+    const bool on_track = fused && fix_nis(correction, *fused, config_.fuser.ekf.reference_offset) <=
+                                       config_.integrity.fix_gate_chi2;
+    step.check = monitor_.check(correction, *own, status, config_.fuser.ekf.reference_offset, on_track);
     if (step.check->peers_agree_against_own) {
       peers_against_own_until_ = correction.sweep_time + config_.peer_agreement_hold;
     }
