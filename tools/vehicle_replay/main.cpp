@@ -82,6 +82,8 @@ int run(const po::variables_map& vm) {
   vehicle::VehicleCoreConfig config;
   config.check_integrity = vm.count("no-integrity") == 0;
   config.degraded_ndt_variance_scale = vm["degraded-variance-scale"].as<double>();
+  config.integrity.degraded_own_correlation_time =
+      static_cast<rsu::TimeNs>(vm["own-correlation-ms"].as<double>() * 1e6);
   const auto corrections = read_corrections(vm["corrections-in"].as<std::string>());
   std::FILE* decisions = nullptr;
   if (vm.count("corrections")) {
@@ -160,7 +162,11 @@ int main(int argc, char** argv) {
       "degraded-variance-scale",
       po::value<double>()->default_value(rsu::vehicle::VehicleCoreConfig{}.degraded_ndt_variance_scale),
       "a degraded NDT pose's covariance times this")(
-      "ndt-sigma-xy-m", po::value<double>()->default_value(0.2), "as rsu-vehicle's")(
+      "own-correlation-ms",
+      po::value<double>()->default_value(
+          static_cast<double>(rsu::vehicle::IntegrityConfig{}.degraded_own_correlation_time) / 1e6),
+      "the degraded own estimate's error correlation time the integrity checks count fixes by (0: fix by "
+      "fix)")("ndt-sigma-xy-m", po::value<double>()->default_value(0.2), "as rsu-vehicle's")(
       "ndt-sigma-yaw-rad", po::value<double>()->default_value(0.02), "as rsu-vehicle's");
   po::variables_map vm;
   try {
