@@ -3,12 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
 
 #include "common/angles.h"
 #include "common/random.h"
+#include "tracking/assignment.h"
 
 namespace rsu::tracking {
 namespace {
@@ -221,6 +223,68 @@ TEST(Association, NeverSwapsSideBySideVehicles) {
   EXPECT_GE(nearest_neighbour_would_swap, 5);
   // ...and the gate keeps (almost) every true pair: errors are within 2.5 sigma, the gate is 3 sigma.
   EXPECT_GE(both_matched, 495);
+}
+
+// associate() leaves the vehicles with no cluster in their gate out of the assignment (rsud: 1000
+// registered, a handful in view). The optimum over every vehicle, built here as the full matrix (one
+// private "no cluster" column per vehicle at the gate value, forbidden pairs above every vehicle
+// unmatched) and solved by the same solver, must pair the same clusters with the same vehicles.
+TEST(Association, VehiclesOutsideEveryGateDoNotChangeTheAssignment) {
+  const AssociationConfig config;
+  int pairs_compared = 0;
+  for (std::uint64_t trial = 0; trial < 200; ++trial) {
+    std::vector<VehicleHypothesis> vehicles;
+    std::vector<perception::Detection> clusters;
+    // A crowded spot (vehicles and clusters within a few metres: contested gates), and vehicles far
+    // from every cluster in between, in an order that changes with the trial.
+    const auto n_near = 2 + static_cast<int>(mix64(trial) % 5);
+    const auto n_far = 30 + static_cast<int>(mix64(trial + 7) % 40);
+    for (int i = 0; i < n_near + n_far; ++i) {
+      const auto n = standard_normal_pair(77, static_cast<std::uint64_t>(i), trial);
+      const bool is_near = mix64(trial * 1000 + static_cast<std::uint64_t>(i)) % 4 == 0 || i < n_near;
+      const double spread = is_near ? 2.0 : 200.0;
+      vehicles.push_back(vehicle(static_cast<std::uint64_t>(i), spread * n.a + (is_near ? 0.0 : 300.0),
+                                 spread * n.b, 0.3 * n.a, is_near ? 0.4 + 0.2 * std::abs(n.b) : 0.3));
+    }
+    for (int c = 0; c < n_near + 1; ++c) {
+      const auto n = standard_normal_pair(78, static_cast<std::uint64_t>(c), trial);
+      clusters.push_back(full_view(2.0 * n.a, 2.0 * n.b, 0.3 * n.b));
+    }
+    const AssociationResult r = associate(clusters, vehicles, config);
+
+    const auto rows = static_cast<Eigen::Index>(vehicles.size());
+    const auto cols = static_cast<Eigen::Index>(clusters.size());
+    const double forbidden = config.gate_chi2 * static_cast<double>(rows + 1) + 1.0;
+    Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(rows, cols + rows, forbidden);
+    for (Eigen::Index v = 0; v < rows; ++v) {
+      cost(v, cols + v) = config.gate_chi2;
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        const PairCheck check = check_pair(clusters[static_cast<std::size_t>(c)].fit,
+                                           vehicles[static_cast<std::size_t>(v)], config);
+        if (check.verdict == PairGate::kPass)
+          cost(v, c) = check.distance_sq;
+      }
+    }
+    const std::optional<Assignment> full = solve_assignment(cost);
+    ASSERT_TRUE(full.has_value());
+    std::vector<AssociatedPair> expected;
+    for (Eigen::Index v = 0; v < rows; ++v) {
+      const int c = full->row_to_col[static_cast<std::size_t>(v)];
+      if (c < cols && cost(v, c) < forbidden)
+        expected.push_back({static_cast<std::size_t>(c), static_cast<std::size_t>(v), cost(v, c)});
+    }
+    std::sort(expected.begin(), expected.end(),
+              [](const AssociatedPair& a, const AssociatedPair& b) { return a.cluster < b.cluster; });
+    ASSERT_EQ(r.pairs.size(), expected.size()) << "trial " << trial;
+    for (std::size_t k = 0; k < expected.size(); ++k) {
+      EXPECT_EQ(r.pairs[k].cluster, expected[k].cluster) << "trial " << trial;
+      EXPECT_EQ(r.pairs[k].vehicle, expected[k].vehicle) << "trial " << trial;
+      EXPECT_EQ(r.pairs[k].distance_sq, expected[k].distance_sq) << "trial " << trial;
+    }
+    EXPECT_EQ(r.unmatched_vehicles.size(), vehicles.size() - expected.size());
+    pairs_compared += static_cast<int>(expected.size());
+  }
+  EXPECT_GE(pairs_compared, 300);  // the crowded spots did pair, contested or not
 }
 
 TEST(Association, BadInputsAreSkippedNotFatal) {
