@@ -8,8 +8,9 @@ for /etc/rsud/keys; the unit's own lines are then followed:
       systemd's part, done here: the key copied into a credentials directory readable by the service's
       user only (mode 0400 in a 0500 directory, as systemd makes it), $CREDENTIALS_DIRECTORY set and %d
       replaced by it.
-  DynamicUser=yes, CapabilityBoundingSet=, NoNewPrivileges=yes, UMask=0077
-      an unprivileged uid of systemd's dynamic range with no groups and no capabilities (setpriv).
+  DynamicUser=yes, CapabilityBoundingSet=, NoNewPrivileges=yes, UMask=0077, Nice=
+      an unprivileged uid of systemd's dynamic range with no groups and no capabilities (setpriv), at the
+      unit's nice value (nice, as root: rsud runs at it).
   SystemCallFilter=, RestrictAddressFamilies=, MemoryDenyWriteExecute=
       installed with libseccomp (sandbox_exec) from the unit's own lines, the groups expanded by
       `systemd-analyze syscall-filter`; a system call outside them kills rsud (SIGSYS), as under systemd.
@@ -210,7 +211,8 @@ def run(args, work, lines, children):
 
     # DynamicUser= etc.: the uid, no groups, no capabilities, no new privileges, UMask=.
     umask = one(lines, "UMask")
-    as_service = ["setpriv", "--reuid", str(SERVICE_UID), "--regid", str(SERVICE_UID), "--clear-groups",
+    # Nice=: systemd sets it before dropping privileges; here nice(1) as root does.
+    as_service = ["nice", "-n", one(lines, "Nice"), "setpriv", "--reuid", str(SERVICE_UID), "--regid", str(SERVICE_UID), "--clear-groups",
                   "--inh-caps=-all", "--bounding-set=-all", "--no-new-privs", "sh", "-c", 'umask %s && exec "$@"' % umask,
                   "sh"]
     # SystemCallFilter= etc. through seccomp, when this machine can.
@@ -270,6 +272,9 @@ def run(args, work, lines, children):
              watch_log=log)
     s = stats()
     assert s["security.insecure_mode"] == 0, s
+    # Nice=: the process serving is rsud itself (every wrapper above execs), at the unit's nice value.
+    nice = int(read_text("/proc/%d/stat" % rsud.pid).rsplit(")", 1)[1].split()[16])
+    assert nice == int(one(lines, "Nice")), "rsud runs at nice %d, the unit says %s" % (nice, one(lines, "Nice"))
     # ExecReload=/bin/kill -HUP $MAINPID: the configuration and the credential read again.
     assert one(lines, "ExecReload") == "/bin/kill -HUP $MAINPID"
     rsud.send_signal(signal.SIGHUP)
@@ -279,7 +284,8 @@ def run(args, work, lines, children):
     rc = rsud.wait(timeout=10)
     assert rc == 0, "rsud exited %d on SIGTERM under the unit's sandbox:\n%s" % (rc, read_text(log)[-3000:])
     print("ok: rsud ran as uid %d with the unit's credential%s: check-config, start, a signed announcement "
-          "accepted, SIGHUP reload, SIGTERM exit 0" % (SERVICE_UID, " and seccomp filter" if sandbox else ""))
+          "accepted at nice %s, SIGHUP reload, SIGTERM exit 0" % (SERVICE_UID, " and seccomp filter" if sandbox else "",
+                                                             one(lines, "Nice")))
     return 0
 
 
