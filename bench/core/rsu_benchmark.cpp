@@ -267,16 +267,20 @@ void BM_EndToEndLatency(benchmark::State& state) {
   const Recording& rec = recording(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
                                    static_cast<Drive>(state.range(2)));
   const bool check_after_send = state.range(3) == 1;
+  RsuCoreConfig config = bench_config(rec.model);
+  config.prepare_fixes = state.range(4) == 1;
   std::vector<double> latency_ms;
   std::vector<double> latency_cpu_ms;
   std::vector<double> wait_ms;
   std::vector<double> compute_us;
   std::vector<double> compute_cpu_us;
   std::size_t corrections = 0;
-  std::uint64_t mount_stops = 0;  // over the iterations (the fixes the check stopped are not measured)
+  std::uint64_t mount_stops = 0;    // over the iterations (the fixes the check stopped are not measured)
+  std::uint64_t prepared_used = 0;  // corrections whose fix was prepared ahead of the release
+  std::uint64_t prepared = 0;       // fixes prepared
   for (auto _ : state) {
     state.PauseTiming();
-    RsuCore core(bench_config(rec.model));
+    RsuCore core(config);
     for (std::size_t k = 0; k < rec.first_busy; ++k)
       core.on_lidar_packet(rec.packets[k].bytes, rec.packets[k].arrival);
     v2i::VehicleAnnouncement a;
@@ -337,8 +341,14 @@ void BM_EndToEndLatency(benchmark::State& state) {
       finish_cpu += thread_cpu_ns() - m0;
     }
     mount_stops += core.mount_monitor() ? core.mount_monitor()->stats().stops : 0;
+    prepared_used += core.lidar_stats().fixes_prepared_used;
+    prepared += core.lidar_stats().fixes_prepared;
   }
   state.counters["mount_stops"] = static_cast<double>(mount_stops);
+  state.counters["fixes_prepared"] =
+      static_cast<double>(prepared) / static_cast<double>(std::max<std::size_t>(1, corrections));
+  state.counters["prepared_fixes_used"] =
+      static_cast<double>(prepared_used) / static_cast<double>(std::max<std::size_t>(1, corrections));
   state.counters["corrections_per_rotation"] =
       static_cast<double>(corrections) / static_cast<double>(state.iterations() * kBusyRotations);
   state.counters["latency_p50_ms"] = percentile(latency_ms, 0.50);
@@ -352,25 +362,31 @@ void BM_EndToEndLatency(benchmark::State& state) {
   state.counters["packet_compute_p99_us"] = percentile(compute_us, 0.99);
   state.counters["packet_compute_max_us"] = percentile(compute_us, 1.0);
   char label[128];
-  std::snprintf(label, sizeof label, "%s %s, vehicle centre %.1f-%.1f m%s", rec.model.c_str(),
+  std::snprintf(label, sizeof label, "%s %s, vehicle centre %.1f-%.1f m%s%s", rec.model.c_str(),
                 drive_name(rec.drive), rec.min_range_m, rec.max_range_m,
-                check_after_send ? "" : ", mount check before the batch (baseline)");
+                check_after_send ? "" : ", mount check before the batch (baseline)",
+                config.prepare_fixes ? "" : ", fixes not prepared (baseline)");
   state.SetLabel(label);
 }
 // Args: sensor (0 = VLP-16, 1 = VLP-32C, 2 = OS1-128 2048x10), range of the vehicle from the LiDAR (m), the
 // issue's 5-40 m, drive (Drive: 0 = approach: starts at that range and drives in, to 5 m at the nearest;
 // 1 = hold: stays there; 2 = approach past 5 m: 8 m in, from 10 m to 3.6 m), mount check (1 = after the
-// corrections are sent, as rsud does; 0 = before the next batch, the baseline).
+// corrections are sent, as rsud does; 0 = before the next batch, the baseline), fixes prepared while the
+// sweep closes the cluster (1, RsuCoreConfig::prepare_fixes; 0 = not, the baseline).
 BENCHMARK(BM_EndToEndLatency)
-    ->ArgsProduct({{0, 1}, {10, 20, 30, 40}, {0, 1}, {0, 1}})
-    ->Args({0, 10, 2, 1})
-    ->Args({1, 10, 2, 1})
+    ->ArgsProduct({{0, 1}, {10, 20, 30, 40}, {0, 1}, {0, 1}, {1}})
+    ->ArgsProduct({{0, 1}, {10, 20, 30, 40}, {0, 1}, {1}, {0}})
+    ->Args({0, 10, 2, 1, 1})
+    ->Args({1, 10, 2, 1, 1})
+    ->Args({0, 10, 2, 1, 0})
+    ->Args({1, 10, 2, 1, 0})
     ->Iterations(3)
     ->Unit(benchmark::kMillisecond);
 // The dense sensor, as rsud runs it (the mount check after the corrections are sent).
 BENCHMARK(BM_EndToEndLatency)
-    ->ArgsProduct({{2}, {10, 20, 30, 40}, {0, 1}, {1}})
-    ->Args({2, 10, 2, 1})
+    ->ArgsProduct({{2}, {10, 20, 30, 40}, {0, 1}, {1}, {1, 0}})
+    ->Args({2, 10, 2, 1, 1})
+    ->Args({2, 10, 2, 1, 0})
     ->Iterations(3)
     ->Unit(benchmark::kMillisecond);
 

@@ -34,6 +34,8 @@ void report(const lidar::PacketOrderStats& o, const perception::SweepClustererSt
   out.add("lidar", "corrections_encode_failed", l.corrections_encode_failed);
   out.add("lidar", "corrections", l.corrections);
   out.add("lidar", "corrections_withheld_mount", l.corrections_withheld_mount);
+  out.add("lidar", "fixes_prepared", l.fixes_prepared);
+  out.add("lidar", "fixes_prepared_used", l.fixes_prepared_used);
 }
 
 }  // namespace rsu::core

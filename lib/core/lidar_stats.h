@@ -29,7 +29,11 @@ struct LidarStats {
   std::uint64_t corrections_encode_failed = 0;
   std::uint64_t corrections = 0;
   std::uint64_t corrections_withheld_mount = 0;  // fixed, not sent: the LiDAR moved (MountMonitor)
-  std::uint64_t packets_too_late = 0;            // older than RsuCoreConfig::max_packet_age when processed
+  // fixes computed ahead of their vehicle's release (RsuCoreConfig::prepare_fixes), and those of them
+  // its release used (its inputs unchanged)
+  std::uint64_t fixes_prepared = 0;
+  std::uint64_t fixes_prepared_used = 0;
+  std::uint64_t packets_too_late = 0;      // older than RsuCoreConfig::max_packet_age when processed
   std::uint64_t packets_clock_offset = 0;  // time_source sensor: the sensor's clock beyond the tolerance
 };
 

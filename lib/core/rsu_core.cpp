@@ -114,6 +114,8 @@ LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Rele
   LidarStepResult result;
   for (const HeldVehicle& held : gatherer_.release(release == Release::everything, sweep_))
     correct(held, now, result);
+  if (release == Release::passed && config_.prepare_fixes)
+    prepare_fixes(now);
   return result;
 }
 
@@ -122,7 +124,7 @@ std::vector<perception::Detection> RsuCore::detect(std::vector<perception::Swept
   for (const perception::SweptCluster& cluster : clusters) {
     if (cluster.points.empty())
       continue;
-    perception::Detection d = perception::detect(cluster.points, mount_.xy(), config_.perception.fix.fit);
+    perception::Detection d = prepared_.fit(cluster.points, mount_.xy(), config_.perception.fix.fit);
     ++lidar_stats_.clusters_fitted;
     if (!d.fit.ok()) {
       ++lidar_stats_.fits_failed;  // too small or thin to fit alone, but maybe a fragment of a vehicle
@@ -160,8 +162,8 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
     return;
   // Packets lost while the sweep crossed the vehicle (or just before its first points: its leading part
   // may be what was lost).
-  const bool lost_nearby = last_loss_ns_ >= held.first_time - sweep_.rotation_period_ns() / 8;
-  const GatheredFix fix = fixer_.fix(held, vehicle->announcement, lost_nearby, occluders_.of(held));
+  const GatheredFix fix =
+      prepared_.fix(fixer_, held, vehicle->announcement, lost_near(held), occluders_.of(held), lidar_stats_);
   count(fix, lidar_stats_);
   if (!fix.ok())
     return;

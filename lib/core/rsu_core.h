@@ -32,6 +32,7 @@
 #include "core/lidar_mount.h"
 #include "core/lidar_stats.h"
 #include "core/packet_intake.h"
+#include "core/prepared_fixes.h"
 #include "core/refusal_notices.h"
 #include "core/rsu_core_config.h"
 #include "core/sweep_occluders.h"
@@ -169,6 +170,10 @@ class RsuCore {
   std::vector<tracking::VehicleHypothesis> predict_announced(
       std::span<const perception::Detection> detections, TimeNs now);
   void correct(const HeldVehicle& held, TimeNs now, LidarStepResult& result);
+  // Fits and fixes the clusters every laser has swept past but not closed yet (prepared_fixes.h).
+  void prepare_fixes(TimeNs now);
+  // Whether LiDAR packets were lost while the sweep crossed `held` (or just before its first points).
+  bool lost_near(const HeldVehicle& held) const;
 
   // sensor_points: this batch in the sensor frame (the rotations are kept so); map_scratch_ holds them
   // in the map frame.
@@ -197,6 +202,7 @@ class RsuCore {
   VehicleGatherer gatherer_;
   SweepOccluders occluders_;  // the sweep's other objects, which may hide part of a vehicle
   GatheredVehicleFixer fixer_;
+  PreparedFixes prepared_;  // fits and fixes prepared ahead of the release (prepare_fixes)
   CorrectionBuilder corrections_;
   RefusalNotices refusals_;
   LidarStats lidar_stats_;

@@ -110,6 +110,10 @@ struct RsuCoreConfig {
   // includes the packets' transit (a millisecond on a direct link).
   TimeNs clock_tolerance = 100 * kNsPerMs;
   perception::SweepConfig sweep;  // when a cluster is released (perception/sweep_clusterer.h)
+  // Fit and fix a cluster once every laser has swept past it, while the sweep still covers the angle
+  // that decides it is closed, and use the result on its release when its inputs are the same bit for
+  // bit (rsu_core.h, prepare_fixes): the corrections are the same, sent sooner. false: the baseline.
+  bool prepare_fixes = true;
   GatheringConfig gathering;
   // Background, clustering and the per-vehicle fix (perception::fix_vehicle): the library's defaults,
   // the same the pilot experiment measures, unless the configuration file changes them.

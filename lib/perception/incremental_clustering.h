@@ -66,6 +66,8 @@ class IncrementalClustering {
   const ComponentSummary& summary(std::uint32_t component) const { return cells_[component].summary; }
   // Removes a component; its points in arrival order.
   std::vector<PendingPoint> take(std::uint32_t component);
+  // A component's points in arrival order, left in place (what take would give now).
+  std::vector<PendingPoint> copy(std::uint32_t component) const;
   // Removes everything; all points in arrival order.
   std::vector<PendingPoint> take_all();
 
@@ -95,6 +97,7 @@ class IncrementalClustering {
   std::uint32_t unite(std::uint32_t root_a, std::uint32_t root_b);
   void unlist(std::uint32_t root);  // off the list of components
   bool any_within(const Cell& cell, const GridPoint& g) const;
+  std::vector<PendingPoint> in_arrival_order(std::span<const std::uint32_t> members, std::size_t size) const;
 
   float tol2_;
   float prune2_;  // tol2_ with a margin against float rounding (bounding-box tests)

@@ -184,6 +184,33 @@ std::vector<SweptCluster> SweepClusterer::release_all() {
   return release(true);
 }
 
+std::vector<SweptCluster> SweepClusterer::swept_open() {
+  std::vector<SweptCluster> out;
+  const double a_future = sweep_ - lag_rad_;
+  std::vector<std::uint64_t> given;  // those still pending
+  for (const std::uint32_t c : clusters_.components()) {
+    const ComponentSummary& s = clusters_.summary(c);
+    const bool before =
+        std::find(swept_open_given_.begin(), swept_open_given_.end(), s.first_seq) != swept_open_given_.end();
+    if (before)
+      given.push_back(s.first_seq);
+    if (before || a_future > s.close_at || !(a_future > s.max_azimuth) || s.size < min_points_ ||
+        s.size > max_points_)
+      continue;
+    given.push_back(s.first_seq);
+    const std::vector<PendingPoint> members = clusters_.copy(c);
+    if (cut_at_start(members))
+      continue;
+    SweptCluster cluster;
+    cluster.points.reserve(members.size());
+    for (const PendingPoint& m : members)
+      cluster.points.push_back(m.point);
+    out.push_back(std::move(cluster));
+  }
+  swept_open_given_ = std::move(given);
+  return out;
+}
+
 std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   std::vector<SweptCluster> out;
   if (!everything) {

@@ -120,6 +120,13 @@ class SweepClusterer {
   std::vector<SweptCluster> release_closed();
   // Everything pending, closed or not: the end of a whole frame (PCD replay) or of the stream (drain).
   std::vector<SweptCluster> release_all();
+  // Clusters not closed yet that every laser has swept past (a_future beyond their largest azimuth):
+  // they are complete unless another object's point still comes within the tolerance, so RsuCore fits
+  // and fixes them while the sweep covers the rest of the closing angle, and finds the result ready
+  // when release_closed gives the same points (issue 16: a VLP-32C's car at 5 m waits 3.3-4.0 ms for
+  // that, exactly, after its last packet). The points as release_closed would give them now; each
+  // cluster once (by its first point); none that release would drop (size, cut at the start).
+  std::vector<SweptCluster> swept_open();
 
   // Drops every pending point (counted as points_dropped_restart) and starts the stream afresh, as a
   // gap does: the caller skipped part of the stream (RsuCore sheds packets it is too late for), so
@@ -161,6 +168,7 @@ class SweepClusterer {
   // Pending foreground points, in their components.
   IncrementalClustering clusters_;
   std::uint64_t next_seq_ = 0;
+  std::vector<std::uint64_t> swept_open_given_;  // first_seq of the clusters swept_open gave
   SweepClustererStats stats_;
 };
 

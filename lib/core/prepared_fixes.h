@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: Apache-2.0
+// Fits and fixes computed ahead of a cluster's release (issue 16, latency). The sweep clusterer releases
+// a cluster only once no later point can join it (sweep_clusterer.h), and that rule is exact: near the
+// LiDAR it waits 10-15 deg of sweep past the vehicle (a VLP-32C's car at 5 m: 3.3-4.0 ms after its last
+// packet, whose -4.2 deg lasers pass over the roof and could still return a tall neighbour's point
+// within the tolerance). Once every laser has swept past a cluster nothing else can change it, so
+// RsuCore fits and fixes it meanwhile (RsuCore::prepare_fixes, in prepared_fixes.cpp) and keeps the
+// results here with their exact inputs. The release takes them only when its inputs are the same bit for
+// bit (points, announcement, occluders, ...), else computes them: the corrections are the same either
+// way, only ready sooner (RsuCoreConfig::prepare_fixes turns it off, the baseline).
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/gathered_fix.h"
+#include "core/lidar_stats.h"
+#include "core/vehicle_gatherer.h"
+#include "lidar/point.h"
+#include "perception/detection.h"
+#include "v2i/messages.h"
+
+namespace rsu::core {
+
+class PreparedFixes {
+ public:
+  // A cluster's fit, by its points.
+  void add_fit(std::vector<lidar::LidarPoint>&& points, perception::Detection detection);
+  // A released cluster's fit: the one prepared for exactly these points (then forgotten), else computed.
+  perception::Detection fit(std::span<const lidar::LidarPoint> points, const Eigen::Vector2d& lidar_xy,
+                            const perception::LShapeFitConfig& config);
+  // A vehicle's fix, by GatheredVehicleFixer::fix's inputs.
+  void add(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby,
+           const std::vector<Eigen::Vector2d>& occluders, const GatheredFix& fix);
+  // A released vehicle's fix: the one prepared for exactly these inputs (then forgotten; counted as
+  // fixes_prepared_used), else computed by `fixer`.
+  GatheredFix fix(const GatheredVehicleFixer& fixer, const HeldVehicle& held,
+                  const v2i::VehicleAnnouncement& a, bool lost_nearby,
+                  const std::vector<Eigen::Vector2d>& occluders, LidarStats& stats);
+
+ private:
+  static constexpr std::size_t kKept = 8;  // the newest of each; one is taken within a few packets
+  struct Entry {
+    HeldVehicle held;
+    v2i::VehicleAnnouncement announcement;
+    bool lost_nearby = false;
+    std::vector<Eigen::Vector2d> occluders;
+    GatheredFix fix;
+  };
+  std::vector<std::pair<std::vector<lidar::LidarPoint>, perception::Detection>> fits_;
+  std::vector<Entry> fixes_;
+};
+
+}  // namespace rsu::core
