@@ -89,8 +89,8 @@ struct TimedPose {
 // Time-stamped poses, held before the first and after the last. Between them either piecewise-linear in
 // x, y and (shortest-way) yaw, or, with `smooth`, a cubic Hermite path through the points (tangents by
 // central differences in time) with the yaw along the direction of motion, as a driven car moves: no
-// sideways crabbing and no jumps of the yaw rate at the points. (The points' yaw then only matters where
-// the vehicle stands still.)
+// sideways crabbing and no jumps of the yaw. Its curvature is not continuous: the yaw rate steps at each
+// inner point. (The points' yaw then only matters where the vehicle stands still.)
 struct Waypoints {
   std::vector<TimedPose> points;
   bool smooth = false;
