@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
@@ -22,20 +23,31 @@
 namespace rsu::eval {
 namespace {
 
-// A vehicle return of a simulated rotation, in the map frame.
+// A return of a simulated rotation that may hide part of a vehicle or is one (map frame): a vehicle's
+// (vehicle_id its id) or a static object's above the road (vehicle_id 0).
 struct Hit {
   Eigen::Vector3d xyz;
   TimeNs time_ns = 0;
   std::uint32_t vehicle_id = 0;
 };
 
-std::vector<Hit> vehicle_hits(const sim::SimulatedFrame& frame, const Eigen::Isometry3d& to_map) {
+// The vehicles' returns and the static scene's at least min_static_z high: rsud passes each fix the
+// background's returns that high (the static scene's objects) as occluders, beside the sweep's other
+// detections (core/sweep_occluders.h). Without them a lamp post 1.1 m from a VLP-32C 6 m up hid a car's
+// rear half and the front half's end was taken for its rear: 2.33 m off at NEES 216 (the corridor's
+// north sidewalk), a fix rsud does not send.
+std::vector<Hit> frame_hits(const sim::SimulatedFrame& frame, const Eigen::Isometry3d& to_map,
+                            double min_static_z) {
   std::vector<Hit> hits;
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
-    if (frame.truth[i].surface != sim::SurfaceClass::kVehicle)
+    const sim::SurfaceClass surface = frame.truth[i].surface;
+    if (surface == sim::SurfaceClass::kNone || surface == sim::SurfaceClass::kGround)
       continue;
     const lidar::LidarPoint& p = frame.frame.points[i];
-    hits.push_back({to_map * Eigen::Vector3d(p.x, p.y, p.z), p.time_ns, frame.truth[i].vehicle_id});
+    const Eigen::Vector3d xyz = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+    const bool vehicle = surface == sim::SurfaceClass::kVehicle;
+    if (vehicle || xyz.z() >= min_static_z)
+      hits.push_back({xyz, p.time_ns, vehicle ? frame.truth[i].vehicle_id : 0U});
   }
   return hits;
 }
@@ -55,14 +67,14 @@ struct Placement {
 
 // One vehicle's points in the rotation the sweep passes it in (from the three frames around it: a
 // vehicle the frame cut falls on is whole in the window centred on it, as rsud's streaming sweep
-// sees it), the other vehicles' returns of that window, and the fix.
+// sees it), the other vehicles' and the static objects' returns of that window, and the fix.
 PlacementSample score_vehicle(const sim::Vehicle& v, const std::vector<const std::vector<Hit>*>& frames,
                               TimeNs window_begin, TimeNs window_end,
                               const perception::LidarGeometry& lidar_in, const PlacementStudyConfig& config,
                               const perception::VehicleFixConfig& fix_config, std::uint64_t key) {
   std::vector<Eigen::Vector3d> points;
   std::vector<TimeNs> times;
-  std::vector<Eigen::Vector2d> others;
+  std::vector<Eigen::Vector2d> others, statics;
   for (const auto* hits : frames) {
     for (const Hit& h : *hits) {
       if (h.time_ns < window_begin || h.time_ns >= window_end)
@@ -71,7 +83,7 @@ PlacementSample score_vehicle(const sim::Vehicle& v, const std::vector<const std
         points.push_back(h.xyz);
         times.push_back(h.time_ns);
       } else {
-        others.push_back(h.xyz.head<2>());
+        (h.vehicle_id == 0 ? statics : others).push_back(h.xyz.head<2>());
       }
     }
   }
@@ -114,15 +126,20 @@ PlacementSample score_vehicle(const sim::Vehicle& v, const std::vector<const std
   }
   const double margin = 2.0 * lidar_in.azimuth_step_rad;
   perception::LidarGeometry lidar = lidar_in;
-  for (const Eigen::Vector2d& o : others) {
-    const Eigen::Vector2d d = o - lidar_xy;
-    const double rel = wrap_angle(std::atan2(d.y(), d.x()) - centre_dir);
-    if (rel >= lo - margin && rel <= hi + margin && d.norm() < far)
-      lidar.occluders.push_back(o);
-  }
+  const auto add_in_view = [&](std::span<const Eigen::Vector2d> objects) {
+    for (const Eigen::Vector2d& o : objects) {
+      const Eigen::Vector2d d = o - lidar_xy;
+      const double rel = wrap_angle(std::atan2(d.y(), d.x()) - centre_dir);
+      if (rel >= lo - margin && rel <= hi + margin && d.norm() < far)
+        lidar.occluders.push_back(o);
+    }
+  };
+  add_in_view(others);
   constexpr double kOutlineMarginM = 0.3;  // an occluder this much nearer than the outline point
   for (const Eigen::Vector2d& p : outline)
     s.occluded = s.occluded || lidar.occluded(p, kOutlineMarginM);
+  // The static objects hide it from the fix too (frame_hits); `occluded` counts the traffic's doing.
+  add_in_view(statics);
 
   perception::AnnouncedVehicle announced;
   announced.size = {v.shape.length, v.shape.width, v.shape.height};
@@ -199,7 +216,9 @@ PlacementResult run_placement(const sim::Scenario& scenario, const Placement& p,
   for (const double e : model->elevation_deg)
     lidar.elevations_rad.push_back(deg_to_rad(e));
   lidar.azimuth_step_rad = deg_to_rad(model->azimuth_step_deg());
-  perception::VehicleFixConfig fix_config = perception::PerceptionConfig{}.fix;  // rsud's
+  const perception::PerceptionConfig perception;  // rsud's
+  const perception::VehicleFixConfig& fix_config = perception.fix;
+  const double min_static_z = perception.ground.ground_z + perception.ground.min_height;
 
   const TimeNs period = simulator.rotation_period_ns();
   const int rotations = static_cast<int>(std::floor(config.duration_s / to_seconds(period)));
@@ -210,10 +229,11 @@ PlacementResult run_placement(const sim::Scenario& scenario, const Placement& p,
   r.mount_y_m = p.y_m;
   std::vector<std::vector<Hit>> window(3);  // frames k-1, k, k+1
   for (int k = 0; k < 2 && k < rotations; ++k)
-    window[static_cast<std::size_t>(k + 1)] = vehicle_hits(simulator.simulate_frame(k * period), to_map);
+    window[static_cast<std::size_t>(k + 1)] =
+        frame_hits(simulator.simulate_frame(k * period), to_map, min_static_z);
   for (int k = 1; k + 1 < rotations; ++k) {
     std::rotate(window.begin(), window.begin() + 1, window.end());
-    window[2] = vehicle_hits(simulator.simulate_frame((k + 1) * period), to_map);
+    window[2] = frame_hits(simulator.simulate_frame((k + 1) * period), to_map, min_static_z);
     if ((k - 1) % std::max(1, config.rotation_stride) != 0)
       continue;
     const TimeNs frame_start = k * period;
@@ -329,8 +349,9 @@ std::string placement_json(const std::vector<PlacementResult>& results, const Pl
       << "  \"fix_configuration\": \"rsud's: perception::PerceptionConfig defaults (deploy/rsud.yaml keeps "
          "them), "
          "improved correction\",\n"
-      << "  \"segmentation\": \"perfect (the simulator's per-return vehicle id); other vehicles' returns as "
-         "occluders\",\n"
+      << "  \"segmentation\": \"perfect (the simulator's per-return vehicle id); other vehicles' and the "
+         "static "
+         "objects' returns (0.2 m or more above the road) as occluders\",\n"
       << "  \"coverage_radius_m\": " << config.coverage_radius_m
       << ", \"coverage_bin_m\": " << config.coverage_bin_m
       << ", \"bin_covered_share\": " << config.bin_covered_share << ", \"accurate_m\": " << config.accurate_m

@@ -7,10 +7,11 @@
 // drive, for every vehicle of the scenario as if it were connected (it announces its true size and a
 // yaw prior off by up to +-10 deg, as in the pilot). It does NOT run rsud's segmentation and association:
 // a vehicle's points are the returns the simulator says hit it (perfect segmentation), and the other
-// vehicles' returns are passed as occluders (rsud passes the sweep's other detections,
-// core/sweep_occluders.h). So it measures the fix at each placement, with the occlusion traffic causes;
-// wrong-vehicle corrections need the live run (run_experiment.py with the traffic experiment). This is
-// what makes 36 placements fit in minutes on two cores.
+// vehicles' returns and the static objects' (lamp posts, hedges) are passed as occluders (rsud passes the
+// sweep's other detections and the background's returns above the road, core/sweep_occluders.h). So it
+// measures the fix at each placement, with the occlusion traffic causes; wrong-vehicle corrections need the
+// live run (run_experiment.py with the traffic experiment). This is what makes 36 placements fit in minutes
+// on two cores.
 #pragma once
 
 #include <cstddef>
