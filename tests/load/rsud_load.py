@@ -96,6 +96,7 @@ def run(args):
              "fleet": os.path.join(args.build, "tests", "fleet", "rsu-fleet"),
              "keygen": os.path.join(args.build, "tools", "rsu-keygen")}
     h = LiveRsu(args.work, tools, SCENARIO)
+    caller_nice = None
     try:
         if args.ouster:
             h.use_ouster(args.ouster, args.lidar_mode, args.profile)
@@ -119,9 +120,10 @@ def run(args):
             # The nice of rsud's autogroup and of this driver's (rsu-fleet, rsu-sim): how the scheduler
             # weighs them against other sessions' work (sched(7)); -10 models a box of their own on a
             # machine others share. Root to lower it.
+            # The driver's autogroup is its caller's session: its nice is given back at the end.
+            caller_nice = autogroup_nice(os.getpid())
             for pid in (rsud.pid, os.getpid()):
-                with open("/proc/%d/autogroup" % pid, "w") as f:
-                    f.write("%d" % args.group_nice)
+                set_autogroup_nice(pid, args.group_nice)
         if args.ouster:
             h.wait_for(lambda: "ready: serving" in h.log(), 20, "rsud to learn the background and serve")
         else:
@@ -146,7 +148,19 @@ def run(args):
         h.stop_rsud()
         return report(h, args, samples, cpu_share, thread_shares, drops)
     finally:
+        if caller_nice is not None:
+            set_autogroup_nice(os.getpid(), caller_nice)
         h.close()
+
+
+def autogroup_nice(pid):
+    """The nice value of the process's scheduling autogroup (/proc/PID/autogroup: "/autogroup-N nice V")."""
+    return int(read_text("/proc/%d/autogroup" % pid).split()[-1])
+
+
+def set_autogroup_nice(pid, nice):
+    with open("/proc/%d/autogroup" % pid, "w") as f:
+        f.write("%d" % nice)
 
 
 def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
