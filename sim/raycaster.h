@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// Ray casting against a Scene with Embree 3: one BVH for everything static (ground, buildings, poles,
-// trees, shrubs) in the map frame, and one BVH per vehicle in the vehicle's own frame.
+// Ray casting against a Scene with Embree 3: one BVH for everything static but the ground (buildings,
+// poles, trees, shrubs) in the map frame, and one BVH per vehicle in the vehicle's own frame. The
+// ground, the plane z = 0 within its half extent, is intersected directly and bounds the BVH search.
 //
 // Motion: a spinning LiDAR fires each laser at its own time, so a moving vehicle is seen at a
 // different pose by every ray (the rolling-shutter skew of a real sweep). Each ray is therefore
@@ -59,8 +60,8 @@ struct RaycasterConfig {
   int cylinder_segments = 16;   // poles, trunks, lamp arms
   int sphere_subdivisions = 2;  // tree crowns and shrubs: 320 triangles each
   BatchMode batch_mode = BatchMode::kPacket16;
-  // Embree's robust mode: no rays slipping between triangles that share an edge (the ground's
-  // diagonal runs under the sensor); its cost was within the noise of bench/sim.
+  // Embree's robust mode: no rays slipping between triangles that share an edge (a box's corner, a
+  // cylinder's seams; the ground, whose diagonal ran under the sensor, is no longer triangles).
   bool robust_traversal = true;
   // One build thread: scene builds are small (milliseconds), and a single-threaded build keeps the
   // BVH, hence ties between equidistant hits, identical from run to run on a shared 2-core machine.

@@ -56,6 +56,19 @@ TEST(SimRaycaster, HitsTheGroundPlaneExactly) {
   EXPECT_FALSE(rc.cast(origin, {0.3, 0.1, 1.0}, 0).hit());
   EXPECT_FALSE(rc.cast(origin, {0.0, 0.0, -1.0}, 0, 2.9).hit());
   EXPECT_TRUE(rc.cast(origin, {0.0, 0.0, -1.0}, 0, 3.1).hit());
+  // The ground ends at its half extent (the raycaster intersects the plane itself, not triangles):
+  // a ray meeting the plane at x = 301 m misses it, one meeting it at 151 m does not.
+  EXPECT_FALSE(rc.cast(origin, Eigen::Vector3d(300.0, 0.0, -3.0).normalized(), 0).hit());
+  EXPECT_NEAR(rc.cast(origin, Eigen::Vector3d(150.0, 0.0, -3.0).normalized(), 0).range,
+              std::hypot(150.0, 3.0), kMm);
+  // Seen from below, as Embree's two-sided triangles were.
+  const RayHit below = rc.cast({1.0, 2.0, -3.0}, {0.0, 0.6, 0.8}, 0);
+  ASSERT_TRUE(below.hit());
+  EXPECT_NEAR(below.range, 3.75, kMm);
+  EXPECT_NEAR(below.normal.z(), -1.0, 1e-6);
+  // Along it or from it: no hit.
+  EXPECT_FALSE(rc.cast({1.0, 2.0, 0.0}, {0.0, 0.6, -0.8}, 0).hit());
+  EXPECT_FALSE(rc.cast(origin, {1.0, 0.0, 0.0}, 0).hit());
 }
 
 TEST(SimRaycaster, HitsARotatedBuildingWhereTheSlabTestSays) {
