@@ -49,8 +49,8 @@ bool same_held(const HeldVehicle& a, const HeldVehicle& b) {
          a.assigned_begin == b.assigned_begin && a.assigned_size == b.assigned_size &&
          a.assigned_time == b.assigned_time && same_bits(a.assigned_distance_sq, b.assigned_distance_sq) &&
          a.assigned_own == b.assigned_own && a.gathered_own == b.gathered_own &&
-         a.after_assigned_release == b.after_assigned_release && a.far == b.far &&
-         a.release_at == b.release_at;
+         a.after_assigned_release == b.after_assigned_release && a.far == b.far;
+  // Not release_at: when it is released, not what; the fix does not read it.
 }
 
 bool same_announcement(const v2i::VehicleAnnouncement& a, const v2i::VehicleAnnouncement& b) {
