@@ -472,20 +472,17 @@ TEST(RsuCore, FixesPreparedAheadAreTheFixesOfTheRelease) {
   RsuCore prepared(config);
   config.prepare_fixes = false;
   RsuCore computed(config);
-  std::vector<SimStream> streams;
-  for (int i = 0; i < 2; ++i)
-    streams.emplace_back(testing::street_scene(), vehicles, lidar::make_vlp32c(), m, sim::NoiseModel{},
-                         kEmptyRotations);
-  const TimeNs t0 = kEmptyRotations * streams[0].rotation_ns() - 100 * kNsPerMs;
-  const TimeNs t1 = (kEmptyRotations + 4) * streams[0].rotation_ns();
+  SimStream stream(testing::street_scene(), vehicles, lidar::make_vlp32c(), m, sim::NoiseModel{},
+                   kEmptyRotations);
+  const TimeNs t0 = kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs;
+  const TimeNs t1 = (kEmptyRotations + 4) * stream.rotation_ns();
   for (RsuCore* core : {&prepared, &computed}) {
     announce_between(*core, 1, {near_car.x + 0.3, near_car.y - 0.2, near_car.yaw}, "192.0.2.1", t0, t1);
     announce_between(*core, 2, {far_car.x - 0.2, far_car.y + 0.3, far_car.yaw}, "192.0.2.2", t0, t1);
   }
-  streams[0].run_until(prepared, t1);
-  streams[1].run_until(computed, t1);
-  const auto& with = streams[0].corrections();
-  const auto& without = streams[1].corrections();
+  stream.run_until(prepared, &computed, t1);
+  const auto& with = stream.corrections();
+  const auto& without = stream.twin_corrections();
   ASSERT_EQ(with.size(), without.size());
   EXPECT_GE(with.size(), 6U);  // both vehicles, every rotation
   for (std::size_t i = 0; i < with.size(); ++i) {

@@ -73,6 +73,11 @@ class SimStream {
   // Feeds packets [next, first packet at or after `until`) and calls on_step per packet.
   void run_until(RsuCore& core, TimeNs until,
                  const std::function<void(const LidarStepResult&, TimeNs now)>& on_step = {}) {
+    run_until(core, nullptr, until, on_step);
+  }
+  // The same packets to `core` and to `twin` too (twin_corrections(): what it sent).
+  void run_until(RsuCore& core, RsuCore* twin, TimeNs until,
+                 const std::function<void(const LidarStepResult&, TimeNs now)>& on_step = {}) {
     const std::int64_t last = busy_->packet_index_at(until);
     const std::int64_t empty_packets =
         busy_->packet_index_at(rotation_ns() * empty_rotations_ + rotation_ns() / 2);
@@ -85,6 +90,9 @@ class SimStream {
       const LidarStepResult r = core.on_lidar_packet(payload, now);
       for (const auto& c : r.corrections)
         corrections_.push_back({c, now});
+      for (const auto& c : twin != nullptr ? twin->on_lidar_packet(payload, now).corrections
+                                           : std::vector<OutgoingCorrection>{})
+        twin_corrections_.push_back({c, now});
       if (on_step)
         on_step(r, now);
     }
@@ -95,6 +103,7 @@ class SimStream {
     TimeNs emitted_at;
   };
   const std::vector<Received>& corrections() const { return corrections_; }
+  const std::vector<Received>& twin_corrections() const { return twin_corrections_; }
 
  private:
   lidar::SensorModel model_;
@@ -103,6 +112,7 @@ class SimStream {
   std::unique_ptr<sim::LidarSimulator> busy_;
   std::int64_t next_ = 0;
   std::vector<Received> corrections_;
+  std::vector<Received> twin_corrections_;
 };
 
 // The port every test vehicle announces from and receives on (reply_to must be the source's).
