@@ -223,7 +223,8 @@ Side side_bound(const AxisContext& ctx, int a, double sign, const Extremes& e, c
     const double sin_incidence = std::abs(sight[1 - a]) / std::max(sight.norm(), 1e-9);
     const double spacing =
         p.range * lidar.azimuth_step_rad / std::max(sin_incidence, config.min_incidence_cos);
-    return Side{config.end_allowance_m + spacing, true};
+    if (spacing <= config.max_end_spacing_m)
+      return Side{config.end_allowance_m + spacing, true};
   }
   // Not seen beyond, or higher up (glasshouse, roof, bonnet: a laser's trace leaves a roof through
   // whichever edge it meets): only containment and, facing away, the shadow bound that side.
