@@ -276,7 +276,7 @@ void BM_EndToEndLatency(benchmark::State& state) {
   std::vector<double> compute_cpu_us;
   std::size_t corrections = 0;
   std::uint64_t mount_stops = 0;    // over the iterations (the fixes the check stopped are not measured)
-  std::uint64_t prepared_used = 0;  // corrections whose fix was prepared ahead of the release
+  std::uint64_t prepared_used = 0;  // fixes prepared ahead of the release and used by it
   std::uint64_t prepared = 0;       // fixes prepared
   for (auto _ : state) {
     state.PauseTiming();
@@ -345,10 +345,11 @@ void BM_EndToEndLatency(benchmark::State& state) {
     prepared += core.lidar_stats().fixes_prepared;
   }
   state.counters["mount_stops"] = static_cast<double>(mount_stops);
-  state.counters["fixes_prepared"] =
-      static_cast<double>(prepared) / static_cast<double>(std::max<std::size_t>(1, corrections));
-  state.counters["prepared_fixes_used"] =
-      static_cast<double>(prepared_used) / static_cast<double>(std::max<std::size_t>(1, corrections));
+  const auto per_rotation = [&](std::uint64_t n) {
+    return static_cast<double>(n) / static_cast<double>(state.iterations() * kBusyRotations);
+  };
+  state.counters["fixes_prepared_per_rotation"] = per_rotation(prepared);
+  state.counters["prepared_fixes_used_per_rotation"] = per_rotation(prepared_used);
   state.counters["corrections_per_rotation"] =
       static_cast<double>(corrections) / static_cast<double>(state.iterations() * kBusyRotations);
   state.counters["latency_p50_ms"] = percentile(latency_ms, 0.50);

@@ -112,8 +112,17 @@ GatheredFix PreparedFixes::fix(const GatheredVehicleFixer& fixer, const HeldVehi
 
 // RsuCore's step that prepares them (file comment of prepared_fixes.h): each cluster every laser has swept
 // past, fitted, and fixed as its release would do it now (association and gathering on a copy of the
-// gatherer; counters untouched but fixes_prepared).
+// gatherer; counters untouched but fixes_prepared); and each vehicle the gatherer holds (one beyond
+// GatheringConfig::hold_beyond_m until the sweep has passed its footprint) whenever it gains a part, so
+// that its release finds the fix ready unless it gains another.
 void RsuCore::prepare_fixes(TimeNs now) {
+  std::vector<std::tuple<std::uint64_t, std::size_t, std::size_t>> held_now;
+  for (const HeldVehicle& held : gatherer_.held()) {
+    held_now.emplace_back(held.vehicle_id, held.parts, held.points.size());
+    if (std::find(prepared_held_.begin(), prepared_held_.end(), held_now.back()) == prepared_held_.end())
+      prepare_fix(held, now);
+  }
+  prepared_held_ = std::move(held_now);
   std::vector<perception::SweptCluster> swept = clusterer_.swept_open();
   if (swept.empty())
     return;
@@ -142,15 +151,20 @@ void RsuCore::prepare_fixes(TimeNs now) {
         std::any_of(first_points.begin(), first_points.end(), [&](const Eigen::Vector3d& p) {
           return std::find(held.points.begin(), held.points.end(), p) != held.points.end();
         });
-    const v2i::RegisteredVehicle* vehicle = announcements_.registry().find(held.vehicle_id, now);
-    if (!prepared_here || vehicle == nullptr || held.points.empty())
-      continue;
-    const bool lost_nearby = lost_near(held);
-    std::vector<Eigen::Vector2d> occluders = occluders_.of(held);
-    const GatheredFix fix = fixer_.fix(held, vehicle->announcement, lost_nearby, occluders);
-    prepared_.add(held, vehicle->announcement, lost_nearby, occluders, fix);
-    ++lidar_stats_.fixes_prepared;
+    if (prepared_here)
+      prepare_fix(held, now);
   }
+}
+
+void RsuCore::prepare_fix(const HeldVehicle& held, TimeNs now) {
+  const v2i::RegisteredVehicle* vehicle = announcements_.registry().find(held.vehicle_id, now);
+  if (vehicle == nullptr || held.points.empty())
+    return;
+  const bool lost_nearby = lost_near(held);
+  const std::vector<Eigen::Vector2d> occluders = occluders_.of(held);
+  prepared_.add(held, vehicle->announcement, lost_nearby, occluders,
+                fixer_.fix(held, vehicle->announcement, lost_nearby, occluders));
+  ++lidar_stats_.fixes_prepared;
 }
 
 bool RsuCore::lost_near(const HeldVehicle& held) const {

@@ -18,6 +18,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -172,6 +173,8 @@ class RsuCore {
   void correct(const HeldVehicle& held, TimeNs now, LidarStepResult& result);
   // Fits and fixes the clusters every laser has swept past but not closed yet (prepared_fixes.h).
   void prepare_fixes(TimeNs now);
+  // Fixes `held` now and keeps the fix for its release (prepared_fixes.h).
+  void prepare_fix(const HeldVehicle& held, TimeNs now);
   // Whether LiDAR packets were lost while the sweep crossed `held` (or just before its first points).
   bool lost_near(const HeldVehicle& held) const;
 
@@ -203,6 +206,8 @@ class RsuCore {
   SweepOccluders occluders_;  // the sweep's other objects, which may hide part of a vehicle
   GatheredVehicleFixer fixer_;
   PreparedFixes prepared_;  // fits and fixes prepared ahead of the release (prepare_fixes)
+  // The held vehicles fixed ahead, as (vehicle id, parts gathered, points).
+  std::vector<std::tuple<std::uint64_t, std::size_t, std::size_t>> prepared_held_;
   CorrectionBuilder corrections_;
   RefusalNotices refusals_;
   LidarStats lidar_stats_;

@@ -79,6 +79,8 @@ class VehicleGatherer {
   // The held vehicles the sweep has passed (every one if `everything`: a whole rotation, the drain),
   // in the order they were first gathered.
   std::vector<HeldVehicle> release(bool everything, const SweepPosition& sweep);
+  // The vehicles held now, in the order they were first gathered.
+  std::span<const HeldVehicle> held() const { return held_; }
 
  private:
   // For each vehicle, the detections that join it (the assigned one first); counts the others.
