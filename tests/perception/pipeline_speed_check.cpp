@@ -11,7 +11,7 @@
 //
 // Usage: pipeline_speed_check [--slowdown N]
 //   --slowdown N  runs the pipeline N times per frame (a pipeline N times slower): the second ctest
-//                 runs it with N = 3 and expects the check to report a regression, so that the check is
+//                 runs it with N = 4 and expects the check to report a regression, so that the check is
 //                 shown to be able to fail.
 // Exit status 0: within the limit; 1: a regression (the line "REGRESSION" says by how much); 2: usage.
 #include <algorithm>
@@ -30,9 +30,12 @@ namespace {
 using rsu::lidar::LidarPoint;
 using namespace rsu::perception;
 
-// Pipeline time / reference time per frame, measured when this check was written: GCC Release, 2 cores
-// shared with other engineers' builds (load average 5-6), 9 runs gave 0.24-0.28.
-constexpr double kBaselineRatio = 0.26;
+// Pipeline time / reference time per frame: GCC Release, 2 cores shared with other engineers' builds.
+// When this check was written (load average 5-6) 9 runs gave 0.24-0.28; the pipeline has been made
+// faster since (prepared fixes, the incremental clustering): at d5713de, load average 2-4, 6 runs gave
+// 0.16-0.21, and with --slowdown 3 only 0.41-0.48, under the old limit (0.52): the check could no
+// longer fail. Re-measure and update this when the pipeline gets faster.
+constexpr double kBaselineRatio = 0.18;
 constexpr double kAllowedSlowdown = 2.0;
 constexpr int kRepetitions = 21;
 // The reference costs about 4 pipeline frames: one of it per block balances the two blocks' lengths.
