@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "common/angles.h"
-#include "lidar/sensor_model.h"
+#include "lidar/lidar_decoder.h"
 #include "tracking/association.h"
 #include "tracking/vehicle_hypothesis.h"
 
@@ -29,13 +29,14 @@ void count(const GatheredFix& f, LidarStats& stats) {
 namespace {
 
 // What the fix needs to know of the LiDAR: where it stands, the road's height, and its lasers'
-// elevations and azimuth step from the configured model's table (a model without one, e.g. a sensor
-// described by its own metadata, leaves every direction counted as observed: fewer, not wrong, bounds).
+// elevations and azimuth step from the tables its points are decoded with (an Ouster's from its metadata:
+// before, an OS1-128 at 2048x10 was fixed as if 0.2 deg apart and every direction observed; a model without
+// tables leaves every direction counted as observed: fewer, not wrong, bounds).
 perception::LidarGeometry lidar_geometry(const RsuCoreConfig& config, const LidarMount& mount) {
   perception::LidarGeometry lidar;
   lidar.position = mount.position();
   lidar.ground_z = config.perception.ground.ground_z;
-  if (const auto model = lidar::sensor_model_by_name(config.sensor_model)) {
+  if (const auto model = lidar::decoded_sensor_model(config.sensor_model, config.sensor_options)) {
     for (const double e : model->elevation_deg)
       lidar.elevations_rad.push_back(deg_to_rad(e));
     lidar.azimuth_step_rad = deg_to_rad(model->azimuth_step_deg());

@@ -4,7 +4,9 @@
 
 #include <stdexcept>
 
+#include "lidar/ouster/ouster_geometry.h"
 #include "lidar/ouster/ouster_lidar_decoder.h"
+#include "lidar/ouster/ouster_metadata.h"
 #include "lidar/velodyne_decoder.h"
 
 namespace rsu::lidar {
@@ -43,6 +45,21 @@ std::uint64_t LidarDecoder::packets_seen() const {
 bool is_decodable_model(std::string_view model) {
   const auto velodyne = sensor_model_by_name(model);
   return (velodyne && velodyne->has_packet_format()) || ouster::is_ouster_model(model);
+}
+
+std::optional<SensorModel> decoded_sensor_model(std::string_view model, const LidarDecoderOptions& options) {
+  if (options.calibrated_model)
+    return options.calibrated_model;
+  if (ouster::is_ouster_model(model) && !options.metadata_text.empty()) {
+    try {
+      // The minimum range plays no part in the tables.
+      return ouster::sensor_model(ouster::parse_metadata(options.metadata_text, options.metadata_source),
+                                  0.0);
+    } catch (const std::exception&) {
+      return std::nullopt;  // make_lidar_decoder says why
+    }
+  }
+  return sensor_model_by_name(model);
 }
 
 std::unique_ptr<LidarDecoder> make_lidar_decoder(std::string_view model, const LidarDecoderOptions& options) {

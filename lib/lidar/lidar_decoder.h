@@ -141,5 +141,9 @@ inline constexpr std::string_view kDecodableModels =
 std::unique_ptr<LidarDecoder> make_lidar_decoder(std::string_view model, const LidarDecoderOptions& options);
 // Whether make_lidar_decoder knows `model` (for configuration checks before any file is read).
 bool is_decodable_model(std::string_view model);
+// The tables of the points the decoder for `model` with `options` gives (their lasers' elevations, the
+// azimuth step): a Velodyne calibration's, an Ouster's from its metadata, else the named model's
+// (sensor_model_by_name, which knows "genericN" too). nullopt for an unknown model or unreadable metadata.
+std::optional<SensorModel> decoded_sensor_model(std::string_view model, const LidarDecoderOptions& options);
 
 }  // namespace rsu::lidar

@@ -67,6 +67,30 @@ TEST(OusterLidarDecoder, FactoryAndModelNames) {
   EXPECT_NE(error_of("os9-32", os1_32).find("os0-, os1-, os2-"), std::string::npos);
 }
 
+// The tables the fix reasons with (rsud's core: lasers' elevations, azimuth step) are the decoded points':
+// an Ouster's from its metadata (32 beams of the file's beam_altitude_angles, 1024 columns a turn).
+TEST(OusterLidarDecoder, DecodedSensorModelIsTheMetadatas) {
+  const LidarDecoderOptions os1_32 = options_for("OS-1-32-G_v2.1.1_1024x10.json");
+  const auto model = decoded_sensor_model("os1-32", os1_32);
+  ASSERT_TRUE(model);
+  ASSERT_EQ(model->laser_count(), 32U);
+  EXPECT_EQ(model->elevation_deg.front(), 12.75);  // the file's first beam altitude
+  EXPECT_LT(model->elevation_deg.back(), -10.0);
+  EXPECT_NEAR(model->azimuth_step_deg(), 360.0 / 1024.0, 1e-9);
+  LidarDecoderOptions broken = os1_32;
+  broken.metadata_text.replace(broken.metadata_text.find("[12.75, "), 8, "[\"x\", ");
+  EXPECT_FALSE(decoded_sensor_model("os1-32", broken));
+  EXPECT_FALSE(decoded_sensor_model("os1-32", LidarDecoderOptions{}));
+  // A Velodyne: its calibration's tables where it has one, else the built-in ones.
+  EXPECT_EQ(decoded_sensor_model("vlp32c", LidarDecoderOptions{})->elevation_deg,
+            make_vlp32c().elevation_deg);
+  LidarDecoderOptions calibrated;
+  calibrated.calibrated_model = make_vlp16();
+  calibrated.calibrated_model->elevation_deg[0] += 0.1;
+  EXPECT_EQ(decoded_sensor_model("vlp16", calibrated)->elevation_deg,
+            calibrated.calibrated_model->elevation_deg);
+}
+
 // The real low-bandwidth OS-1-128 capture through the seam: 192 lidar packets (3 frames) and 30 IMU
 // packets, each counted once; the rhythm PacketOrder counts loss from.
 TEST(OusterLidarDecoder, RealCaptureThroughTheSeam) {
