@@ -55,10 +55,12 @@
 namespace rsu::perception {
 
 struct CovarianceModelConfig {
-  double range_sigma_m = 0.02;                      // docs/design.md §2 (simulator default)
-  double angle_sigma_rad = 0.001;                   // docs/design.md §2
-  double shape_sigma_m = 0.03;                      // vehicle vs box
-  double azimuth_resolution_rad = deg_to_rad(0.2);  // VLP at 600 rpm (docs/design.md §2)
+  double range_sigma_m = 0.02;     // docs/design.md §2 (simulator default)
+  double angle_sigma_rad = 0.001;  // docs/design.md §2
+  double shape_sigma_m = 0.03;     // vehicle vs box
+  // The azimuth spacing of the points along a laser's trace: the LiDAR's step (VLP at 600 rpm: docs/design.md
+  // §2), k steps where fix_vehicle thinned the cluster to every k-th column (azimuth_thinning.h).
+  double azimuth_resolution_rad = deg_to_rad(0.2);
   double search_resolution_rad = deg_to_rad(0.02);  // the orientation search's final step
   double max_yaw_sigma_rad = 0.5;
   // The body's departure from a plane that tilts a face's fitted direction, seen head-on (smaller than

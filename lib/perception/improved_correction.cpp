@@ -143,8 +143,10 @@ YawDecision decide_yaw(const View& view, const RectangleFit& fit, const VehicleS
       outline_local.push_back(frame.local(p));
   }
   const Eigen::Vector2d lidar_local = frame.local(view.lidar.xy());
-  const double cover_radius =
-      std::max(config.cover_radius_m, (view.lidar.xy() - fit.center).norm() * view.lidar.azimuth_step_rad);
+  // At least the points' spacing along a laser's trace (the covariance's azimuth resolution: the LiDAR's
+  // step, times k where the fix was given every k-th column).
+  const double cover_radius = std::max(config.cover_radius_m, (view.lidar.xy() - fit.center).norm() *
+                                                                  config.covariance.azimuth_resolution_rad);
   std::array<Placement, 2> boxes;
   std::array<double, 2> score{};
   for (int j = 0; j < 2; ++j) {

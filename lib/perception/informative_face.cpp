@@ -171,8 +171,8 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   // stating 2 deg (`rsu-pilot matrix`, a VLP-16 4 m up, an SUV at 25 m).
   // A gap wider than a short face, or than a few points' spacing along the face where that is wider,
   // splits it (a laser's returns lie R * azimuth step apart across the line of sight, farther at grazing
-  // incidence).
-  const double spacing = (0.5 * (a + b) - lidar.xy()).norm() * lidar.azimuth_step_rad /
+  // incidence; k steps where the fix was given every k-th: the covariance's azimuth resolution).
+  const double spacing = (0.5 * (a + b) - lidar.xy()).norm() * config.covariance.azimuth_resolution_rad /
                          std::max(face.incidence_sin, config.covariance.min_incidence_sin);
   face.length_m =
       std::min(face.length_m, effective_face_length(along, std::max(config.short_face_m, 3.0 * spacing)));

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/angles.h"
+#include "perception/azimuth_thinning.h"
 
 namespace rsu::perception {
 namespace {
@@ -31,17 +32,23 @@ std::vector<Eigen::Vector2d> outline_points(std::span<const Eigen::Vector3d> poi
 
 }  // namespace
 
-VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> points, const AnnouncedVehicle& vehicle,
+VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> cluster, const AnnouncedVehicle& vehicle,
                        const LidarGeometry& lidar, const VehicleFixConfig& config) {
   VehicleFix out;
+  // A dense cluster is fixed from fewer of its points (azimuth_thinning.h); a sparse one as it is.
+  const AzimuthThinning thinned = thin_along_azimuth(cluster, lidar, config.thin_above_points);
+  const std::span<const Eigen::Vector3d> points =
+      thinned.stride > 1 ? std::span<const Eigen::Vector3d>(thinned.points) : cluster;
+  out.azimuth_stride = thinned.stride;
   const std::vector<Eigen::Vector2d> all = outline_points(points, vehicle.size, lidar, config, false);
   out.points_used = all.size();
 
   // The correction judges faces with the fit's own support rules, and the fix's yaw is quantised by
-  // the orientation search that produced the fit.
+  // the orientation search that produced the fit. Its points lie k azimuth steps apart along a trace
+  // when thinned.
   CorrectionConfig correction = config.correction;
   correction.fit = config.fit;
-  correction.covariance.azimuth_resolution_rad = lidar.azimuth_step_rad;
+  correction.covariance.azimuth_resolution_rad = lidar.azimuth_step_rad * static_cast<double>(thinned.stride);
   correction.covariance.search_resolution_rad =
       deg_to_rad(config.fit.search.method == OrientationSearchMethod::exhaustive
                      ? config.fit.search.exhaustive_step_deg

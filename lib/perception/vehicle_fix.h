@@ -14,6 +14,7 @@
 // rectangle to the lower body's points where there are enough (size_correction.h), Algorithm 1 to all.
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <span>
 
@@ -32,6 +33,13 @@ struct VehicleFixConfig {
   LShapeFitConfig fit;
   CorrectionMethod method = CorrectionMethod::improved;
   CorrectionConfig correction;  // the improved correction's rules (size_correction.h)
+  // A cluster with more finite points than this is fixed from every k-th azimuth column of each laser's
+  // trace, its ends kept (azimuth_thinning.h), k chosen so that about this many remain; 0: never thinned.
+  // A car within 10 m of a 128-ring sensor holds thousands (azimuth_thinning.h). Above every car's
+  // cluster of a VLP-16 or VLP-32C in the pilot (at most 2,461 points: the SUV 3 m from a VLP-32C 2 m up;
+  // their fixes are the same bit for bit); a van's or bus's near a 2 m mount holds more (the pilot
+  // matrix's largest: VLP-16 3,233 and 7,109, VLP-32C 7,890 and 14,113) and is thinned.
+  std::size_t thin_above_points = 3000;
 };
 
 // What the vehicle told the RSU, carried to the time the LiDAR swept it.
@@ -41,9 +49,10 @@ struct AnnouncedVehicle {
 };
 
 struct VehicleFix {
-  CorrectedPose corrected;  // status (ok or why not), pose, covariance, how the yaw was resolved
-  RectangleFit fit;         // the L-shape fit the correction started from (its status says if it failed)
-  std::size_t points_used = 0;
+  CorrectedPose corrected;      // status (ok or why not), pose, covariance, how the yaw was resolved
+  RectangleFit fit;             // the L-shape fit the correction started from (its status says if it failed)
+  std::size_t points_used = 0;  // the finite points fixed from (after thinning)
+  int azimuth_stride = 1;       // every k-th azimuth column of each laser's trace was used (1: all)
 
   bool ok() const { return corrected.ok(); }
   CorrectionStatus status() const { return corrected.status; }

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <utility>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "common/pose.h"
 #include "common/time.h"
 #include "lidar/sensor_model.h"
+#include "perception/azimuth_thinning.h"
 #include "perception/face_envelope.h"
 #include "perception/l_shape_criteria.h"
 #include "perception/vehicle_fix.h"
@@ -750,6 +752,171 @@ TEST(VehicleFixGeometry, GrazingSideCutShortByTheSegmentation) {
     const double nees = error.dot(fix.corrected.covariance.topLeftCorner<2, 2>().ldlt().solve(error));
     EXPECT_TRUE(error.norm() < 0.10 || nees <= kChi2TwoDof3Sigma)
         << "prior " << prior_error_deg << " deg: " << error.norm() << " m off at NEES " << nees;
+  }
+}
+
+// --- thinning a dense cluster along azimuth (azimuth_thinning.h) ---------------------------------------
+
+// The near car of a dense sensor (issue 16: 5,600-17,600 points in rsud) and its lasers' traces, told apart
+// by the reference rule (LidarGeometry::laser_of, every laser scanned) and the points' absolute azimuth.
+struct Traces {
+  View view;
+  std::vector<int> laser;       // per point
+  std::vector<double> azimuth;  // per point, radians seen from the LiDAR
+};
+
+Traces near_dense_car(const Pose2& truth = {1.5, 3.6, deg_to_rad(8.0)}) {
+  Traces t{look(lidar::make_generic(128), 2.0, sim::VehicleShape{}, truth), {}, {}};
+  for (const auto& p : t.view.points) {
+    t.laser.push_back(t.view.lidar.laser_of(p));
+    t.azimuth.push_back(std::atan2(p.y() - t.view.lidar.position.y(), p.x() - t.view.lidar.position.x()));
+  }
+  return t;
+}
+
+bool contains(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& p) {
+  return std::find(points.begin(), points.end(), p) != points.end();
+}
+
+// Each laser's trace keeps points (none of the lasers that saw the car is dropped), both its ends, and
+// about max_points remain.
+TEST(AzimuthThinning, KeepsEveryLaserAndBothEndsOfEachTrace) {
+  const Traces t = near_dense_car();
+  const std::size_t n = t.view.points.size();
+  ASSERT_GE(n, 5000U);  // the claimed view: a dense cluster
+  constexpr std::size_t kMax = 2000;
+  const AzimuthThinning thinned = thin_along_azimuth(t.view.points, t.view.lidar, kMax);
+  const int k = static_cast<int>((n + kMax - 1) / kMax);
+  ASSERT_EQ(thinned.stride, k);
+  ASSERT_GT(k, 1);
+  EXPECT_GE(thinned.points.size(), n / static_cast<std::size_t>(k));
+  EXPECT_LE(thinned.points.size(), kMax + kMax / 2);
+  std::map<int, std::pair<std::size_t, std::size_t>> ends;  // laser -> (westmost, eastmost) point
+  for (std::size_t i = 0; i < n; ++i) {
+    auto [it, fresh] = ends.try_emplace(t.laser[i], i, i);
+    if (t.azimuth[i] < t.azimuth[it->second.first])
+      it->second.first = i;
+    if (t.azimuth[i] > t.azimuth[it->second.second])
+      it->second.second = i;
+  }
+  EXPECT_GE(ends.size(), 40U);  // the claimed view: many lasers on the car
+  for (const auto& [laser, e] : ends) {
+    EXPECT_TRUE(contains(thinned.points, t.view.points[e.first]))
+        << "laser " << laser << ": first end dropped";
+    EXPECT_TRUE(contains(thinned.points, t.view.points[e.second]))
+        << "laser " << laser << ": last end dropped";
+  }
+}
+
+// A break in the traces (a pole in front of the car: 1.5 deg of azimuth without returns) ends each trace on
+// both sides of it: the points beside it are kept.
+TEST(AzimuthThinning, KeepsThePointsBesideABreakInATrace) {
+  const Traces t = near_dense_car();
+  const auto [lo, hi] = std::minmax_element(t.azimuth.begin(), t.azimuth.end());
+  const double from = 0.5 * (*lo + *hi), to = from + deg_to_rad(1.5);
+  std::vector<Eigen::Vector3d> points;
+  std::map<int, std::pair<std::size_t, std::size_t>> beside;  // laser -> (last before, first after)
+  for (std::size_t i = 0; i < t.view.points.size(); ++i) {
+    if (t.azimuth[i] >= from && t.azimuth[i] <= to)
+      continue;
+    points.push_back(t.view.points[i]);
+    auto [it, fresh] = beside.try_emplace(t.laser[i], i, i);
+    auto& [before, after] = it->second;
+    if (t.azimuth[i] < from && (t.azimuth[before] >= from || t.azimuth[i] > t.azimuth[before]))
+      before = i;
+    if (t.azimuth[i] > to && (t.azimuth[after] <= to || t.azimuth[i] < t.azimuth[after]))
+      after = i;
+  }
+  const AzimuthThinning thinned = thin_along_azimuth(points, t.view.lidar, 2000);
+  ASSERT_GT(thinned.stride, 1);
+  std::size_t broken = 0;
+  for (const auto& [laser, b] : beside) {
+    const auto [before, after] = b;
+    if (t.azimuth[before] >= from || t.azimuth[after] <= to)
+      continue;  // this laser's trace does not cross the break
+    ++broken;
+    EXPECT_TRUE(contains(thinned.points, t.view.points[before])) << "laser " << laser;
+    EXPECT_TRUE(contains(thinned.points, t.view.points[after])) << "laser " << laser;
+  }
+  EXPECT_GE(broken, 40U);  // the claimed view: the break crosses most traces
+}
+
+// The thinned points lie k azimuth steps apart along a trace, and the fix says so: its stride is k, and
+// its covariance is the one stated with that spacing, wider than with the sensor's own step (which the
+// same points, given unthinned, are stated with).
+TEST(AzimuthThinning, FixStatesTheCoarserSpacing) {
+  // Broadside, the LiDAR abreast of its middle: both ends seen, neither facing the LiDAR, so its place
+  // along its length is their midpoint, as uncertain as the points' spacing (fix_covariance.h).
+  const Pose2 truth{0.0, 4.0, 0.0};
+  const Traces t = near_dense_car(truth);
+  const sim::VehicleShape shape;
+  AnnouncedVehicle announced;
+  announced.size = {shape.length, shape.width, shape.height};
+  announced.yaw_prior = YawPrior{truth.yaw, deg_to_rad(10.0)};
+  VehicleFixConfig config;
+  config.thin_above_points = 2000;
+  const VehicleFix fix = fix_vehicle(t.view.points, announced, t.view.lidar, config);
+  ASSERT_TRUE(fix.ok()) << to_string(fix.status());
+  const AzimuthThinning thinned = thin_along_azimuth(t.view.points, t.view.lidar, config.thin_above_points);
+  ASSERT_GT(thinned.stride, 1);
+  EXPECT_EQ(fix.azimuth_stride, thinned.stride);
+  EXPECT_EQ(fix.points_used, thinned.points.size());
+  // The spacing measured along each laser's trace, in azimuth steps: its median is the stride.
+  std::map<int, std::vector<double>> trace;
+  for (const auto& p : thinned.points)
+    trace[t.view.lidar.laser_of(p)].push_back(
+        std::atan2(p.y() - t.view.lidar.position.y(), p.x() - t.view.lidar.position.x()));
+  std::vector<double> gaps;
+  for (auto& [laser, azimuths] : trace) {
+    std::sort(azimuths.begin(), azimuths.end());
+    for (std::size_t i = 1; i < azimuths.size(); ++i)
+      gaps.push_back((azimuths[i] - azimuths[i - 1]) / t.view.lidar.azimuth_step_rad);
+  }
+  ASSERT_GE(gaps.size(), 1000U);
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+  EXPECT_NEAR(gaps[gaps.size() / 2], static_cast<double>(fix.azimuth_stride), 0.5);
+  // The same points unthinned, stated with the sensor's step: the same box, a tighter covariance.
+  VehicleFixConfig never;
+  never.thin_above_points = 0;
+  const VehicleFix fine = fix_vehicle(thinned.points, announced, t.view.lidar, never);
+  ASSERT_TRUE(fine.ok());
+  EXPECT_EQ(fine.azimuth_stride, 1);
+  const double coarse = fix.corrected.covariance(0, 0) + fix.corrected.covariance(1, 1);
+  EXPECT_GT(coarse, fine.corrected.covariance(0, 0) + fine.corrected.covariance(1, 1));
+}
+
+// A cluster at or under the threshold, and any cluster of a sensor whose elevations are unknown, is fixed
+// from all its points: the fix is the same bit for bit as with thinning off.
+TEST(AzimuthThinning, ClusterUnderTheThresholdIsUntouched) {
+  const Traces dense = near_dense_car();
+  const View sparse = look(lidar::make_vlp32c(), 2.0, sim::VehicleShape{}, {1.5, 3.6, deg_to_rad(8.0)});
+  ASSERT_LE(sparse.points.size(), VehicleFixConfig{}.thin_above_points);
+  View unknown_lasers = dense.view;
+  unknown_lasers.lidar.elevations_rad.clear();
+  struct Case {
+    const View* view;
+    std::size_t threshold;
+  };
+  for (const Case& c : {Case{&sparse, VehicleFixConfig{}.thin_above_points},
+                        Case{&dense.view, dense.view.points.size()}, Case{&unknown_lasers, 2000}}) {
+    const sim::VehicleShape shape;
+    AnnouncedVehicle announced;
+    announced.size = {shape.length, shape.width, shape.height};
+    announced.yaw_prior = YawPrior{deg_to_rad(8.0), deg_to_rad(10.0)};
+    VehicleFixConfig config;
+    config.thin_above_points = c.threshold;
+    VehicleFixConfig never;
+    never.thin_above_points = 0;
+    const VehicleFix fix = fix_vehicle(c.view->points, announced, c.view->lidar, config);
+    const VehicleFix all = fix_vehicle(c.view->points, announced, c.view->lidar, never);
+    EXPECT_EQ(fix.azimuth_stride, 1);
+    EXPECT_EQ(fix.points_used, c.view->points.size());
+    EXPECT_EQ(fix.status(), all.status());
+    EXPECT_EQ(fix.corrected.pose.x, all.corrected.pose.x);
+    EXPECT_EQ(fix.corrected.pose.y, all.corrected.pose.y);
+    EXPECT_EQ(fix.corrected.pose.yaw, all.corrected.pose.yaw);
+    EXPECT_EQ(fix.corrected.covariance, all.corrected.covariance);
+    EXPECT_EQ(fix.fit.yaw, all.fit.yaw);
   }
 }
 

@@ -1,0 +1,164 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "perception/azimuth_thinning.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace rsu::perception {
+namespace {
+
+constexpr std::size_t kNoLaser = std::numeric_limits<std::size_t>::max();
+
+// The laser nearest a point's elevation, as LidarGeometry::laser_of decides it, by the tangents of the
+// midpoints between the lasers sorted by elevation (laser_of scans all 128 lasers of a dense sensor for
+// each point), searched from the previous point's laser: points arrive firing by firing, so the next
+// one is mostly a neighbour's (a binary search's unpredictable branches cost more). The result is the
+// laser's rank by elevation: a grouping, not an index into elevations_rad.
+class LaserRanks {
+ public:
+  explicit LaserRanks(const LidarGeometry& lidar) {
+    std::vector<double> e = lidar.elevations_rad;
+    std::sort(e.begin(), e.end());
+    for (std::size_t i = 1; i < e.size(); ++i)
+      boundaries_.push_back(std::tan(0.5 * (e[i - 1] + e[i])));
+  }
+  std::size_t count() const { return boundaries_.size() + 1; }
+  // rise / run: the point's height above the LiDAR over its horizontal range (the elevation's tangent);
+  // the rank r with boundaries_[r - 1] <= rise / run < boundaries_[r], searched from `hint`.
+  std::size_t operator()(double rise_over_run, std::size_t hint) const {
+    std::size_t r = std::min(hint, boundaries_.size());
+    while (r > 0 && rise_over_run < boundaries_[r - 1])
+      --r;
+    while (r < boundaries_.size() && rise_over_run >= boundaries_[r])
+      ++r;
+    return r;
+  }
+
+ private:
+  std::vector<double> boundaries_;
+};
+
+// Each point's laser and azimuth column (kNoLaser: not finite, dropped).
+struct Columns {
+  std::vector<std::size_t> laser;
+  std::vector<std::int64_t> column;
+};
+
+Columns columns_of(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar) {
+  const LaserRanks ranks(lidar);
+  Columns out{std::vector<std::size_t>(points.size(), kNoLaser), std::vector<std::int64_t>(points.size(), 0)};
+  // Azimuths are measured from the first point's direction, so that a cluster across the +-pi line (the
+  // LiDAR's -x axis) does not wrap; each laser's columns from its own first point.
+  Eigen::Vector2d reference = Eigen::Vector2d::Zero();
+  std::vector<double> first(ranks.count(), std::numeric_limits<double>::quiet_NaN());
+  const double per_step = 1.0 / lidar.azimuth_step_rad;
+  std::size_t laser = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
+    const Eigen::Vector2d d = p.head<2>() - lidar.xy();
+    const double run = d.norm();
+    if (!p.allFinite() || !(run > 0.0))
+      continue;
+    if (reference.isZero())
+      reference = d;
+    // In float: its rounding (about 1e-7 of the angle) is far below a step (3e-3 rad).
+    const double azimuth =
+        static_cast<double>(std::atan2(static_cast<float>(reference.x() * d.y() - reference.y() * d.x()),
+                                       static_cast<float>(reference.x() * d.x() + reference.y() * d.y())));
+    laser = ranks((p.z() - lidar.position.z()) / run, laser);
+    if (std::isnan(first[laser]))
+      first[laser] = azimuth;
+    out.laser[i] = laser;
+    const double steps = (azimuth - first[laser]) * per_step;
+    out.column[i] = static_cast<std::int64_t>(steps + (steps < 0.0 ? -0.5 : 0.5));  // the nearest
+  }
+  return out;
+}
+
+// Which columns of each laser's trace hold a point.
+class Occupancy {
+ public:
+  Occupancy(const Columns& c, std::size_t lasers)
+      : lo_(lasers, std::numeric_limits<std::int64_t>::max()),
+        hi_(lasers, std::numeric_limits<std::int64_t>::min()),
+        offset_(lasers, 0) {
+    for (std::size_t i = 0; i < c.laser.size(); ++i) {
+      if (c.laser[i] == kNoLaser)
+        continue;
+      lo_[c.laser[i]] = std::min(lo_[c.laser[i]], c.column[i]);
+      hi_[c.laser[i]] = std::max(hi_[c.laser[i]], c.column[i]);
+    }
+    std::size_t size = 0;
+    for (std::size_t l = 0; l < lasers; ++l) {
+      offset_[l] = size;
+      if (lo_[l] <= hi_[l])
+        size += static_cast<std::size_t>(hi_[l] - lo_[l] + 1);
+    }
+    size_ = size;
+  }
+  // The table's size: every column of every laser's trace, from its first to its last.
+  std::size_t size() const { return size_; }
+  void fill(const Columns& c) {
+    bits_.assign(size_, false);
+    for (std::size_t i = 0; i < c.laser.size(); ++i) {
+      if (c.laser[i] != kNoLaser)
+        bits_[index(c.laser[i], c.column[i])] = true;
+    }
+  }
+  bool occupied(std::size_t laser, std::int64_t column) const {
+    return column >= lo_[laser] && column <= hi_[laser] && bits_[index(laser, column)];
+  }
+  std::int64_t first(std::size_t laser) const { return lo_[laser]; }
+
+ private:
+  std::size_t index(std::size_t laser, std::int64_t column) const {
+    return offset_[laser] + static_cast<std::size_t>(column - lo_[laser]);
+  }
+  std::vector<std::int64_t> lo_, hi_;
+  std::vector<std::size_t> offset_;
+  std::size_t size_ = 0;
+  std::vector<bool> bits_;
+};
+
+}  // namespace
+
+AzimuthThinning thin_along_azimuth(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
+                                   std::size_t max_points) {
+  AzimuthThinning out;
+  const auto finite = static_cast<std::size_t>(
+      std::count_if(points.begin(), points.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); }));
+  if (max_points == 0 || finite <= max_points || lidar.elevations_rad.empty() ||
+      !(lidar.azimuth_step_rad > 0.0))
+    return out;
+  const Columns c = columns_of(points, lidar);
+  Occupancy occupancy(c, lidar.elevations_rad.size());
+  // Traces spread over far more columns than there are points are not dense along azimuth (and their
+  // table would be large): left as they are.
+  if (occupancy.size() > 64 * finite)
+    return out;
+  occupancy.fill(c);
+  const auto stride = static_cast<std::int64_t>((finite + max_points - 1) / max_points);
+  out.stride = static_cast<int>(stride);
+  out.points.reserve(finite / static_cast<std::size_t>(stride) + lidar.elevations_rad.size() * 4);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::size_t l = c.laser[i];
+    const std::int64_t col = c.column[i];
+    if (l == kNoLaser) {
+      // Finite but straight above or below the LiDAR: no azimuth to thin by.
+      if (points[i].allFinite())
+        out.points.push_back(points[i]);
+      continue;
+    }
+    // A trace's end or a break in it: no return in the next two columns on one side (one empty column
+    // is the angle noise moving a return into its neighbour's column).
+    const bool end = (!occupancy.occupied(l, col + 1) && !occupancy.occupied(l, col + 2)) ||
+                     (!occupancy.occupied(l, col - 1) && !occupancy.occupied(l, col - 2));
+    if (end || (col - occupancy.first(l)) % stride == 0)
+      out.points.push_back(points[i]);
+  }
+  return out;
+}
+
+}  // namespace rsu::perception

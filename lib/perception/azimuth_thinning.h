@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: Apache-2.0
+// A dense cluster thinned along azimuth before its fix (issue 16 item 1). A car 3.6-10 m from a 128-ring
+// sensor 2 m up holds 3,600-20,200 points, and its fix (the L-shape criterion, the faces' EM, run again at
+// each yaw probe) cost 1.8-8.9 ms of CPU (bench_perception BM_FixVehicleNear) against the 0.78 ms between
+// an OS1-128's packets; the fix needs far fewer.
+//
+// What is kept is what the correction reasons with:
+//  - every laser: the correction asks per laser what the LiDAR could have seen (lidar_geometry.h: a laser
+//    that would have hit the body and returned nothing says the body is not there), so thinning never
+//    drops a laser; it thins along each laser's trace only, keeping every k-th of its azimuth columns;
+//  - the ends of each trace, and the points beside a break in it (two or more columns without a return):
+//    the body ends within an azimuth step of them (box_axis.h, CorrectionConfig::max_end_spacing_m);
+// and what is lost is said: along a trace the points then lie k azimuth steps apart, the spacing the fix
+// states (VehicleFix::azimuth_stride, the covariance's azimuth resolution).
+//
+// A laser's trace is told from its neighbours by the lasers' elevations (the nearest, as
+// LidarGeometry::laser_of); without them nothing is thinned. Columns are the points' azimuth seen from
+// the LiDAR in steps of LidarGeometry::azimuth_step_rad, counted from the laser's own first point, so that
+// a beam's azimuth offset (an Ouster's beams are up to ~3 deg apart) does not put it between two columns.
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "perception/lidar_geometry.h"
+
+namespace rsu::perception {
+
+struct AzimuthThinning {
+  // Every k-th column of each laser's trace is kept; 1: nothing was thinned (points is then empty: the
+  // input stands as it is).
+  int stride = 1;
+  std::vector<Eigen::Vector3d> points;  // the points kept, in their input order (finite ones only)
+};
+
+// `points` thinned to about `max_points` (k = the finite points / max_points, rounded up, and the ends
+// kept beside them) when more of them are finite, the lidar's elevations are known and its azimuth step
+// positive; else stride 1.
+AzimuthThinning thin_along_azimuth(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
+                                   std::size_t max_points);
+
+}  // namespace rsu::perception
