@@ -15,6 +15,7 @@
 #include "core/lidar_stats.h"
 #include "core/rsu_core_config.h"
 #include "core/vehicle_gatherer.h"
+#include "perception/detection.h"
 #include "perception/vehicle_fix.h"
 #include "v2i/messages.h"
 
@@ -53,6 +54,8 @@ class GatheredVehicleFixer {
   // occluders: the other objects' points that may hide part of it (sweep_occluders.h).
   GatheredFix fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby = false,
                   std::vector<Eigen::Vector2d> occluders = {}) const;
+  // How a cluster's rectangle is fitted for association (perception::detect): thinned as its fix is.
+  perception::FitThinning fit_thinning() const { return {&lidar_, fix_config_.thin_above_points}; }
 
  private:
   // The vehicle's fix from its points swept at `sweep_time`, with its announced size and its announced

@@ -77,12 +77,13 @@ void PreparedFixes::add_fit(std::vector<lidar::LidarPoint>&& points, perception:
 
 perception::Detection PreparedFixes::fit(std::span<const lidar::LidarPoint> points,
                                          const Eigen::Vector2d& lidar_xy,
-                                         const perception::LShapeFitConfig& config) {
+                                         const perception::LShapeFitConfig& config,
+                                         const perception::FitThinning& thinning) {
   const auto it = std::find_if(fits_.begin(), fits_.end(), [&](const auto& fit) {
     return std::equal(fit.first.begin(), fit.first.end(), points.begin(), points.end(), same_point);
   });
   if (it == fits_.end())
-    return perception::detect(points, lidar_xy, config);
+    return perception::detect(points, lidar_xy, config, thinning);
   perception::Detection d = std::move(it->second);
   fits_.erase(it);
   return d;
@@ -129,7 +130,8 @@ void RsuCore::prepare_fixes(TimeNs now) {
   std::vector<perception::Detection> detections;
   std::vector<Eigen::Vector3d> first_points;
   for (perception::SweptCluster& cluster : swept) {
-    perception::Detection d = perception::detect(cluster.points, mount_.xy(), config_.perception.fix.fit);
+    perception::Detection d =
+        perception::detect(cluster.points, mount_.xy(), config_.perception.fix.fit, fixer_.fit_thinning());
     if (d.fit.ok() && (d.fit.center - mount_.xy()).norm() <= config_.coverage_radius_m && !d.points.empty()) {
       first_points.push_back(d.points.front());
       detections.push_back(d);

@@ -33,7 +33,8 @@ class PreparedFixes {
   void add_fit(std::vector<lidar::LidarPoint>&& points, perception::Detection detection);
   // A released cluster's fit: the one prepared for exactly these points (then forgotten), else computed.
   perception::Detection fit(std::span<const lidar::LidarPoint> points, const Eigen::Vector2d& lidar_xy,
-                            const perception::LShapeFitConfig& config);
+                            const perception::LShapeFitConfig& config,
+                            const perception::FitThinning& thinning);
   // A vehicle's fix, by GatheredVehicleFixer::fix's inputs.
   void add(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby,
            const std::vector<Eigen::Vector2d>& occluders, const GatheredFix& fix);

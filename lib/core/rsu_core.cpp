@@ -124,7 +124,7 @@ std::vector<perception::Detection> RsuCore::detect(std::vector<perception::Swept
   for (const perception::SweptCluster& cluster : clusters) {
     if (cluster.points.empty())
       continue;
-    perception::Detection d = prepared_.fit(cluster.points, mount_.xy(), config_.perception.fix.fit);
+    auto d = prepared_.fit(cluster.points, mount_.xy(), config_.perception.fix.fit, fixer_.fit_thinning());
     ++lidar_stats_.clusters_fitted;
     if (!d.fit.ok()) {
       ++lidar_stats_.fits_failed;  // too small or thin to fit alone, but maybe a fragment of a vehicle

@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "perception/detection.h"
 
+#include "perception/azimuth_thinning.h"
+
 namespace rsu::perception {
 namespace {
 
 // `point_at(k)` for k < n gives the k-th point of the detection.
 template <typename PointAt>
 Detection detect_points(std::size_t n, PointAt point_at, const Eigen::Vector2d& lidar_xy,
-                        const LShapeFitConfig& config) {
+                        const LShapeFitConfig& config, const FitThinning& thinning = {}) {
   Detection d;
   d.points.reserve(n);
   std::vector<Eigen::Vector2d> footprint;
@@ -21,6 +23,14 @@ Detection detect_points(std::size_t n, PointAt point_at, const Eigen::Vector2d& 
     offset_sum += p.time_ns - t0;
   }
   d.sweep_time_ns = t0 + offset_sum / static_cast<TimeNs>(n);
+  if (thinning.lidar != nullptr) {
+    const AzimuthThinning thinned = thin_along_azimuth(d.points, *thinning.lidar, thinning.above_points);
+    if (thinned.stride > 1) {
+      footprint.clear();
+      for (const Eigen::Vector3d& p : thinned.points)
+        footprint.emplace_back(p.x(), p.y());
+    }
+  }
   d.fit = fit_rectangle(footprint, lidar_xy, config);
   return d;
 }
@@ -28,9 +38,10 @@ Detection detect_points(std::size_t n, PointAt point_at, const Eigen::Vector2d& 
 }  // namespace
 
 Detection detect(std::span<const lidar::LidarPoint> points, const Eigen::Vector2d& lidar_xy,
-                 const LShapeFitConfig& config) {
+                 const LShapeFitConfig& config, const FitThinning& thinning) {
   return detect_points(
-      points.size(), [&](std::size_t k) -> const lidar::LidarPoint& { return points[k]; }, lidar_xy, config);
+      points.size(), [&](std::size_t k) -> const lidar::LidarPoint& { return points[k]; }, lidar_xy, config,
+      thinning);
 }
 
 Detection detect(std::span<const lidar::LidarPoint> frame, std::span<const std::uint32_t> indices,

@@ -5,6 +5,7 @@
 // rectangle against the announced vehicles (tracking).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "common/time.h"
 #include "lidar/point.h"
 #include "perception/l_shape_fitting.h"
+#include "perception/lidar_geometry.h"
 #include "perception/rectangle_fit.h"
 
 namespace rsu::perception {
@@ -24,10 +26,19 @@ struct Detection {
   RectangleFit fit;                     // its status says whether a rectangle could be fitted
 };
 
+// Which of a dense cluster's points the rectangle is fitted to: every k-th azimuth column of each laser's
+// trace when it has more than `above_points` (azimuth_thinning.h; `lidar` tells its lasers apart), as
+// fix_vehicle fits and fixes it (VehicleFixConfig::thin_above_points). The detection keeps all its points.
+// Default: all.
+struct FitThinning {
+  const LidarGeometry* lidar = nullptr;
+  std::size_t above_points = 0;
+};
+
 // The detection made of `points` (map frame, at least one): their mean firing time and the rectangle
 // fitted to their footprint as seen from the LiDAR at `lidar_xy`.
 Detection detect(std::span<const lidar::LidarPoint> points, const Eigen::Vector2d& lidar_xy,
-                 const LShapeFitConfig& config);
+                 const LShapeFitConfig& config, const FitThinning& thinning = {});
 // The same for the points `indices` of `frame`.
 Detection detect(std::span<const lidar::LidarPoint> frame, std::span<const std::uint32_t> indices,
                  const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& config);
