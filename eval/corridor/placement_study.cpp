@@ -13,11 +13,11 @@
 #include "common/angles.h"
 #include "common/random.h"
 #include "eval/consistency.h"
-#include "eval/parallel_indices.h"
 #include "lidar/sensor_model.h"
 #include "perception/pipeline.h"
 #include "perception/vehicle_fix.h"
 #include "sim/lidar_simulator.h"
+#include "sim/parallel_indices.h"
 #include "sim/trajectory.h"
 
 namespace rsu::eval {
@@ -285,7 +285,7 @@ std::vector<PlacementResult> run_placement_study(const sim::Scenario& scenario,
     }
   }
   std::vector<PlacementResult> results(placements.size());
-  run_indices_in_parallel(placements.size(), config.threads, [&](std::size_t i) {
+  sim::run_indices_in_parallel(placements.size(), config.threads, [&](std::size_t i) {
     results[i] = run_placement(scenario, placements[i], config);
     std::fprintf(
         stderr, "placement %zu/%zu: %s %s %.0f m: %zu vehicle-rotations, coverage %.0f m, HMI %zu (%.0f s)\n",

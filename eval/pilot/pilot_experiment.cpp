@@ -12,10 +12,10 @@
 #include "common/random.h"
 #include "common/symmetric_eigen.h"
 #include "eval/consistency.h"
-#include "eval/parallel_indices.h"
 #include "lidar/sensor_model.h"
 #include "perception/ground_height_filter.h"
 #include "sim/lidar_simulator.h"
+#include "sim/parallel_indices.h"
 #include "sim/trajectory.h"
 #include "sim/vehicle_mesh.h"
 
@@ -245,7 +245,7 @@ PilotResult run_pilot(const PilotConfig& config) {
 
   const auto wall_start = std::chrono::steady_clock::now();
   std::vector<DistanceRun> runs(result.distances.size());
-  run_indices_in_parallel(runs.size(), config.threads, [&](std::size_t i) {
+  sim::run_indices_in_parallel(runs.size(), config.threads, [&](std::size_t i) {
     runs[i] = run_distance(config, *model, indices[i], result.distances[i], result.frames_per_turn);
   });
   for (auto& r : runs) {
