@@ -13,8 +13,10 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "common/pose.h"
@@ -86,12 +88,18 @@ class LidarSimulator {
   // `sector` report no return. Throws std::invalid_argument if the model has no packet format.
   lidar::PacketReturns simulate_packet(std::int64_t k,
                                        const std::optional<AzimuthSector>& sector = std::nullopt) const;
+  // Packets first, first + 1, ... into out[0], out[1], ..., each as simulate_packet makes it, on `threads`
+  // threads (the caller's among them; started per call: for many packets, not one). Throws as
+  // simulate_packet, and std::invalid_argument for threads < 1.
+  void simulate_packets(std::int64_t first, std::span<lidar::PacketReturns> out, int threads) const;
 
   // One rotation: every firing with time in [start, start + 1 / rotation rate) (0.1 s at 10 Hz),
   // from all packets that overlap that window. Points are those a decoder would rebuild from the
-  // packets, bit for bit.
-  SimulatedFrame simulate_frame(TimeNs start,
-                                const std::optional<AzimuthSector>& sector = std::nullopt) const;
+  // packets, bit for bit. threads > 1 simulates runs of packets on that many threads (the caller's
+  // among them; started per call) with the same frame, bit for bit, as on one. Throws
+  // std::invalid_argument for threads < 1.
+  SimulatedFrame simulate_frame(TimeNs start, const std::optional<AzimuthSector>& sector = std::nullopt,
+                                int threads = 1) const;
 
   // Index of the packet whose first firing is the last one at or before t.
   std::int64_t packet_index_at(TimeNs t) const;
@@ -133,6 +141,20 @@ class LidarSimulator {
   void run_packet(std::int64_t k, TimeNs t_begin, TimeNs t_end, const std::optional<AzimuthSector>& sector,
                   PacketScratch& scratch) const;
   lidar::LidarPoint to_point(const lidar::Firing& f, const Outcome& o) const;
+  lidar::PacketReturns packet_returns(std::int64_t k, const std::optional<AzimuthSector>& sector,
+                                      PacketScratch& scratch) const;
+  // What one run of a frame's packets produced: its points (and truth) stand in the frame from
+  // first_point on, counts.returns of them.
+  struct RunResult {
+    std::size_t first_point = 0;
+    SimulationCounts counts;
+    TimeNs start_ns = std::numeric_limits<TimeNs>::max();
+    TimeNs end_ns = std::numeric_limits<TimeNs>::min();
+  };
+  // Simulates packets [k_begin, k_end) and writes their firings in [start, end) into frame's points and
+  // truth from run.first_point on (room made by the caller), counting them in `run`.
+  void write_packets(std::int64_t k_begin, std::int64_t k_end, TimeNs start, TimeNs end,
+                     const std::optional<AzimuthSector>& sector, SimulatedFrame& frame, RunResult& run) const;
 
   std::shared_ptr<const Raycaster> owned_raycaster_;
   const Raycaster* raycaster_;

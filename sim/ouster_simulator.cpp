@@ -5,11 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <numeric>
 #include <stdexcept>
 
 #include "common/byte_order.h"
 #include "common/random.h"
 #include "lidar/ouster/ouster_geometry.h"
+#include "sim/parallel_indices.h"
 
 namespace rsu::sim {
 namespace {
@@ -145,6 +147,27 @@ std::int64_t OusterSimulator::packet_index_at(TimeNs t) const {
 
 std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns,
                                     std::vector<std::uint8_t>& out) const {
+  scratch_.resize(std::max<std::size_t>(scratch_.size(), 1));
+  return packet(k, clock_offset_ns, out, scratch_.front());
+}
+
+std::size_t OusterSimulator::packets(std::int64_t first, TimeNs clock_offset_ns,
+                                     std::span<std::vector<std::uint8_t>> out, int threads) const {
+  // Each run of packets with its own buffers; every packet is the one packet() makes, whichever thread
+  // made it.
+  const std::size_t runs = range_count(out.size(), threads);
+  scratch_.resize(std::max(scratch_.size(), runs));
+  std::vector<std::size_t> vehicle_returns(runs, 0);
+  run_ranges_in_parallel(out.size(), threads, [&](std::size_t run, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      vehicle_returns[run] +=
+          packet(first + static_cast<std::int64_t>(i), clock_offset_ns, out[i], scratch_[run]);
+  });
+  return std::accumulate(vehicle_returns.begin(), vehicle_returns.end(), std::size_t{0});
+}
+
+std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out,
+                                    Scratch& scratch) const {
   const ouster::Metadata& m = metadata_;
   const bool legacy = m.profile == ouster::UdpProfile::legacy;
   const std::int64_t frame = floor_div(k, packets_per_frame_);
@@ -165,11 +188,12 @@ std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns,
   // The packet's rays in column-major order (a column's beams side by side: coherent for Embree).
   const int rows = m.pixels_per_column;
   const auto n = static_cast<std::size_t>(m.columns_per_packet * rows);
-  std::vector<Ray>& rays = scratch_.rays;
-  std::vector<RayHit>& hits = scratch_.hits;
+  std::vector<Ray>& rays = scratch.rays;
+  std::vector<RayHit>& hits = scratch.hits;
+  std::vector<double>& range_noise = scratch.range_noise;
   rays.resize(n);
   hits.assign(n, RayHit{});
-  std::vector<double> range_noise(n, 0.0);
+  range_noise.assign(n, 0.0);
   const Eigen::Matrix3d to_map = mount_.linear();
   const bool noisy = noise_.angle_sigma_rad > 0.0 || noise_.range_sigma_m > 0.0;
   for (int c = 0; c < m.columns_per_packet; ++c) {

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -60,7 +61,13 @@ class OusterSimulator {
   // Packet k's bytes (the metadata's profile), its column timestamps on the sensor clock
   // (simulation time + clock_offset_ns), into `out` (resized). Returns how many of its returns are a
   // vehicle's (the ray caster's truth: which packets hold a vehicle, for latency benchmarks).
+  // Not thread-safe: it reuses the simulator's buffers (one simulator per thread).
   std::size_t packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out) const;
+  // Packets first, first + 1, ... into out[0], out[1], ..., each as packet() makes it, on `threads`
+  // threads (the caller's among them; started per call: for a frame's packets, not one's). Returns
+  // their vehicle returns summed. Throws std::invalid_argument for threads < 1. Not thread-safe either.
+  std::size_t packets(std::int64_t first, TimeNs clock_offset_ns, std::span<std::vector<std::uint8_t>> out,
+                      int threads) const;
 
   const lidar::ouster::Metadata& metadata() const { return metadata_; }
 
@@ -78,11 +85,17 @@ class OusterSimulator {
   struct Scratch {
     std::vector<Ray> rays;
     std::vector<RayHit> hits;
+    std::vector<double> range_noise;  // m, per ray
   };
+
+  std::size_t packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out,
+                     Scratch& scratch) const;
 
   lidar::ouster::Metadata metadata_;
   std::vector<Beam> beams_;
-  mutable Scratch scratch_;  // reused packet after packet (one simulator per thread)
+  // Reused packet after packet and call after call (one simulator per thread): [0] by packet(), one a run
+  // by packets(). Fresh buffers per frame cost page faults that outweighed a second thread (bench/sim).
+  mutable std::vector<Scratch> scratch_;
   lidar::ouster::PacketLayout layout_;
   Eigen::Isometry3d mount_;
   NoiseModel noise_;

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "common/angles.h"
+#include "sim/parallel_indices.h"
 #include "sim/trajectory.h"
 #include "sim/vehicle_mesh.h"
 
@@ -23,6 +24,8 @@ namespace {
 
 constexpr std::size_t kClassCount = 6;
 constexpr unsigned kPacketWidth = 16;
+// cast_batch's chunk of rays: small enough for the stack, so no allocation per ray or per chunk.
+constexpr std::size_t kChunk = 64;
 
 std::size_t class_index(SurfaceClass c) {
   return static_cast<std::size_t>(c);
@@ -532,10 +535,10 @@ struct Raycaster::Impl {
     }
   }
 
-  // At most 64 rays (cast_batch's chunk).
+  // At most kChunk rays.
   void static_batch_stream(std::span<const CheckedRay> rays, std::span<RayHit> hits) const {
-    std::array<RTCRayHit, 64> stream;
-    std::array<float, 64> ground{};
+    std::array<RTCRayHit, kChunk> stream;
+    std::array<float, kChunk> ground{};
     for (std::size_t i = 0; i < rays.size(); ++i) {
       // An invalid ray gets an empty interval (tfar < tnear), which Embree skips.
       ground[i] = rays[i].valid ? ground_within(rays[i]) : std::numeric_limits<float>::infinity();
@@ -553,6 +556,80 @@ struct Raycaster::Impl {
         finish_static_hit(stream[i].hit, stream[i].ray.tfar, rays[i].direction, hits[i]);
       } else if (rays[i].valid && std::isfinite(ground[i])) {
         finish_ground_hit(ground[i], rays[i].direction, hits[i]);
+      }
+    }
+  }
+
+  // cast_batch on the calling thread.
+  void cast_rays(std::span<const Ray> rays, std::span<RayHit> hits) const {
+    if (rays.empty()) {
+      return;
+    }
+    TimeNs t_min = rays.front().time_ns;
+    TimeNs t_max = t_min;
+    for (const Ray& r : rays) {
+      t_min = std::min(t_min, r.time_ns);
+      t_max = std::max(t_max, r.time_ns);
+    }
+    // One sphere per vehicle bounding it wherever it is during the batch; only rays that meet it pay
+    // for the exact pose at their own time.
+    struct SweptSphere {
+      Eigen::Vector3d centre;
+      double radius;
+      PosedVehicle posed;  // at the last ray's time that met the sphere
+    };
+    std::vector<SweptSphere> swept;
+    swept.reserve(vehicles.size());
+    for (const auto& v : vehicles) {
+      const auto path = path_vertices(v.trajectory, t_min, t_max);
+      Eigen::Vector2d mid = Eigen::Vector2d::Zero();
+      for (const auto& p : path) {
+        mid += p;
+      }
+      mid /= static_cast<double>(path.size());
+      double spread = 0.0;
+      for (const auto& p : path) {
+        spread = std::max(spread, (p - mid).norm());
+      }
+      swept.push_back({Eigen::Vector3d(mid.x(), mid.y(), v.bound_centre.z()),
+                       v.bound_radius + v.bound_centre.head<2>().norm() + spread,
+                       {}});
+    }
+    std::array<CheckedRay, kChunk> checked;
+    for (std::size_t base = 0; base < rays.size(); base += kChunk) {
+      const std::size_t n = std::min(kChunk, rays.size() - base);
+      const std::span<const CheckedRay> chunk(checked.data(), n);
+      const std::span<RayHit> chunk_hits = hits.subspan(base, n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Ray& r = rays[base + i];
+        check_ray(r.origin, r.direction, r.max_range, checked[i]);
+        chunk_hits[i] = RayHit{};
+      }
+      switch (config.batch_mode) {
+        case BatchMode::kPacket16:
+          if (packet16_native) {
+            static_batch_packet16(chunk, chunk_hits);
+          } else {
+            static_batch_single(chunk, chunk_hits);  // no native 16-wide packets in this build
+          }
+          break;
+        case BatchMode::kStream:
+          static_batch_stream(chunk, chunk_hits);
+          break;
+        case BatchMode::kSingle:
+          static_batch_single(chunk, chunk_hits);
+          break;
+      }
+      for (std::size_t j = 0; j < vehicles.size(); ++j) {
+        const auto& v = vehicles[j];
+        for (std::size_t i = 0; i < n; ++i) {
+          const CheckedRay& ray = checked[i];
+          if (ray.valid && ray_meets_sphere(ray, swept[j].centre, swept[j].radius,
+                                            std::min(chunk_hits[i].range, ray.max_range))) {
+            pose_vehicle(v, rays[base + i].time_ns, swept[j].posed);
+            intersect_vehicle(v, swept[j].posed, ray, chunk_hits[i]);
+          }
+        }
       }
     }
   }
@@ -614,82 +691,20 @@ RayHit Raycaster::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir
   return hit;
 }
 
-void Raycaster::cast_batch(std::span<const Ray> rays, std::span<RayHit> hits) const {
+void Raycaster::cast_batch(std::span<const Ray> rays, std::span<RayHit> hits, int threads) const {
   if (rays.size() != hits.size()) {
     throw std::invalid_argument("Raycaster::cast_batch: rays and hits differ in size");
   }
-  if (rays.empty()) {
-    return;
-  }
-  TimeNs t_min = rays.front().time_ns;
-  TimeNs t_max = t_min;
-  for (const Ray& r : rays) {
-    t_min = std::min(t_min, r.time_ns);
-    t_max = std::max(t_max, r.time_ns);
-  }
-  // One sphere per vehicle bounding it wherever it is during the batch; only rays that meet it pay
-  // for the exact pose at their own time.
-  struct SweptSphere {
-    Eigen::Vector3d centre;
-    double radius;
-    Impl::PosedVehicle posed;  // at the last ray's time that met the sphere
-  };
-  std::vector<SweptSphere> swept;
-  swept.reserve(impl_->vehicles.size());
-  for (const auto& v : impl_->vehicles) {
-    const auto path = path_vertices(v.trajectory, t_min, t_max);
-    Eigen::Vector2d mid = Eigen::Vector2d::Zero();
-    for (const auto& p : path) {
-      mid += p;
-    }
-    mid /= static_cast<double>(path.size());
-    double spread = 0.0;
-    for (const auto& p : path) {
-      spread = std::max(spread, (p - mid).norm());
-    }
-    swept.push_back({Eigen::Vector3d(mid.x(), mid.y(), v.bound_centre.z()),
-                     v.bound_radius + v.bound_centre.head<2>().norm() + spread,
-                     {}});
-  }
-  // Chunks small enough for the stack: no allocation per ray or per chunk.
-  constexpr std::size_t kChunk = 64;
-  std::array<CheckedRay, kChunk> checked;
-  for (std::size_t base = 0; base < rays.size(); base += kChunk) {
-    const std::size_t n = std::min(kChunk, rays.size() - base);
-    const std::span<const CheckedRay> chunk(checked.data(), n);
-    const std::span<RayHit> chunk_hits = hits.subspan(base, n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Ray& r = rays[base + i];
-      check_ray(r.origin, r.direction, r.max_range, checked[i]);
-      chunk_hits[i] = RayHit{};
-    }
-    switch (impl_->config.batch_mode) {
-      case BatchMode::kPacket16:
-        if (impl_->packet16_native) {
-          impl_->static_batch_packet16(chunk, chunk_hits);
-        } else {
-          impl_->static_batch_single(chunk, chunk_hits);  // no native 16-wide packets in this build
-        }
-        break;
-      case BatchMode::kStream:
-        impl_->static_batch_stream(chunk, chunk_hits);
-        break;
-      case BatchMode::kSingle:
-        impl_->static_batch_single(chunk, chunk_hits);
-        break;
-    }
-    for (std::size_t j = 0; j < impl_->vehicles.size(); ++j) {
-      const auto& v = impl_->vehicles[j];
-      for (std::size_t i = 0; i < n; ++i) {
-        const CheckedRay& ray = checked[i];
-        if (ray.valid && ray_meets_sphere(ray, swept[j].centre, swept[j].radius,
-                                          std::min(chunk_hits[i].range, ray.max_range))) {
-          Impl::pose_vehicle(v, rays[base + i].time_ns, swept[j].posed);
-          impl_->intersect_vehicle(v, swept[j].posed, ray, chunk_hits[i]);
-        }
-      }
-    }
-  }
+  // Runs of whole 64-ray chunks from the batch's start: every ray shares its 16-ray Embree packet with
+  // the same rays as on one thread (which of two faces meeting at an edge a packet reports may depend on
+  // the packet), so the hits are the same bits whatever the thread count. Each run bounds the vehicles
+  // over its own time span only.
+  run_ranges_in_parallel((rays.size() + kChunk - 1) / kChunk, threads,
+                         [&](std::size_t /*run*/, std::size_t begin, std::size_t end) {
+                           const std::size_t first = begin * kChunk;
+                           const std::size_t n = std::min(end * kChunk, rays.size()) - first;
+                           impl_->cast_rays(rays.subspan(first, n), hits.subspan(first, n));
+                         });
 }
 
 }  // namespace rsu::sim

@@ -87,7 +87,10 @@ class Raycaster {
 
   // Same results as cast() for each ray (hits.size() must equal rays.size()), faster for many rays
   // that are close in time: the vehicles' swept bounding spheres are computed once per call.
-  void cast_batch(std::span<const Ray> rays, std::span<RayHit> hits) const;
+  // threads > 1 casts runs of the batch on that many threads, the caller's among them, with the same
+  // hits, bit for bit, as on one; threads start per call, so this pays for a frame's rays, not a
+  // packet's. Throws std::invalid_argument for threads < 1.
+  void cast_batch(std::span<const Ray> rays, std::span<RayHit> hits, int threads = 1) const;
 
   std::size_t vehicle_count() const;
   // The vehicle's mesh in its own frame, as it was put in the BVH.

@@ -14,6 +14,7 @@
 
 #include "geometry_checks.h"
 #include "sim/trajectory.h"
+#include "street_with_traffic.h"
 
 namespace rsu::sim {
 namespace {
@@ -246,42 +247,6 @@ TEST(SimRaycaster, EachRaySeesTheVehicleAtItsOwnTime) {
   }
 }
 
-// A street: facades, lamps, trees, a car driving past and one spinning on the spot.
-Scene street_with_traffic() {
-  Scene scene = ground_only();
-  for (int i = 0; i < 6; ++i) {
-    Building b;
-    b.x = -30.0 + 12.0 * i;
-    b.y = 15.0;
-    scene.buildings.push_back(b);
-    Pole p;
-    p.x = -30.0 + 12.0 * i;
-    p.y = 6.0;
-    p.arm_length = 2.0;
-    p.arm_yaw = -1.57;
-    scene.poles.push_back(p);
-    Tree t;
-    t.x = -25.0 + 12.0 * i;
-    t.y = -8.0;
-    scene.trees.push_back(t);
-  }
-  Vehicle moving;
-  moving.id = 1;
-  Waypoints w;
-  w.points = {{0, {-10.0, 3.0, 0.0}}, {1'000'000'000, {10.0, 3.0, 0.2}}};
-  moving.trajectory = w;
-  scene.vehicles.push_back(moving);
-  Vehicle spinning;
-  spinning.id = 2;
-  Spin s;
-  s.x = 4.0;
-  s.y = -4.0;
-  s.rate_rad_s = 3.0;
-  spinning.trajectory = s;
-  scene.vehicles.push_back(spinning);
-  return scene;
-}
-
 // Every field of the hit, exactly: the batch path must give the single-ray path's hits bit for bit (but for
 // the face reported at an edge both faces meet at the same range).
 // Cast in batches of `packet` rays, as the simulators cast a packet's.
@@ -321,7 +286,7 @@ void expect_same_hits(const Raycaster& rc, const std::vector<Ray>& rays, std::si
 // (12 firings of 32 beams, each beam at its own time, in elevation order) and an Ouster-like packet
 // (16 columns of 128 beams, a column's beams at one time), over a whole rotation each.
 TEST(SimRaycaster, CoherentLidarBatchesMatchSingleRaysExactly) {
-  const Raycaster rc(street_with_traffic());
+  const Raycaster rc(testing::street_with_traffic());
   const Eigen::Vector3d origin(0.0, 0.0, 2.0);
   const auto beam = [](double elevation, double azimuth) {
     return Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
@@ -360,7 +325,7 @@ TEST(SimRaycaster, CoherentLidarBatchesMatchSingleRaysExactly) {
 }
 
 TEST(SimRaycaster, BatchedCastingMatchesSingleRays) {
-  const Scene scene = street_with_traffic();
+  const Scene scene = testing::street_with_traffic();
   std::mt19937 rng(5);
   std::vector<Ray> rays(2000);
   for (std::size_t i = 0; i < rays.size(); ++i) {
