@@ -21,6 +21,7 @@
 #include "eval/corridor/report.h"
 #include "eval/corridor/vehicle_ndt_run.h"
 #include "io/pcd_io.h"
+#include "sim/parallel_indices.h"
 #include "sim/raycaster.h"
 #include "tools/cli/version.h"
 
@@ -29,10 +30,18 @@ using namespace rsu;
 
 namespace {
 
-int run_ndt(const eval::CorridorExperimentConfig& config, const std::filesystem::path& out) {
+// --threads; no default in the options, so that the help does not depend on the machine.
+int threads_option(const po::variables_map& vm) {
+  const int threads = vm.count("threads") ? vm["threads"].as<int>() : sim::hardware_threads();
+  if (threads < 1 || threads > 256)
+    throw std::invalid_argument("--threads must be within [1, 256]");
+  return threads;
+}
+
+int run_ndt(const eval::CorridorExperimentConfig& config, const std::filesystem::path& out, int threads) {
   std::fprintf(stderr, "vehicle NDT self-localization (%s on the roof, %.1f s drive)\n",
                config.vehicle_lidar_model.c_str(), config.duration_s);
-  const auto samples = eval::run_vehicle_ndt(config, [](int done, int total) {
+  const auto samples = eval::run_vehicle_ndt(config, threads, [](int done, int total) {
     if (done % 10 == 0 || done == total)
       std::fprintf(stderr, "\r  NDT frame %d/%d", done, total);
   });
@@ -108,7 +117,7 @@ int run_placement(const eval::CorridorExperimentConfig& config, const std::files
     return std::find(laterals.begin(), laterals.end(), l.first) == laterals.end();
   });
   study.rotation_stride = vm["rotation-stride"].as<int>();
-  study.threads = vm["threads"].as<int>();
+  study.threads = threads_option(vm);
   if (study.models.empty() || study.heights_m.empty() || study.laterals.empty() || study.rotation_stride < 1)
     throw std::invalid_argument(
         "placement: need models, heights, laterals (curb, median, across), stride >= 1");
@@ -141,8 +150,10 @@ int main(int argc, char** argv) {
       "laterals", po::value<std::string>()->default_value("curb,median,across"),
       "placement: curb (y = -8.5 m, the south sidewalk), median (y = 0), across (y = 8.5 m, the north "
       "sidewalk)")("rotation-stride", po::value<int>()->default_value(1),
-                   "placement: score every n-th rotation")("threads", po::value<int>()->default_value(2),
-                                                           "placement: worker threads");
+                   "placement: score every n-th rotation")("threads", po::value<int>(),
+                                                           "worker threads: placements at once (placement), "
+                                                           "each frame's rays (ndt); default: the machine's "
+                                                           "hardware threads");
   // The positional arguments, named in the usage line above rather than listed as options.
   po::options_description all;
   all.add(options).add_options()("command", po::value<std::string>(), "ndt, report or map")(
@@ -162,7 +173,7 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(out);
     const std::string command = vm["command"].as<std::string>();
     if (command == "ndt")
-      return run_ndt(config, out);
+      return run_ndt(config, out, threads_option(vm));
     if (command == "report")
       return run_report(config, out);
     if (command == "map")

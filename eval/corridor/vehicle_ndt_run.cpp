@@ -43,7 +43,7 @@ void deskew(std::vector<lidar::LidarPoint>& points, TimeNs t_ref, double speed, 
 
 }  // namespace
 
-std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
+std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config, int threads,
                                        const std::function<void(int, int)>& progress) {
   const sim::Scene& scene = config.scenario.scene;
   const sim::Vehicle& vehicle = find_vehicle(scene, config.vehicle_id);
@@ -86,7 +86,7 @@ std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
     const double speed = predicted ? predicted->state(fusion::kSpeed) : 0.0;
     const double yaw_rate = predicted ? predicted->state(fusion::kYawRate) : 0.0;
 
-    sim::SimulatedFrame frame = lidar.simulate_frame(start);
+    sim::SimulatedFrame frame = lidar.simulate_frame(start, std::nullopt, threads);
     deskew(frame.frame.points, t_ref, speed, yaw_rate, config.vehicle_lidar_mount);
     const NdtResult r = ndt.align(frame.frame.points, config.vehicle_lidar_mount, guess);
     // The guess's predictor keeps the fixed covariance it is tuned with, whichever NDT reports: the poses

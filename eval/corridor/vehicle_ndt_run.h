@@ -24,8 +24,9 @@ struct NdtSample {
   Pose2 truth;                 // the true pose at time_ns
 };
 
-// progress(done, total) is called after each frame.
-std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config,
+// Each frame is simulated on `threads` threads (the same frame on any count); progress(done, total) is
+// called after each frame.
+std::vector<NdtSample> run_vehicle_ndt(const CorridorExperimentConfig& config, int threads,
                                        const std::function<void(int, int)>& progress = {});
 
 }  // namespace rsu::eval

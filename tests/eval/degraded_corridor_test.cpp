@@ -23,7 +23,7 @@ NdtDriveErrors ndt_drive_errors(const std::string& experiment_file) {
   const CorridorExperimentConfig config = load_corridor_experiment(experiment_file);
   NdtDriveErrors e;
   int n = 0;
-  for (const NdtSample& s : run_vehicle_ndt(config)) {
+  for (const NdtSample& s : run_vehicle_ndt(config, 1)) {
     if (std::abs(s.truth.x - config.scenario.lidar.mount.x) > 36.0)
       continue;
     e.mae_m += std::hypot(s.pose.x - s.truth.x, s.pose.y - s.truth.y);
