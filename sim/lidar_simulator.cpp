@@ -334,9 +334,12 @@ SimulatedFrame LidarSimulator::simulate_frame(TimeNs start, const std::optional<
   result.truth.resize(packets * per_packet);
   std::vector<RunResult> runs(range_count(packets, threads));
   run_ranges_in_parallel(packets, threads, [&](std::size_t r, std::size_t begin, std::size_t stop) {
-    runs[r].first_point = begin * per_packet;
+    // Counted on this thread's stack and stored once: neighbouring runs' counts share a cache line.
+    RunResult run;
+    run.first_point = begin * per_packet;
     write_packets(k_first + static_cast<std::int64_t>(begin), k_first + static_cast<std::int64_t>(stop),
-                  start, end, sector, result, runs[r]);
+                  start, end, sector, result, run);
+    runs[r] = run;
   });
   result.frame.start_ns = std::numeric_limits<TimeNs>::max();
   result.frame.end_ns = std::numeric_limits<TimeNs>::min();

@@ -147,21 +147,20 @@ std::int64_t OusterSimulator::packet_index_at(TimeNs t) const {
 
 std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns,
                                     std::vector<std::uint8_t>& out) const {
-  scratch_.resize(std::max<std::size_t>(scratch_.size(), 1));
-  return packet(k, clock_offset_ns, out, scratch_.front());
+  return packet(k, clock_offset_ns, out, scratch_);
 }
 
 std::size_t OusterSimulator::packets(std::int64_t first, TimeNs clock_offset_ns,
                                      std::span<std::vector<std::uint8_t>> out, int threads) const {
   // Each run of packets with its own buffers; every packet is the one packet() makes, whichever thread
-  // made it.
-  const std::size_t runs = range_count(out.size(), threads);
-  scratch_.resize(std::max(scratch_.size(), runs));
-  std::vector<std::size_t> vehicle_returns(runs, 0);
+  // made it. A run counts on its own stack and stores once: neighbouring counts share a cache line.
+  std::vector<std::size_t> vehicle_returns(range_count(out.size(), threads), 0);
   run_ranges_in_parallel(out.size(), threads, [&](std::size_t run, std::size_t begin, std::size_t end) {
+    Scratch scratch;
+    std::size_t sum = 0;
     for (std::size_t i = begin; i < end; ++i)
-      vehicle_returns[run] +=
-          packet(first + static_cast<std::int64_t>(i), clock_offset_ns, out[i], scratch_[run]);
+      sum += packet(first + static_cast<std::int64_t>(i), clock_offset_ns, out[i], scratch);
+    vehicle_returns[run] = sum;
   });
   return std::accumulate(vehicle_returns.begin(), vehicle_returns.end(), std::size_t{0});
 }

@@ -65,7 +65,7 @@ class OusterSimulator {
   std::size_t packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out) const;
   // Packets first, first + 1, ... into out[0], out[1], ..., each as packet() makes it, on `threads`
   // threads (the caller's among them; started per call: for a frame's packets, not one's). Returns
-  // their vehicle returns summed. Throws std::invalid_argument for threads < 1. Not thread-safe either.
+  // their vehicle returns summed. Throws std::invalid_argument for threads < 1.
   std::size_t packets(std::int64_t first, TimeNs clock_offset_ns, std::span<std::vector<std::uint8_t>> out,
                       int threads) const;
 
@@ -93,9 +93,7 @@ class OusterSimulator {
 
   lidar::ouster::Metadata metadata_;
   std::vector<Beam> beams_;
-  // Reused packet after packet and call after call (one simulator per thread): [0] by packet(), one a run
-  // by packets(). Fresh buffers per frame cost page faults that outweighed a second thread (bench/sim).
-  mutable std::vector<Scratch> scratch_;
+  mutable Scratch scratch_;  // packet()'s, reused packet after packet (one simulator per thread)
   lidar::ouster::PacketLayout layout_;
   Eigen::Isometry3d mount_;
   NoiseModel noise_;
