@@ -104,6 +104,17 @@ void write_v2i(const fs::path& dir) {
   refusal.reason = rsu::v2i::RefusalReason::kReplyToMismatch;
   refusal.detail = "port";
   write_file(dir / "refusal", rsu_signer.encode(refusal, kNow));
+
+  rsu::v2i::FixWithheld withheld;
+  withheld.rsu_id = 3;
+  withheld.vehicle_id = 7;
+  withheld.announcement_sequence = 1;
+  withheld.sweep_time = kNow;
+  withheld.reason = rsu::v2i::FixWithheldReason::kPositionUnbounded;
+  withheld.position_sigma_m = 0.73;
+  withheld.max_position_sigma_m = 0.5;
+  withheld.packets_lost_nearby = true;
+  write_file(dir / "fix_withheld", rsu_signer.encode(withheld, kNow));
 }
 
 // rsu_datagram framing: { u8 source, u16 ms since the previous, u16 length, bytes }.

@@ -67,6 +67,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check_reencodes(*r, decoded.body.index());
   } else if (const auto* f = std::get_if<AnnouncementRefusal>(&decoded.body)) {
     check_reencodes(*f, decoded.body.index());
+  } else if (const auto* w = std::get_if<FixWithheld>(&decoded.body)) {
+    (void)to_string(w->reason);
+    check_reencodes(*w, decoded.body.index());
   }
   return 0;
 }

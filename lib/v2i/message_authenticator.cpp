@@ -38,6 +38,8 @@ AuthVerdict check_rights(const security::TrustEntry& entry, const MessageBody& b
     rsu_id = r->rsu_id;
   } else if (const auto* f = std::get_if<AnnouncementRefusal>(&body)) {
     rsu_id = f->rsu_id;
+  } else if (const auto* w = std::get_if<FixWithheld>(&body)) {
+    rsu_id = w->rsu_id;
   }
   if (entry.role != security::SignerRole::kRsu)
     return AuthVerdict::kWrongRole;

@@ -27,6 +27,7 @@ class MessageSigner {
   std::vector<std::uint8_t> encode(const Correction& m, TimeNs now) { return seal(m, now); }
   std::vector<std::uint8_t> encode(const RsuAdvertisement& m, TimeNs now) { return seal(m, now); }
   std::vector<std::uint8_t> encode(const AnnouncementRefusal& m, TimeNs now) { return seal(m, now); }
+  std::vector<std::uint8_t> encode(const FixWithheld& m, TimeNs now) { return seal(m, now); }
 
   bool signs() const { return key_.has_value(); }
   const security::SigningKey* key() const { return key_ ? &*key_ : nullptr; }

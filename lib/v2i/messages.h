@@ -145,4 +145,55 @@ struct AnnouncementRefusal {
   std::string detail;
 };
 
+// Why an RSU sends a vehicle it swept no correction (proto/v2i.proto FixWithheldReason).
+enum class FixWithheldReason : std::uint8_t {
+  kUnspecified = 0,        // a value this receiver does not know; never sent
+  kPositionUnbounded = 1,  // its position open over more than a fix may claim (position_sigma_m says)
+  kYawUnobserved = 2,      // no seen face tells its heading, and none usable was announced
+  kInconsistent = 3,       // a box of the announced size contradicts the points or the announced heading
+  kNoOwnCluster = 4,       // no cluster near it known to be its own rather than a neighbour's
+  kNoFit = 5,              // too few or scattered points on it to fit a box
+  kOutOfCoverage = 6,      // its box lies beyond the RSU's coverage radius
+  kMount = 7,              // fixed, but the RSU withholds every fix: its LiDAR moved (mount_cause)
+  kCount,
+};
+
+inline const char* to_string(FixWithheldReason r) {
+  switch (r) {
+    case FixWithheldReason::kPositionUnbounded:
+      return "position_unbounded";
+    case FixWithheldReason::kYawUnobserved:
+      return "yaw_unobserved";
+    case FixWithheldReason::kInconsistent:
+      return "inconsistent";
+    case FixWithheldReason::kNoOwnCluster:
+      return "no_own_cluster";
+    case FixWithheldReason::kNoFit:
+      return "no_fit";
+    case FixWithheldReason::kOutOfCoverage:
+      return "out_of_coverage";
+    case FixWithheldReason::kMount:
+      return "mount";
+    case FixWithheldReason::kUnspecified:
+    case FixWithheldReason::kCount:
+      break;
+  }
+  return "unspecified";
+}
+
+// RSU -> vehicle: it was swept, and gets no correction for that rotation, and why.
+struct FixWithheld {
+  std::uint32_t protocol_version = kProtocolVersion;
+  std::uint64_t rsu_id = 0;
+  std::uint64_t vehicle_id = 0;
+  std::uint32_t announcement_sequence = 0;
+  TimeNs sweep_time = 0;
+  FixWithheldReason reason = FixWithheldReason::kUnspecified;
+  // kPositionUnbounded: the sigma the fix would have stated (larger axis, m) and the largest sent (m).
+  std::optional<double> position_sigma_m;
+  std::optional<double> max_position_sigma_m;
+  bool packets_lost_nearby = false;  // the RSU judged it by its stricter rules for an incomplete sweep
+  FixesWithheld mount_cause = FixesWithheld::kNone;  // kMount: why the RSU withholds its fixes
+};
+
 }  // namespace rsu::v2i

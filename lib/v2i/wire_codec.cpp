@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "v2i/wire_codec.h"
 
+#include <cmath>
 #include <cstring>
 
 #include "proto/v2i.pb.h"
@@ -11,13 +12,11 @@ namespace {
 namespace pb = ::rsu::v2i::v2;
 
 bool read_covariance(const pb::Covariance3& in, Eigen::Matrix3d& out) {
-  if (in.row_major_size() != 9) {
+  if (in.row_major_size() != 9)
     return false;
-  }
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 3; ++c)
       out(r, c) = in.row_major(3 * r + c);
-    }
   }
   return true;
 }
@@ -25,9 +24,8 @@ bool read_covariance(const pb::Covariance3& in, Eigen::Matrix3d& out) {
 void write_covariance(const Eigen::Matrix3d& in, pb::Covariance3& out) {
   out.clear_row_major();
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 3; ++c)
       out.add_row_major(in(r, c));
-    }
   }
 }
 
@@ -63,6 +61,18 @@ pb::YawResolution write_yaw_resolution(YawResolution in) {
       break;
   }
   return pb::YAW_RESOLUTION_UNRESOLVED;
+}
+
+// A wire enum's value, or `unknown` for one this code does not know (a newer sender's, or garbage).
+template <typename Enum>
+Enum read_enum(int value, Enum known_end, Enum unknown) {
+  return value >= 0 && value < static_cast<int>(known_end) ? static_cast<Enum>(value) : unknown;
+}
+
+// kUnknown is a receiver's reading, never sent: an RSU that has a reason names it.
+pb::FixesWithheld write_fixes_withheld(FixesWithheld w) {
+  return w == FixesWithheld::kUnknown || w == FixesWithheld::kCount ? pb::FIXES_WITHHELD_NONE
+                                                                    : static_cast<pb::FixesWithheld>(w);
 }
 
 DecodeStatus read_announcement(const pb::VehicleAnnouncement& in, VehicleAnnouncement& out) {
@@ -105,18 +115,16 @@ DecodeStatus read_correction(const pb::Correction& in, Correction& out) {
   return DecodeStatus::kOk;
 }
 
-void read_advertisement(const pb::RsuAdvertisement& in, RsuAdvertisement& out) {
+DecodeStatus read_advertisement(const pb::RsuAdvertisement& in, RsuAdvertisement& out) {
   out.rsu_id = in.rsu_id();
   const auto& p = in.lidar_pose();
   out.lidar_pose = {p.x(), p.y(), p.z(), p.roll(), p.pitch(), p.yaw()};
   out.coverage_radius_m = in.coverage_radius_m();
   out.correction_port = in.correction_port();
   out.announcement_port = in.announcement_port();
-  const int withheld = in.fixes_withheld();
-  out.fixes_withheld = withheld >= 0 && withheld < static_cast<int>(FixesWithheld::kUnknown)
-                           ? static_cast<FixesWithheld>(withheld)
-                           : FixesWithheld::kUnknown;
+  out.fixes_withheld = read_enum(in.fixes_withheld(), FixesWithheld::kUnknown, FixesWithheld::kUnknown);
   out.mount_error_at_radius_m = in.mount_error_at_radius_m();
+  return DecodeStatus::kOk;
 }
 
 // A detail the vehicle may print: printable ASCII, short (proto/v2i.proto AnnouncementRefusal).
@@ -124,10 +132,7 @@ DecodeStatus read_refusal(const pb::AnnouncementRefusal& in, AnnouncementRefusal
   out.rsu_id = in.rsu_id();
   out.vehicle_id = in.vehicle_id();
   out.announcement_sequence = in.announcement_sequence();
-  const int reason = static_cast<int>(in.reason());
-  out.reason = reason > 0 && reason < static_cast<int>(RefusalReason::kCount)
-                   ? static_cast<RefusalReason>(reason)
-                   : RefusalReason::kUnspecified;
+  out.reason = read_enum(in.reason(), RefusalReason::kCount, RefusalReason::kUnspecified);
   if (in.detail().size() > kMaxRefusalDetailBytes)
     return DecodeStatus::kParseError;
   for (const char c : in.detail()) {
@@ -136,6 +141,38 @@ DecodeStatus read_refusal(const pb::AnnouncementRefusal& in, AnnouncementRefusal
   }
   out.detail = in.detail();
   return DecodeStatus::kOk;
+}
+
+// A sigma is a length or absent (proto/v2i.proto FixWithheld): anything else makes the notice unreadable.
+bool read_sigma(bool present, double value, std::optional<double>& out) {
+  if (present)
+    out = value;
+  return !present || (std::isfinite(value) && value >= 0.0);
+}
+
+DecodeStatus read_fix_withheld(const pb::FixWithheld& in, FixWithheld& out) {
+  out.rsu_id = in.rsu_id();
+  out.vehicle_id = in.vehicle_id();
+  out.announcement_sequence = in.announcement_sequence();
+  out.sweep_time = in.sweep_time_ns();
+  out.reason = read_enum(in.reason(), FixWithheldReason::kCount, FixWithheldReason::kUnspecified);
+  out.packets_lost_nearby = in.packets_lost_nearby();
+  out.mount_cause = read_enum(in.mount_cause(), FixesWithheld::kUnknown, FixesWithheld::kUnknown);
+  const bool sigmas_read =
+      read_sigma(in.has_position_sigma_m(), in.position_sigma_m(), out.position_sigma_m) &&
+      read_sigma(in.has_max_position_sigma_m(), in.max_position_sigma_m(), out.max_position_sigma_m);
+  return sigmas_read ? DecodeStatus::kOk : DecodeStatus::kParseError;
+}
+
+// One body read by `read`, carrying the envelope's protocol version; its status.
+template <typename Wire, typename Body>
+DecodeStatus read_body(const Wire& in, DecodeStatus (*read)(const Wire&, Body&), std::uint32_t version,
+                       MessageBody& out) {
+  Body body;
+  body.protocol_version = version;
+  const DecodeStatus status = read(in, body);
+  out = std::move(body);
+  return status;
 }
 
 void write_announcement(const VehicleAnnouncement& a, pb::VehicleAnnouncement& out) {
@@ -187,9 +224,7 @@ void write_advertisement(const RsuAdvertisement& r, pb::RsuAdvertisement& out) {
   out.set_coverage_radius_m(r.coverage_radius_m);
   out.set_correction_port(r.correction_port);
   out.set_announcement_port(r.announcement_port);
-  // kUnknown is a receiver's reading, never sent: an RSU that has a reason names it.
-  if (r.fixes_withheld != FixesWithheld::kUnknown && r.fixes_withheld != FixesWithheld::kCount)
-    out.set_fixes_withheld(static_cast<pb::FixesWithheld>(r.fixes_withheld));
+  out.set_fixes_withheld(write_fixes_withheld(r.fixes_withheld));
   out.set_mount_error_at_radius_m(r.mount_error_at_radius_m);
 }
 
@@ -199,6 +234,20 @@ void write_refusal(const AnnouncementRefusal& r, pb::AnnouncementRefusal& out) {
   out.set_announcement_sequence(r.announcement_sequence);
   out.set_reason(static_cast<pb::RefusalReason>(r.reason));
   out.set_detail(r.detail.substr(0, kMaxRefusalDetailBytes));
+}
+
+void write_fix_withheld(const FixWithheld& f, pb::FixWithheld& out) {
+  out.set_rsu_id(f.rsu_id);
+  out.set_vehicle_id(f.vehicle_id);
+  out.set_announcement_sequence(f.announcement_sequence);
+  out.set_sweep_time_ns(f.sweep_time);
+  out.set_reason(static_cast<pb::FixWithheldReason>(f.reason));
+  if (f.position_sigma_m)
+    out.set_position_sigma_m(*f.position_sigma_m);
+  if (f.max_position_sigma_m)
+    out.set_max_position_sigma_m(*f.max_position_sigma_m);
+  out.set_packets_lost_nearby(f.packets_lost_nearby);
+  out.set_mount_cause(write_fixes_withheld(f.mount_cause));
 }
 
 // Wraps a filled payload in the envelope, signing the payload's serialized bytes as they go out.
@@ -287,36 +336,23 @@ DecodedMessage decode_payload(const Envelope& envelope) {
   }
   out.header.generation_time = message.generation_time_ns();
   out.header.sequence = message.sequence();
+  const std::uint32_t version = envelope.protocol_version;
   switch (message.body_case()) {
-    case pb::V2iPayload::kAnnouncement: {
-      VehicleAnnouncement a;
-      a.protocol_version = envelope.protocol_version;
-      out.status = read_announcement(message.announcement(), a);
-      out.body = std::move(a);
+    case pb::V2iPayload::kAnnouncement:
+      out.status = read_body(message.announcement(), read_announcement, version, out.body);
       break;
-    }
-    case pb::V2iPayload::kCorrection: {
-      Correction c;
-      c.protocol_version = envelope.protocol_version;
-      out.status = read_correction(message.correction(), c);
-      out.body = std::move(c);
+    case pb::V2iPayload::kCorrection:
+      out.status = read_body(message.correction(), read_correction, version, out.body);
       break;
-    }
-    case pb::V2iPayload::kAdvertisement: {
-      RsuAdvertisement r;
-      r.protocol_version = envelope.protocol_version;
-      read_advertisement(message.advertisement(), r);
-      out.status = DecodeStatus::kOk;
-      out.body = std::move(r);
+    case pb::V2iPayload::kAdvertisement:
+      out.status = read_body(message.advertisement(), read_advertisement, version, out.body);
       break;
-    }
-    case pb::V2iPayload::kRefusal: {
-      AnnouncementRefusal r;
-      r.protocol_version = envelope.protocol_version;
-      out.status = read_refusal(message.refusal(), r);
-      out.body = std::move(r);
+    case pb::V2iPayload::kRefusal:
+      out.status = read_body(message.refusal(), read_refusal, version, out.body);
       break;
-    }
+    case pb::V2iPayload::kFixWithheld:
+      out.status = read_body(message.fix_withheld(), read_fix_withheld, version, out.body);
+      break;
     default:
       out.status = DecodeStatus::kNoBody;
       break;
@@ -376,6 +412,13 @@ std::vector<std::uint8_t> encode_v2i_message(const AnnouncementRefusal& r, const
   return seal(payload, r.protocol_version, header, signer);
 }
 
+std::vector<std::uint8_t> encode_v2i_message(const FixWithheld& f, const MessageHeader& header,
+                                             const security::SigningKey* signer) {
+  pb::V2iPayload payload;
+  write_fix_withheld(f, *payload.mutable_fix_withheld());
+  return seal(payload, f.protocol_version, header, signer);
+}
+
 std::vector<std::uint8_t> encode_v2i_message(const VehicleAnnouncement& a) {
   return encode_v2i_message(a, {a.generation_time, a.sequence}, nullptr);
 }
@@ -390,6 +433,10 @@ std::vector<std::uint8_t> encode_v2i_message(const RsuAdvertisement& r) {
 
 std::vector<std::uint8_t> encode_v2i_message(const AnnouncementRefusal& r) {
   return encode_v2i_message(r, {}, nullptr);
+}
+
+std::vector<std::uint8_t> encode_v2i_message(const FixWithheld& f) {
+  return encode_v2i_message(f, {}, nullptr);
 }
 
 }  // namespace rsu::v2i

@@ -34,7 +34,7 @@ enum class DecodeStatus : std::uint8_t {
   kTooLarge,
   kParseError,           // the envelope or its payload is not protobuf of the expected message
   kUnsupportedVersion,   // protocol_version is not kProtocolVersion (a version 1 datagram, say)
-  kNoBody,               // parsed, but no announcement/correction/advertisement/refusal in it
+  kNoBody,               // parsed, but none of the bodies this code knows in it (a newer sender's)
   kMalformedCovariance,  // a covariance without exactly 9 values
   kCount,
 };
@@ -60,8 +60,8 @@ struct DecodedEnvelope {
   Envelope envelope;  // meaningful only when status is kOk
 };
 
-using MessageBody =
-    std::variant<std::monostate, VehicleAnnouncement, Correction, RsuAdvertisement, AnnouncementRefusal>;
+using MessageBody = std::variant<std::monostate, VehicleAnnouncement, Correction, RsuAdvertisement,
+                                 AnnouncementRefusal, FixWithheld>;
 
 struct DecodedMessage {
   DecodeStatus status = DecodeStatus::kParseError;
@@ -91,13 +91,16 @@ std::vector<std::uint8_t> encode_v2i_message(const RsuAdvertisement& advertiseme
                                              const MessageHeader& header, const security::SigningKey* signer);
 std::vector<std::uint8_t> encode_v2i_message(const AnnouncementRefusal& refusal, const MessageHeader& header,
                                              const security::SigningKey* signer);
+std::vector<std::uint8_t> encode_v2i_message(const FixWithheld& notice, const MessageHeader& header,
+                                             const security::SigningKey* signer);
 
 // Unsigned, with the header taken from the body (announcement: its generation time and sequence;
-// correction: sweep time and sequence; advertisement, refusal: zeros): for tests about something else and
-// tools in insecure mode.
+// correction: sweep time and sequence; advertisement, refusal, fix withheld: zeros): for tests about
+// something else and tools in insecure mode.
 std::vector<std::uint8_t> encode_v2i_message(const VehicleAnnouncement& announcement);
 std::vector<std::uint8_t> encode_v2i_message(const Correction& correction);
 std::vector<std::uint8_t> encode_v2i_message(const RsuAdvertisement& advertisement);
 std::vector<std::uint8_t> encode_v2i_message(const AnnouncementRefusal& refusal);
+std::vector<std::uint8_t> encode_v2i_message(const FixWithheld& notice);
 
 }  // namespace rsu::v2i

@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <variant>
 #include <vector>
@@ -179,6 +181,96 @@ TEST(WireCodec, RefusalRoundTripAndItsDetailChecked) {
   const DecodedMessage unknown = with_detail("x", 9);
   ASSERT_EQ(unknown.status, DecodeStatus::kOk);
   EXPECT_EQ(std::get<AnnouncementRefusal>(unknown.body).reason, RefusalReason::kUnspecified);
+}
+
+FixWithheld withheld_notice() {
+  FixWithheld n;
+  n.rsu_id = 3;
+  n.vehicle_id = 7;
+  n.announcement_sequence = 4'000'000'001U;
+  n.sweep_time = kNow - 37;
+  n.reason = FixWithheldReason::kPositionUnbounded;
+  n.position_sigma_m = 0.731;
+  n.max_position_sigma_m = 0.1;
+  n.packets_lost_nearby = true;
+  return n;
+}
+
+// A withheld-fix notice keeps every field; absent sigmas stay absent, a zero one present.
+TEST(WireCodec, FixWithheldRoundTripKeepsEveryField) {
+  const DecodedMessage m = decode_v2i_message(encode_v2i_message(withheld_notice()));
+  ASSERT_EQ(m.status, DecodeStatus::kOk);
+  const auto& back = std::get<FixWithheld>(m.body);
+  EXPECT_EQ(back.rsu_id, 3U);
+  EXPECT_EQ(back.vehicle_id, 7U);
+  EXPECT_EQ(back.announcement_sequence, 4'000'000'001U);
+  EXPECT_EQ(back.sweep_time, kNow - 37);
+  EXPECT_EQ(back.reason, FixWithheldReason::kPositionUnbounded);
+  EXPECT_EQ(back.position_sigma_m, 0.731);
+  EXPECT_EQ(back.max_position_sigma_m, 0.1);
+  EXPECT_TRUE(back.packets_lost_nearby);
+  EXPECT_EQ(back.mount_cause, FixesWithheld::kNone);
+
+  FixWithheld mount = withheld_notice();
+  mount.reason = FixWithheldReason::kMount;
+  mount.mount_cause = FixesWithheld::kMountSuspected;
+  mount.position_sigma_m.reset();
+  mount.max_position_sigma_m = 0.0;
+  mount.packets_lost_nearby = false;
+  const DecodedMessage m2 = decode_v2i_message(encode_v2i_message(mount));
+  ASSERT_EQ(m2.status, DecodeStatus::kOk);
+  const auto& back2 = std::get<FixWithheld>(m2.body);
+  EXPECT_EQ(back2.reason, FixWithheldReason::kMount);
+  EXPECT_EQ(back2.mount_cause, FixesWithheld::kMountSuspected);
+  EXPECT_FALSE(back2.position_sigma_m.has_value());
+  EXPECT_EQ(back2.max_position_sigma_m, 0.0);
+  EXPECT_FALSE(back2.packets_lost_nearby);
+}
+
+// A reason or mount cause this code does not know (a newer RSU's) reads as unspecified / unknown, never
+// as another; a sigma that is no length (NaN, infinite, negative) makes the notice unreadable.
+TEST(WireCodec, FixWithheldUnknownValuesAndBadSigmas) {
+  v2::V2iPayload p;
+  p.mutable_fix_withheld()->set_vehicle_id(7);
+  p.mutable_fix_withheld()->set_reason(static_cast<v2::FixWithheldReason>(42));
+  p.mutable_fix_withheld()->set_mount_cause(static_cast<v2::FixesWithheld>(17));
+  const DecodedMessage unknown = decode_v2i_message(wrap(p));
+  ASSERT_EQ(unknown.status, DecodeStatus::kOk);
+  EXPECT_EQ(std::get<FixWithheld>(unknown.body).reason, FixWithheldReason::kUnspecified);
+  EXPECT_EQ(std::get<FixWithheld>(unknown.body).mount_cause, FixesWithheld::kUnknown);
+  p.mutable_fix_withheld()->set_reason(static_cast<v2::FixWithheldReason>(-1));
+  EXPECT_EQ(std::get<FixWithheld>(decode_v2i_message(wrap(p)).body).reason, FixWithheldReason::kUnspecified);
+
+  for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity(), -0.01}) {
+    v2::V2iPayload sigma;
+    sigma.mutable_fix_withheld()->set_position_sigma_m(bad);
+    EXPECT_EQ(decode_v2i_message(wrap(sigma)).status, DecodeStatus::kParseError) << bad;
+    v2::V2iPayload bound;
+    bound.mutable_fix_withheld()->set_max_position_sigma_m(bad);
+    EXPECT_EQ(decode_v2i_message(wrap(bound)).status, DecodeStatus::kParseError) << bad;
+  }
+}
+
+// Cut anywhere, a notice never decodes as one; padded beyond a datagram it is too large; and a body
+// this code does not know (as field 7 is to an older receiver) is a payload without a body.
+TEST(WireCodec, FixWithheldTruncatedOversizedAndUnknownBodies) {
+  const std::vector<std::uint8_t> bytes = encode_v2i_message(withheld_notice());
+  ASSERT_FALSE(bytes.empty());
+  for (std::size_t n = 1; n < bytes.size(); ++n) {
+    const std::vector<std::uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
+    EXPECT_NE(decode_v2i_message(cut).status, DecodeStatus::kOk) << "length " << n;
+  }
+  v2::SignedV2iMessage padded;
+  padded.set_protocol_version(kProtocolVersion);
+  EXPECT_TRUE(padded.ParseFromArray(bytes.data(), static_cast<int>(bytes.size())));
+  padded.set_signature(std::string(kMaxDatagramBytes, 'x'));
+  EXPECT_EQ(decode_v2i_message(serialise(padded)).status, DecodeStatus::kTooLarge);
+
+  // V2iPayload field 15, length-delimited, 2 bytes: a body from a later version.
+  v2::SignedV2iMessage later;
+  later.set_protocol_version(kProtocolVersion);
+  later.set_payload(std::string("\x7a\x02\x08\x01", 4));
+  EXPECT_EQ(decode_v2i_message(serialise(later)).status, DecodeStatus::kNoBody);
 }
 
 TEST(WireCodec, EmptyAndOversizedInputsAreRefused) {
