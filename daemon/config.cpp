@@ -281,6 +281,15 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
     f.child("release_margin_deg").fail("must be <= 30 deg");
 }
 
+// v2i.refusal_notices, v2i.withheld_notices: whether, and how often, a vehicle is told why it gets nothing.
+void read_notices(const YamlField& n, core::NoticeConfig& r) {
+  n.expect_map({"enabled", "per_vehicle_interval_s", "rate_per_s"});
+  if (n.has("enabled"))
+    r.enabled = bool_of(n.child("enabled"));
+  r.per_vehicle_interval_s = n.positive_or("per_vehicle_interval_s", r.per_vehicle_interval_s);
+  r.rate_per_s = n.positive_or("rate_per_s", r.rate_per_s);
+}
+
 void read_v2i(const YamlField& f, DaemonConfig& c) {
   // The key before v2i.reply_to: a configuration written for it names its replacement instead of
   // "unknown field" (true checked the address only; false trusted any reply_to, which no policy does now).
@@ -289,7 +298,7 @@ void read_v2i(const YamlField& f, DaemonConfig& c) {
         .fail(
             "replaced by reply_to: write `reply_to: match_address` for true, `reply_to: use_source` for "
             "false (vehicles behind NAT), or leave it out for the default match_address_and_port");
-  f.expect_map({"listen_address", "port", "reply_to", "refusal_notices", "advertisement",
+  f.expect_map({"listen_address", "port", "reply_to", "refusal_notices", "withheld_notices", "advertisement",
                 "receive_buffer_bytes", "verifier_thread"});
   if (f.has("listen_address"))
     c.v2i_listen_address = address_of(f.child("listen_address"));
@@ -311,15 +320,10 @@ void read_v2i(const YamlField& f, DaemonConfig& c) {
     else
       r.fail("expected match_address_and_port, match_address or use_source, got \"" + v + "\"");
   }
-  if (f.has("refusal_notices")) {
-    const YamlField n = f.child("refusal_notices");
-    n.expect_map({"enabled", "per_vehicle_interval_s", "rate_per_s"});
-    core::RefusalNoticeConfig& r = c.core.refusal_notices;
-    if (n.has("enabled"))
-      r.enabled = bool_of(n.child("enabled"));
-    r.per_vehicle_interval_s = n.positive_or("per_vehicle_interval_s", r.per_vehicle_interval_s);
-    r.rate_per_s = n.positive_or("rate_per_s", r.rate_per_s);
-  }
+  if (f.has("refusal_notices"))
+    read_notices(f.child("refusal_notices"), c.core.refusal_notices);
+  if (f.has("withheld_notices"))
+    read_notices(f.child("withheld_notices"), c.core.withheld_notices);
   if (f.has("advertisement")) {
     const YamlField a = f.child("advertisement");
     a.expect_map({"enabled", "address", "port", "interval_s"});

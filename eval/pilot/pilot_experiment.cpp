@@ -10,7 +10,6 @@
 
 #include "common/angles.h"
 #include "common/random.h"
-#include "common/symmetric_eigen.h"
 #include "eval/consistency.h"
 #include "lidar/sensor_model.h"
 #include "perception/ground_height_filter.h"
@@ -67,8 +66,7 @@ MethodCell score(const perception::VehicleFix& fix, const Pose2& truth) {
   const Eigen::Matrix2d position_cov = fix.corrected.covariance.topLeftCorner<2, 2>();
   m.center_err_m = error.norm();
   m.yaw_err_deg = axis_error_deg(pose.yaw, truth.yaw);
-  const SymmetricEigen2 eig(position_cov);
-  m.sigma_m = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+  m.sigma_m = perception::position_sigma_m(fix.corrected);
   m.yaw_sigma_deg = rad_to_deg(std::sqrt(std::max(0.0, fix.corrected.covariance(2, 2))));
   m.position_nees = position_nees(error, position_cov);
   return m;

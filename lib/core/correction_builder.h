@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The correction a vehicle receives (proto/v2i.proto Correction, messages.h): its fix (pose of the
 // footprint centre, covariance, how the yaw was settled) with the sweep time and the quality block,
-// encoded with the RSU's per-vehicle sequence and signed in signed mode. Also the RSU's advertisement,
-// which its signer seals too.
+// encoded with the RSU's per-vehicle sequence and signed in signed mode. Also the RSU's advertisement and
+// its notices, which its signer seals too.
 #pragma once
 
 #include <cstddef>
@@ -67,8 +67,12 @@ class CorrectionBuilder {
   // fixes are withheld now and why (with a mount cause, the estimated error at the coverage radius).
   std::vector<std::uint8_t> advertisement(TimeNs now, v2i::FixesWithheld withheld = v2i::FixesWithheld::kNone,
                                           double mount_error_at_radius_m = 0.0);
-  // The encoded refusal notice, signed in signed mode (empty if encoding failed).
-  std::vector<std::uint8_t> refusal(const v2i::AnnouncementRefusal& notice, TimeNs now) {
+  // An encoded notice (refusal_notices.h, withheld_notices.h), signed in signed mode (empty if encoding
+  // failed): the one signer seals everything the RSU sends, so a vehicle's replay window sees one counter.
+  std::vector<std::uint8_t> notice(const v2i::AnnouncementRefusal& notice, TimeNs now) {
+    return signer_.encode(notice, now);
+  }
+  std::vector<std::uint8_t> notice(const v2i::FixWithheld& notice, TimeNs now) {
     return signer_.encode(notice, now);
   }
 

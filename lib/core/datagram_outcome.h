@@ -54,7 +54,7 @@ struct DatagramOutcome {
   std::uint32_t announcement_sequence = 0;                 // when decoded as an announcement
   ReplyToCheck reply_to = ReplyToCheck::kMatches;
   // RsuCore::on_datagram: the encoded AnnouncementRefusal to send to the datagram's source (signed in
-  // signed mode), when the refusal deserves one and the limits allow it (rsu/refusal_notices.h).
+  // signed mode), when the refusal deserves one and the limits allow it (core/refusal_notices.h).
   std::vector<std::uint8_t> refusal_notice;
 
   bool accepted() const { return stage == DatagramStage::kAccepted; }

@@ -78,6 +78,7 @@ bool GatheredVehicleFixer::fits_vehicle(const perception::RectangleFit& fit,
 GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a,
                                       bool lost_nearby, std::vector<Eigen::Vector2d> occluders) const {
   GatheredFix out;
+  out.sweep_time = held.sweep_time();  // also for no fix: a notice names the rotation (withheld_notices.h)
   perception::LidarGeometry lidar = lidar_;
   lidar.complete_sweep = !lost_nearby;
   lidar.occluders = std::move(occluders);
@@ -105,7 +106,6 @@ GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::Vehicl
     out.outcome = GatheredFixOutcome::no_assigned_cluster;
     return out;
   }
-  out.sweep_time = held.sweep_time();
   out.fix = fix_announced(held.points, a, out.sweep_time, lidar);
   if (held.parts > 1 && fits_vehicle(out.fix.fit, a, out.sweep_time)) {
     out.fragments_merged = held.parts - 1;

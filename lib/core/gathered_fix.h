@@ -34,7 +34,7 @@ enum class GatheredFixOutcome {
 struct GatheredFix {
   GatheredFixOutcome outcome = GatheredFixOutcome::fit_failed;
   perception::VehicleFix fix;
-  TimeNs sweep_time = 0;                // mean firing time of the points it was fixed from
+  TimeNs sweep_time = 0;                // mean firing time of the points it was fixed (or held) from
   std::size_t fragments_merged = 0;     // extra parts fixed with the assigned one
   std::size_t fragments_unmatched = 0;  // parts left out (someone else's)
 

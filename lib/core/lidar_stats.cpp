@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "core/lidar_stats.h"
 
+#include "common/angles.h"
+
 namespace rsu::core {
 
 void report(const lidar::PacketOrderStats& o, const perception::SweepClustererStats& s, const LidarStats& l,
@@ -36,6 +38,33 @@ void report(const lidar::PacketOrderStats& o, const perception::SweepClustererSt
   out.add("lidar", "corrections_withheld_mount", l.corrections_withheld_mount);
   out.add("lidar", "fixes_prepared", l.fixes_prepared);
   out.add("lidar", "fixes_prepared_used", l.fixes_prepared_used);
+}
+
+void report_mount(const calibration::MountMonitor* monitor, std::uint64_t rotations_gappy, CounterList& out) {
+  const calibration::MountMonitorStats none;
+  const calibration::MountMonitorStats& m = monitor != nullptr ? monitor->stats() : none;
+  out.add("mount", "rotations_checked", m.rotations_checked);
+  out.add("mount", "rotations_beyond_tolerance", m.rotations_beyond_tolerance);
+  out.add("mount", "rotations_unobservable", m.rotations_unobservable);
+  out.add("mount", "rotations_gappy", rotations_gappy);
+  out.add("mount", "rotations_mismatched", m.rotations_mismatched);
+  out.add("mount", "rotations_unverifiable", m.rotations_unverifiable);
+  out.add("mount", "stops", m.stops);
+  out.add("mount", "stops_unconfirmed", m.stops_unconfirmed);
+  out.add("mount", "resumes", m.resumes);
+  out.add_level("mount", "fixes_stopped", monitor != nullptr && !monitor->serving() ? 1 : 0);
+  if (monitor == nullptr || m.rotations_checked == 0)
+    return;
+  const calibration::MountDrift& d = monitor->last();
+  out.add_measured("mount", "error_at_radius_m", d.error_at_radius_m);
+  out.add_measured("mount", "error_sigma_m", d.error_sigma_m);
+  out.add_measured("mount", "motion_x_m", d.motion.x);
+  out.add_measured("mount", "motion_y_m", d.motion.y);
+  out.add_measured("mount", "motion_z_m", d.motion.z);
+  out.add_measured("mount", "motion_roll_deg", rad_to_deg(d.motion.roll));
+  out.add_measured("mount", "motion_pitch_deg", rad_to_deg(d.motion.pitch));
+  out.add_measured("mount", "motion_yaw_deg", rad_to_deg(d.motion.yaw));
+  out.add_measured("mount", "matched_points", static_cast<double>(d.matches));
 }
 
 }  // namespace rsu::core

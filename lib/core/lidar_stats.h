@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "calibration/mount_monitor.h"
 #include "common/counter_list.h"
 #include "lidar/packet_order.h"
 #include "perception/sweep_clusterer.h"
@@ -42,5 +43,8 @@ struct LidarStats {
 // sweep.* (the sweep clusterer's) and lidar.*.
 void report(const lidar::PacketOrderStats& order, const perception::SweepClustererStats& sweep,
             const LidarStats& stats, CounterList& out);
+// mount.*: the mount monitor's counts (zeros without one: nullptr), whether fixes are stopped, its latest
+// estimate (measured); rotations_gappy: the rotations not checked for want of packets (RsuCore).
+void report_mount(const calibration::MountMonitor* monitor, std::uint64_t rotations_gappy, CounterList& out);
 
 }  // namespace rsu::core

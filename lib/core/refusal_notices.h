@@ -3,9 +3,9 @@
 // refusals deserve a notice, and how many may go out. Only an announcement that passed authentication
 // gets one (in signed mode the vehicle's own signature, so a forged source address cannot aim notices at
 // a third party), never one the registry took as a retransmission, and each goes to the datagram's
-// source, smaller than what it answers. At most one per vehicle per `per_vehicle_interval`, and
-// `rate_per_s` in all: a vehicle that keeps announcing wrongly learns why within a second, and a flood
-// of refusable announcements cannot turn the RSU into a sender.
+// source, smaller than what it answers. At most one per vehicle per `per_vehicle_interval_s`, and
+// `rate_per_s` in all (notice_limits.h): a vehicle that keeps announcing wrongly learns why within a
+// second, and a flood of refusable announcements cannot turn the RSU into a sender.
 #pragma once
 
 #include <cstdint>
@@ -14,10 +14,9 @@
 #include "common/counter_list.h"
 #include "common/time.h"
 #include "core/datagram_outcome.h"
+#include "core/notice_limits.h"
 #include "core/rsu_core_config.h"
 #include "v2i/messages.h"
-#include "v2i/source_rate_limiter.h"
-#include "v2i/token_bucket.h"
 
 namespace rsu::core {
 
@@ -27,22 +26,20 @@ std::optional<v2i::AnnouncementRefusal> refusal_for(const DatagramOutcome& outco
 
 class RefusalNotices {
  public:
-  explicit RefusalNotices(const RefusalNoticeConfig& config);
+  explicit RefusalNotices(const NoticeConfig& config) : limits_(config) {}
 
   // The notice to send for `outcome` (received at `now`), if it deserves one and the limits allow it.
   std::optional<v2i::AnnouncementRefusal> consider(const DatagramOutcome& outcome, std::uint64_t rsu_id,
                                                    TimeNs now);
-  void prune(TimeNs now) { per_vehicle_.prune(now); }
+  void prune(TimeNs now) { limits_.prune(now); }
   // This one under `next` (SIGHUP): the counts go on, the limits start afresh.
-  RefusalNotices reloaded(const RefusalNoticeConfig& next) const;
+  RefusalNotices reloaded(const NoticeConfig& next) const;
 
   // refusal.notices (to be sent), refusal.rate_limited (deserved one, the limits held it back)
   void report(CounterList& out) const;
 
  private:
-  RefusalNoticeConfig config_;
-  v2i::SourceRateLimiter per_vehicle_;
-  v2i::TokenBucket overall_;
+  NoticeLimits limits_;
   std::uint64_t notices_ = 0;
   std::uint64_t rate_limited_ = 0;
 };

@@ -55,6 +55,8 @@ bool same_background_setup(const RsuCoreConfig& a, const RsuCoreConfig& b) {
 void append(LidarStepResult& into, LidarStepResult&& step) {
   for (OutgoingCorrection& c : step.corrections)
     into.corrections.push_back(std::move(c));
+  for (OutgoingNotice& n : step.withheld_notices)
+    into.withheld_notices.push_back(std::move(n));
   into.background_became_ready = into.background_became_ready || step.background_became_ready;
 }
 
@@ -78,13 +80,14 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       fixer_(config, mount_),
       corrections_(config),
       refusals_(config.refusal_notices),
+      withheld_(config.withheld_notices),
       monitor_assembler_(assembler_config(packets_.decoder().geometry())) {}
 
 DatagramOutcome RsuCore::on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source,
                                      TimeNs now, const v2i::SignatureCheck* checked) {
   DatagramOutcome out = announcements_.on_datagram(bytes, source, now, checked);
   if (const auto notice = refusals_.consider(out, config_.rsu_id, now))
-    out.refusal_notice = corrections_.refusal(*notice, now);
+    out.refusal_notice = corrections_.notice(*notice, now);
   return out;
 }
 
@@ -162,13 +165,14 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
     return;
   // Packets lost while the sweep crossed the vehicle (or just before its first points: its leading part
   // may be what was lost).
+  const bool lost = lost_near(held);
   const GatheredFix fix =
-      prepared_.fix(fixer_, held, vehicle->announcement, lost_near(held), occluders_.of(held), lidar_stats_);
+      prepared_.fix(fixer_, held, vehicle->announcement, lost, occluders_.of(held), lidar_stats_);
   count(fix, lidar_stats_);
-  if (!fix.ok())
-    return;
-  if (!mount_serving()) {
+  if (fix.ok() && !mount_serving())
     ++lidar_stats_.corrections_withheld_mount;  // the LiDAR moved: its fixes are off (rsu_core.h)
+  if (!fix.ok() || !mount_serving()) {
+    tell_withheld(fix, vehicle->announcement, lost, now, result);
     return;
   }
   std::optional<OutgoingCorrection> out =
@@ -179,6 +183,24 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
   }
   ++lidar_stats_.corrections;
   result.corrections.push_back(std::move(*out));
+}
+
+void RsuCore::tell_withheld(const GatheredFix& fix, const v2i::VehicleAnnouncement& a, bool lost_nearby,
+                            TimeNs now, LidarStepResult& result) {
+  if (!withheld_.enabled())
+    return;
+  // A vehicle withheld because the LiDAR moved is told so too, though the advertisement says it: that
+  // goes to one configured address, off by default, where a vehicle may not listen; this to the vehicle.
+  std::optional<v2i::FixWithheld> notice = withheld_notice(
+      fix, a, config_.rsu_id, lost_nearby, fixes_withheld(), config_.perception.fix.correction);
+  // A later release of a vehicle corrected in this rotation holds what lay beside or ahead of it.
+  if (!notice ||
+      corrections_.corrected_this_rotation(a.vehicle_id, fix.sweep_time, sweep_.rotation_period_ns()))
+    return;
+  notice = withheld_.consider(std::move(*notice), now);
+  std::vector<std::uint8_t> bytes = notice ? corrections_.notice(*notice, now) : std::vector<std::uint8_t>{};
+  if (!bytes.empty())
+    result.withheld_notices.push_back({a.reply_to, std::move(bytes), std::move(*notice)});
 }
 
 LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, TimeNs now) {
@@ -252,18 +274,7 @@ void RsuCore::follow_geometry() {
 }
 
 v2i::FixesWithheld RsuCore::fixes_withheld() const {
-  if (mount_serving())
-    return v2i::FixesWithheld::kNone;
-  switch (monitor_->cause()) {
-    case calibration::StopCause::kSuspected:
-      return v2i::FixesWithheld::kMountSuspected;
-    case calibration::StopCause::kMismatch:
-      return v2i::FixesWithheld::kMountMismatch;
-    case calibration::StopCause::kMoved:
-    case calibration::StopCause::kNone:
-      break;
-  }
-  return v2i::FixesWithheld::kMountMoved;
+  return mount_serving() ? v2i::FixesWithheld::kNone : mount_withheld(monitor_->cause());
 }
 
 std::vector<std::uint8_t> RsuCore::advertisement(TimeNs now) {
@@ -379,6 +390,7 @@ std::size_t RsuCore::expire(TimeNs now) {
   const std::size_t n = announcements_.expire(now);
   corrections_.forget_unregistered(announcements_.registry(), now);
   refusals_.prune(now);
+  withheld_.prune(now);
   return n;
 }
 
@@ -401,6 +413,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
   fresh.sweep_.follow(fresh.packets_.decoder().geometry());
   fresh.corrections_ = std::move(corrections_).reloaded(next);
   fresh.refusals_ = refusals_.reloaded(next.refusal_notices);
+  fresh.withheld_ = withheld_.reloaded(next.withheld_notices);
   *this = std::move(fresh);
   return summary;
 }
@@ -408,43 +421,17 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
 void RsuCore::report(CounterList& out) const {
   announcements_.report(out);
   refusals_.report(out);
+  withheld_.report(out);
   packets_.report(out);
   core::report(packets_.order_stats(), clusterer_.stats(), lidar_stats_, out);
   packets_.report_clock(out);
-  report_mount(out);
+  core::report_mount(monitor_ ? &*monitor_ : nullptr, mount_rotations_gappy_, out);
 }
 
 std::vector<std::pair<std::string, std::uint64_t>> RsuCore::counters() const {
   CounterList out;
   report(out);
   return out.entries();
-}
-
-void RsuCore::report_mount(CounterList& out) const {
-  const calibration::MountMonitorStats none;
-  const calibration::MountMonitorStats& m = monitor_ ? monitor_->stats() : none;
-  out.add("mount", "rotations_checked", m.rotations_checked);
-  out.add("mount", "rotations_beyond_tolerance", m.rotations_beyond_tolerance);
-  out.add("mount", "rotations_unobservable", m.rotations_unobservable);
-  out.add("mount", "rotations_gappy", mount_rotations_gappy_);
-  out.add("mount", "rotations_mismatched", m.rotations_mismatched);
-  out.add("mount", "rotations_unverifiable", m.rotations_unverifiable);
-  out.add("mount", "stops", m.stops);
-  out.add("mount", "stops_unconfirmed", m.stops_unconfirmed);
-  out.add("mount", "resumes", m.resumes);
-  out.add_level("mount", "fixes_stopped", mount_serving() ? 0 : 1);
-  if (!monitor_ || m.rotations_checked == 0)
-    return;
-  const calibration::MountDrift& d = monitor_->last();
-  out.add_measured("mount", "error_at_radius_m", d.error_at_radius_m);
-  out.add_measured("mount", "error_sigma_m", d.error_sigma_m);
-  out.add_measured("mount", "motion_x_m", d.motion.x);
-  out.add_measured("mount", "motion_y_m", d.motion.y);
-  out.add_measured("mount", "motion_z_m", d.motion.z);
-  out.add_measured("mount", "motion_roll_deg", rad_to_deg(d.motion.roll));
-  out.add_measured("mount", "motion_pitch_deg", rad_to_deg(d.motion.pitch));
-  out.add_measured("mount", "motion_yaw_deg", rad_to_deg(d.motion.yaw));
-  out.add_measured("mount", "matched_points", static_cast<double>(d.matches));
 }
 
 }  // namespace rsu::core

@@ -39,6 +39,7 @@
 #include "core/sweep_occluders.h"
 #include "core/sweep_position.h"
 #include "core/vehicle_gatherer.h"
+#include "core/withheld_notices.h"
 #include "lidar/frame_assembler.h"
 #include "lidar/lidar_decoder.h"
 #include "lidar/packet_order.h"
@@ -52,6 +53,8 @@ namespace rsu::core {
 
 struct LidarStepResult {
   std::vector<OutgoingCorrection> corrections;
+  // Vehicles swept but not corrected, told why (core/withheld_notices.h): sent like the corrections.
+  std::vector<OutgoingNotice> withheld_notices;
   bool background_became_ready = false;  // learning finished during this step (log it)
   // on_lidar_packet: what the decoder made of the payload (refused ones: the reason, to log).
   lidar::PacketOutcome packet;
@@ -74,7 +77,7 @@ class RsuCore {
   // it is authenticated first (v2i/message_authenticator.h): dropped and counted unless a trusted
   // vehicle key signed it for that vehicle id, fresh and not replayed.
   // A refused announcement that passed authentication may get a refusal notice for its source
-  // (DatagramOutcome::refusal_notice; rsu/refusal_notices.h). `checked`: its signature checked ahead
+  // (DatagramOutcome::refusal_notice; core/refusal_notices.h). `checked`: its signature checked ahead
   // (v2i::check_signature_ahead, on the daemon's receiver thread), taken instead of verifying it here.
   DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now,
                               const v2i::SignatureCheck* checked = nullptr);
@@ -171,6 +174,9 @@ class RsuCore {
   std::vector<tracking::VehicleHypothesis> predict_announced(
       std::span<const perception::Detection> detections, TimeNs now);
   void correct(const HeldVehicle& held, TimeNs now, LidarStepResult& result);
+  // The vehicle's notice that `fix` is not sent, and why, when it is owed one and the limits allow it.
+  void tell_withheld(const GatheredFix& fix, const v2i::VehicleAnnouncement& a, bool lost_nearby, TimeNs now,
+                     LidarStepResult& result);
   // Fits and fixes the clusters every laser has swept past but not closed yet (prepared_fixes.h).
   void prepare_fixes(TimeNs now);
   // Fixes `held` now and keeps the fix for its release (prepared_fixes.h).
@@ -187,8 +193,6 @@ class RsuCore {
   // A sample of the sweep's static points (sensor frame; map_scratch_ holds them in the map frame) for
   // the mount monitor, which checks each whole rotation.
   void watch_mount(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame);
-  // mount.*: the monitor's counts, whether fixes are stopped, its latest estimate (measured).
-  void report_mount(CounterList& out) const;
   // Passes a changed rotation rate or packet period measured by the decoder on to the stages.
   void follow_geometry();
 
@@ -210,6 +214,7 @@ class RsuCore {
   std::vector<std::tuple<std::uint64_t, std::size_t, std::size_t>> prepared_held_;
   CorrectionBuilder corrections_;
   RefusalNotices refusals_;
+  WithheldNotices withheld_;
   LidarStats lidar_stats_;
 
   std::vector<lidar::LidarPoint> ordered_scratch_;  // a packet released by the reorder stage

@@ -75,13 +75,15 @@ enum class TimeSource {
 // their address is not what the RSU sees).
 enum class ReplyToPolicy : std::uint8_t { kMatchAddressAndPort, kMatchAddress, kUseSource };
 
-// Refusal notices (rsu/refusal_notices.h): at most one per vehicle per interval, and rate_per_s in all.
-struct RefusalNoticeConfig {
+// Notices that tell a vehicle why the RSU sends it nothing (core/refusal_notices.h: an announcement
+// refused; core/withheld_notices.h: a fix withheld): at most one per vehicle per interval, and
+// rate_per_s in all.
+struct NoticeConfig {
   bool enabled = true;
   double per_vehicle_interval_s = 1.0;
   double rate_per_s = 50.0;
 
-  bool operator==(const RefusalNoticeConfig&) const = default;
+  bool operator==(const NoticeConfig&) const = default;
 };
 
 struct RsuCoreConfig {
@@ -139,8 +141,13 @@ struct RsuCoreConfig {
   // otherwise anyone could aim the RSU's corrections at a third party (a reflection attack), or a
   // vehicle announcing from one port would miss corrections sent to another.
   ReplyToPolicy reply_to = ReplyToPolicy::kMatchAddressAndPort;
-  // Telling a vehicle why its announcement was refused (rsu/refusal_notices.h).
-  RefusalNoticeConfig refusal_notices;
+  // Telling a vehicle why its announcement was refused (core/refusal_notices.h).
+  NoticeConfig refusal_notices;
+  // Telling a vehicle the LiDAR swept why it gets no correction (core/withheld_notices.h). Each goes to
+  // a registered vehicle at its checked reply_to (no one can aim them elsewhere), so the cap only bounds
+  // what a crowded scene costs the RSU in signatures and sends: higher than the refusals', as every
+  // vehicle in view may be owed one each second.
+  NoticeConfig withheld_notices{.rate_per_s = 200.0};
   PeerConfig peers;
 
   // Message security (proto/v2i.proto): signed mode verifies every announcement against the trust list

@@ -9,7 +9,6 @@
 
 #include <Eigen/Core>
 
-#include "common/symmetric_eigen.h"
 #include "perception/box_axis.h"
 #include "perception/box_consistency.h"
 #include "perception/face_envelope.h"
@@ -30,12 +29,6 @@ double fold_half_turn(double a) {
 double logistic(double x) {
   return 1.0 / (1.0 + std::exp(-std::clamp(x, -50.0, 50.0)));
 }
-
-// Packets were lost while the sweep passed the vehicle (LidarGeometry::complete_sweep): any part of it
-// may be missing, so its points bound its place only by containment. Such a fix is sent only when that
-// still places it within this (rsud's fault test, 5 % packet loss: such fixes were 0.23-0.66 m off,
-// where every fix of a complete sweep was within 0.1 m).
-constexpr double kMaxPositionSigmaIncompleteSweepM = 0.1;
 
 struct Frame {
   Eigen::Vector2d origin;
@@ -395,14 +388,6 @@ Eigen::Matrix3d covariance_of(const CorrectedPose& fix, FixEvidence evidence, co
   return fix_covariance(evidence, config.covariance);
 }
 
-// The covariance places the vehicle within what a fix may claim (tighter for an incomplete sweep).
-bool position_bounded(const CorrectedPose& fix, const LidarGeometry& lidar, const CorrectionConfig& config) {
-  const SymmetricEigen2 eig(fix.covariance.topLeftCorner<2, 2>());
-  const double max_sigma =
-      lidar.complete_sweep ? config.max_position_sigma_m : kMaxPositionSigmaIncompleteSweepM;
-  return std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) <= max_sigma;
-}
-
 }  // namespace
 
 CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::Vector2d> outline,
@@ -439,8 +424,12 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   CorrectedPose out = corrected_pose(frame, *box, yaw.decision, prior);
   probe_yaw(view, frame, out, size, yaw_information, *box, yaw_basis);
   out.covariance = covariance_of(out, yaw_basis, *box, yaw.decision, lidar, config);
-  if (!position_bounded(out, lidar, config))
-    return refused(CorrectionStatus::position_unbounded);
+  if (position_sigma_m(out) > max_position_sigma_m(lidar.complete_sweep, config)) {
+    // Refused, with the covariance it would have stated (position_sigma_m): how far from a fix it was.
+    CorrectedPose unbounded = refused(CorrectionStatus::position_unbounded);
+    unbounded.covariance = out.covariance;
+    return unbounded;
+  }
   return out;
 }
 

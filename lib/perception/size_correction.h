@@ -104,6 +104,10 @@ struct CorrectedPose {
   bool ok() const { return status == CorrectionStatus::ok; }
 };
 
+// The position sigma a fix states: the larger axis of its x, y covariance (m). Also kept for a fix
+// refused as position_unbounded: what it would have stated (rsud tells the vehicle how far off it was).
+double position_sigma_m(const CorrectedPose& fix);
+
 struct CorrectionConfig {
   double outside_tolerance_m = 0.15;   // a point farther outside a hypothesis box than this counts against it
   double cover_radius_m = 0.15;        // a point covers a face within this (at least the point spacing)
@@ -199,6 +203,9 @@ double lower_body_height(const VehicleSize& size, const CorrectionConfig& config
 // Up to which height a point can be on the footprint's front or back: the lower body, at most
 // max_end_body_height_m (every point, as for the lower body, when the height is unknown).
 double end_body_height(const VehicleSize& size, const CorrectionConfig& config);
+// The largest position sigma a fix may state (position_unbounded beyond it): max_position_sigma_m, or
+// tighter when packets were lost while the sweep passed the vehicle (LidarGeometry::complete_sweep false).
+double max_position_sigma_m(bool complete_sweep, const CorrectionConfig& config);
 
 CorrectedPose correct_algorithm1(const RectangleFit& fit, const VehicleSize& size,
                                  const Eigen::Vector2d& lidar_xy,

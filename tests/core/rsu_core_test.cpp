@@ -5,11 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -408,6 +411,84 @@ TEST(RsuCore, CorrectionLeavesSoonAfterTheSweepPassedTheVehicle) {
   }
 }
 
+// The notices of one run, as the daemon would send them.
+struct NoticesSent {
+  std::vector<std::pair<OutgoingNotice, TimeNs>> sent;  // with the time each was emitted
+  std::function<void(const LidarStepResult&, TimeNs)> recorder() {
+    return [this](const LidarStepResult& r, TimeNs now) {
+      for (const OutgoingNotice& n : r.withheld_notices)
+        sent.emplace_back(n, now);
+    };
+  }
+};
+
+std::uint64_t withheld_notices_counted(const RsuCore& core) {
+  std::uint64_t n = 0;
+  for (const auto& [name, value] : core.counters())
+    n += name.starts_with("withheld_notice.") ? value : 0;
+  return n;
+}
+
+// Where the RSU cannot bound a seen vehicle's position it sends no fix and tells the vehicle why: the
+// sigma the fix would have stated (the very one a twin RSU with the default bound sent, for the same
+// sweep) against the bound, at most once a second (the rest counted as held back). The twin, which
+// fixes the vehicle, tells it nothing.
+TEST(RsuCore, UnboundedVehicleIsToldWhyOncePerSecondAFixedOneNothing) {
+  const Pose2 truth{17.0, 2.0, 0.4};
+  SimStream stream({static_vehicle(1, truth)}, kEmptyRotations);
+  RsuCoreConfig strict = test_config();
+  strict.perception.fix.correction.max_position_sigma_m = 0.001;  // no fix states that little
+  RsuCore core(strict);
+  RsuCore twin(test_config());
+  const TimeNs t1 = kEmptyRotations * stream.rotation_ns();
+  const TimeNs t_end = t1 + 25 * stream.rotation_ns();  // 2.5 s of the vehicle
+  for (RsuCore* c : {&core, &twin})
+    announce_between(*c, 1, truth, "192.0.2.10", t1 - 100 * kNsPerMs, t_end);
+  NoticesSent notices;
+  stream.run_until(core, &twin, t_end, notices.recorder());
+
+  EXPECT_TRUE(stream.corrections().empty());
+  ASSERT_GE(stream.twin_corrections().size(), 20U);
+  EXPECT_EQ(withheld_notices_counted(twin), 0U);
+  // One at the first rotation, then one a second: at about 1 s and 2 s.
+  ASSERT_EQ(notices.sent.size(), 3U);
+  const std::uint64_t withheld = core.lidar_stats().corrections_failed;
+  EXPECT_GE(withheld, 20U);
+  EXPECT_EQ(counter(core, "withheld_notice.position_unbounded"), 3U);
+  EXPECT_EQ(counter(core, "withheld_notice.rate_limited.position_unbounded"), withheld - 3);
+  for (std::size_t i = 0; i < notices.sent.size(); ++i) {
+    const auto& [out, emitted_at] = notices.sent[i];
+    const v2i::FixWithheld& n = out.notice;
+    EXPECT_EQ(n.reason, v2i::FixWithheldReason::kPositionUnbounded);
+    EXPECT_EQ(n.rsu_id, 77U);
+    EXPECT_EQ(n.vehicle_id, 1U);
+    EXPECT_EQ(n.announcement_sequence, core.registry().find(1, t_end)->announcement.sequence);
+    EXPECT_EQ(out.destination.address, "192.0.2.10");
+    EXPECT_EQ(out.destination.port, testing::kVehiclePort);
+    EXPECT_LE(n.sweep_time, emitted_at);
+    EXPECT_GT(n.sweep_time, emitted_at - stream.rotation_ns());
+    if (i > 0) {
+      EXPECT_GE(n.sweep_time - notices.sent[i - 1].first.notice.sweep_time, 900 * kNsPerMs);
+    }
+    EXPECT_EQ(n.max_position_sigma_m, 0.001);
+    EXPECT_FALSE(n.packets_lost_nearby);
+    EXPECT_EQ(n.mount_cause, v2i::FixesWithheld::kNone);
+    const auto twin_fix = std::find_if(
+        stream.twin_corrections().begin(), stream.twin_corrections().end(),
+        [&](const SimStream::Received& r) { return r.correction.correction.sweep_time == n.sweep_time; });
+    ASSERT_NE(twin_fix, stream.twin_corrections().end()) << "no fix of sweep " << n.sweep_time;
+    perception::CorrectedPose stated;
+    stated.covariance = twin_fix->correction.correction.pose_covariance;
+    ASSERT_TRUE(n.position_sigma_m.has_value());
+    EXPECT_DOUBLE_EQ(*n.position_sigma_m, perception::position_sigma_m(stated));
+    // The bytes say the same, in a datagram no larger than the correction it stands for.
+    const v2i::DecodedMessage m = v2i::decode_v2i_message(out.bytes);
+    ASSERT_EQ(m.status, v2i::DecodeStatus::kOk);
+    EXPECT_EQ(std::get<v2i::FixWithheld>(m.body).sweep_time, n.sweep_time);
+    EXPECT_LT(out.bytes.size(), twin_fix->correction.bytes.size());
+  }
+}
+
 TEST(RsuCore, UnregisteredVehicleGetsNothing) {
   SimStream stream({static_vehicle(1, {17.0, 2.0, 0.4})}, kEmptyRotations);
   RsuCore core(test_config());
@@ -427,6 +508,7 @@ TEST(RsuCore, RegisteredVehicleOutOfViewGetsNothing) {
   EXPECT_TRUE(stream.corrections().empty());
   EXPECT_GE(core.lidar_stats().clusters_unmatched, 2U);
   EXPECT_GE(core.lidar_stats().vehicles_in_batches, 2U);  // it was offered, and matched nothing
+  EXPECT_EQ(withheld_notices_counted(core), 0U);          // not seen: nothing to say
 }
 
 TEST(RsuCore, TwoVehiclesSideBySideAreNotSwapped) {
@@ -711,14 +793,18 @@ TEST(RsuCore, RotationsLackingManyPacketsAreNoMountEvidence) {
 // A LiDAR remounted while rsud was down (issue 17): the background saved under the old mount is loaded as
 // the reference, and the moved sensor's first rotations stop the fixes; the advertisement says so and
 // why. The same sensor unmoved keeps serving and advertises that it does.
-TEST(RsuCore, RemountNoticedAtStartUpAndAdvertised) {
+// Three rotations of the street seen from the roadside mount, as an earlier run saved them.
+std::vector<std::vector<lidar::LidarPoint>> saved_background() {
   std::vector<std::vector<lidar::LidarPoint>> saved;
-  {
-    const sim::LidarSimulator still(lidar::make_vlp16(), testing::roadside_mount(), sim::NoiseModel{},
-                                    testing::street_scene());
-    for (int k = 0; k < 3; ++k)
-      saved.push_back(still.simulate_frame(k * still.rotation_period_ns()).frame.points);
-  }
+  const sim::LidarSimulator still(lidar::make_vlp16(), testing::roadside_mount(), sim::NoiseModel{},
+                                  testing::street_scene());
+  for (int k = 0; k < 3; ++k)
+    saved.push_back(still.simulate_frame(k * still.rotation_period_ns()).frame.points);
+  return saved;
+}
+
+TEST(RsuCore, RemountNoticedAtStartUpAndAdvertised) {
+  const std::vector<std::vector<lidar::LidarPoint>> saved = saved_background();
   for (const double turn_deg : {0.0, 1.0}) {
     RsuCore core(test_config());
     core.load_background(saved);
@@ -749,6 +835,33 @@ TEST(RsuCore, RemountNoticedAtStartUpAndAdvertised) {
     ASSERT_FALSE(notices.empty());
     EXPECT_NE(notices.back().find("fixes stopped"), std::string::npos) << notices.back();
   }
+}
+
+// A vehicle fixed while the LiDAR has turned (the remount above) is told its fix is withheld for the
+// mount, and why (the advertisement's cause), not the fix's sigma: that leaves the mount's error out.
+TEST(RsuCore, VehicleWithheldForTheMountIsToldSo) {
+  RsuCore core(test_config());
+  core.load_background(saved_background());
+  Pose3 turned = testing::roadside_mount();
+  turned.yaw += deg_to_rad(1.0);
+  const Pose2 truth{17.0, 2.0, 0.4};
+  SimStream stream(testing::street_scene(), {static_vehicle(1, truth)}, lidar::make_vlp16(), turned,
+                   sim::NoiseModel{}, 0);
+  const TimeNs end = 12 * stream.rotation_ns();
+  announce_between(core, 1, truth, "192.0.2.10", 0, end);
+  NoticesSent notices;
+  stream.run_until(core, end, notices.recorder());
+  ASSERT_FALSE(core.mount_serving());
+  EXPECT_GT(core.lidar_stats().corrections_withheld_mount, 0U);
+  ASSERT_FALSE(notices.sent.empty());
+  const v2i::FixWithheld& n = notices.sent.front().first.notice;
+  EXPECT_EQ(n.reason, v2i::FixWithheldReason::kMount);
+  EXPECT_EQ(n.mount_cause, v2i::FixesWithheld::kMountSuspected);
+  EXPECT_FALSE(n.position_sigma_m.has_value());
+  EXPECT_EQ(counter(core, "withheld_notice.mount"), notices.sent.size());
+  // Sent before the stop (its first rotations), withheld after it: never both in one rotation.
+  for (const auto& [out, emitted_at] : stream.corrections())
+    EXPECT_LT(out.correction.sweep_time, n.sweep_time);
 }
 
 }  // namespace

@@ -92,5 +92,33 @@ TEST(V2iReplyToConfig, PoliciesAndTheReplacedKeyNamed) {
   EXPECT_NE(old_key.find("`reply_to: match_address` for true"), std::string::npos) << old_key;
 }
 
+// v2i.refusal_notices and v2i.withheld_notices: the documented defaults (deploy/rsud.yaml), every key,
+// and a rate or interval that is not positive refused with its place.
+TEST(V2iNoticesConfig, DefaultsEveryKeyAndLocatedErrors) {
+  const DaemonConfig defaults = parse("");
+  EXPECT_TRUE(defaults.core.withheld_notices.enabled);
+  EXPECT_EQ(defaults.core.withheld_notices.per_vehicle_interval_s, 1.0);
+  EXPECT_EQ(defaults.core.withheld_notices.rate_per_s, 200.0);
+  EXPECT_EQ(defaults.core.refusal_notices.rate_per_s, 50.0);
+  const DaemonConfig c = parse(
+      "v2i:\n"
+      "  withheld_notices: {enabled: false, per_vehicle_interval_s: 2.5, rate_per_s: 20}\n"
+      "  refusal_notices: {rate_per_s: 5}\n");
+  EXPECT_FALSE(c.core.withheld_notices.enabled);
+  EXPECT_EQ(c.core.withheld_notices.per_vehicle_interval_s, 2.5);
+  EXPECT_EQ(c.core.withheld_notices.rate_per_s, 20.0);
+  EXPECT_EQ(c.core.refusal_notices.rate_per_s, 5.0);
+  EXPECT_TRUE(c.core.refusal_notices.enabled);
+  EXPECT_NE(refusal("v2i:\n  withheld_notices: {rate_per_s: 0}\n")
+                .find("/etc/rsud/rsud.yaml:7: v2i.withheld_notices.rate_per_s"),
+            std::string::npos);
+  EXPECT_NE(refusal("v2i:\n  withheld_notices: {per_vehicle_interval_s: -1}\n")
+                .find("v2i.withheld_notices.per_vehicle_interval_s"),
+            std::string::npos);
+  EXPECT_NE(
+      refusal("v2i:\n  withheld_notices: {every: 1}\n").find("v2i.withheld_notices.every: unknown field"),
+      std::string::npos);
+}
+
 }  // namespace
 }  // namespace rsu::daemon

@@ -228,10 +228,15 @@ TEST(Correction, BadInputGivesAStatusNotACrash) {
   for (const auto& cloud : {std::vector<Eigen::Vector2d>{}, garbage}) {
     EXPECT_EQ(test::correct_flat(fit, cloud, size, lidar, std::nullopt).status,
               CorrectionStatus::yaw_unobserved);
-    // With the vehicle's heading, nothing places the box: withheld, and why.
-    EXPECT_EQ(test::correct_flat(fit, cloud, size, lidar, YawPrior{0.5, 0.1}).status,
-              CorrectionStatus::position_unbounded);
+    // With the vehicle's heading, nothing places the box: withheld, and why, with the sigma it would
+    // have stated (rsud tells the vehicle how far from a fix it was) beyond the bound.
+    const CorrectedPose unbounded = test::correct_flat(fit, cloud, size, lidar, YawPrior{0.5, 0.1});
+    EXPECT_EQ(unbounded.status, CorrectionStatus::position_unbounded);
+    EXPECT_GT(position_sigma_m(unbounded), max_position_sigma_m(true, CorrectionConfig{}));
   }
+  // A sweep that lacked packets near the vehicle is held to a tighter bound.
+  EXPECT_EQ(max_position_sigma_m(true, CorrectionConfig{}), CorrectionConfig{}.max_position_sigma_m);
+  EXPECT_LT(max_position_sigma_m(false, CorrectionConfig{}), CorrectionConfig{}.max_position_sigma_m);
 }
 
 }  // namespace
