@@ -444,24 +444,32 @@ void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
     become_ready_if_possible();
   }
   send_corrections(result.corrections);
+  send_withheld_notices(result.withheld_notices);
   // The mount check of a rotation just completed (~1 ms), once its corrections are on the wire.
   core_.check_mount_pending();
+}
+
+bool RsuDaemon::send_to_vehicle(const v2i::UdpEndpoint& destination, std::span<const std::uint8_t> bytes,
+                                const std::string& what) {
+  boost::system::error_code ec;
+  const auto address = asio::ip::make_address(destination.address, ec);
+  if (!ec) {
+    const udp::endpoint to(address, static_cast<unsigned short>(destination.port));
+    v2i_socket_.send_to(asio::buffer(bytes.data(), bytes.size()), to, 0, ec);
+  }
+  if (ec) {
+    bad_input_.report(
+        what, "to " + destination.address + ":" + std::to_string(destination.port) + ": " + ec.message());
+  }
+  return !ec;
 }
 
 void RsuDaemon::send_corrections(const std::vector<core::OutgoingCorrection>& corrections) {
   if (dds_)
     dds_->publish(corrections);
   for (const core::OutgoingCorrection& c : corrections) {
-    boost::system::error_code ec;
-    const auto address = asio::ip::make_address(c.destination.address, ec);
-    if (!ec) {
-      const udp::endpoint to(address, static_cast<unsigned short>(c.destination.port));
-      v2i_socket_.send_to(asio::buffer(c.bytes), to, 0, ec);
-    }
-    if (ec) {
+    if (!send_to_vehicle(c.destination, c.bytes, "correction_send")) {
       ++correction_sends_failed_;
-      bad_input_.report("correction_send", "to " + c.destination.address + ":" +
-                                               std::to_string(c.destination.port) + ": " + ec.message());
       continue;
     }
     ++corrections_sent_;
@@ -471,6 +479,17 @@ void RsuDaemon::send_corrections(const std::vector<core::OutgoingCorrection>& co
         c.correction.sequence, c.correction.vehicle_id, c.destination.address, c.destination.port,
         c.correction.pose.x, c.correction.pose.y, c.correction.pose.yaw, c.correction.quality.points_used,
         c.correction.quality.faces_seen);
+  }
+}
+
+void RsuDaemon::send_withheld_notices(const std::vector<core::OutgoingNotice>& notices) {
+  for (const core::OutgoingNotice& n : notices) {
+    if (!send_to_vehicle(n.destination, n.bytes, "withheld_notice_send")) {
+      ++withheld_notice_sends_failed_;
+      continue;
+    }
+    spdlog::debug("vehicle {} told its fix of sweep {} is withheld: {}", n.notice.vehicle_id,
+                  n.notice.sweep_time, v2i::to_string(n.notice.reason));
   }
 }
 
@@ -719,6 +738,7 @@ CounterList RsuDaemon::stats() {
   out.add("state", "background_save_failed", state_counts_.background_save_failed);
   out.add_level("state", "mount_from_calibration", config_.mount_source != "lidar.mount" ? 1 : 0);
   out.add("", "refusal_sends_failed", refusal_sends_failed_);
+  out.add("", "withheld_notice_sends_failed", withheld_notice_sends_failed_);
   out.add("advertisement", "sent", advertisements_.sent);
   out.add("advertisement", "saying_fixes_withheld", advertisements_.saying_fixes_withheld);
   core_.report(out);
@@ -884,6 +904,7 @@ void RsuDaemon::drain_and_stop() {
   // Pending clusters (a vehicle the sweep was still on) are corrected and sent now, not lost.
   const core::LidarStepResult last = core_.flush(clock_now());
   send_corrections(last.corrections);
+  send_withheld_notices(last.withheld_notices);
   log_counters(true);
   write_stats_file();
   write_metrics();

@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <ostream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,10 @@ class RsuDaemon {
   void on_peer_announcement(std::span<const std::uint8_t> datagram, const core::PeerProvenance& from);
   void handle_lidar_result(const core::LidarStepResult& result);
   void send_corrections(const std::vector<core::OutgoingCorrection>& corrections);
+  void send_withheld_notices(const std::vector<core::OutgoingNotice>& notices);
+  // One datagram to a vehicle; a failure is reported as `what` (rate-limited) and returns false.
+  bool send_to_vehicle(const v2i::UdpEndpoint& destination, std::span<const std::uint8_t> bytes,
+                       const std::string& what);
   void become_ready_if_possible();
 
   void every(boost::asio::steady_timer& timer, steady::duration period, void (RsuDaemon::*tick)());
@@ -185,6 +190,7 @@ class RsuDaemon {
   std::uint64_t correction_sends_failed_ = 0;
   std::uint64_t lidar_packets_rejected_ = 0;
   std::uint64_t refusal_sends_failed_ = 0;
+  std::uint64_t withheld_notice_sends_failed_ = 0;
   // The metrics' histograms (seconds). Bounds: a packet takes microseconds, a batch that fits vehicles
   // milliseconds; a correction leaves well within a rotation (0.1 s) of its sweep; a sensor on the
   // host's clock is behind by its transit (sub-millisecond), one that is not by anything.

@@ -281,6 +281,11 @@ class VehicleClient::Impl : public std::enable_shared_from_this<Impl> {
           stats_.refusals.add(filter_.last_refusal().reason);
           stats_.last_refusal = ReceivedRefusal{filter_.last_refusal(), clock_(), edge::to_text(sender_)};
         }
+        if (verdict == CorrectionVerdict::kFixWithheld) {
+          stats_.fixes_withheld.add(filter_.last_fix_withheld().reason);
+          stats_.last_fix_withheld =
+              ReceivedFixWithheld{filter_.last_fix_withheld(), clock_(), edge::to_text(sender_)};
+        }
         if (verdict == CorrectionVerdict::kAdvertisement) {
           stats_.advertisements.add(filter_.last_advertisement().fixes_withheld);
           stats_.last_advertisement =

@@ -55,6 +55,14 @@ struct ReceivedAdvertisement {
   std::string sender;        // "ADDR:PORT" of the datagram's source
 };
 
+// An RSU's notice that it swept this vehicle and sends it no correction for that rotation, and why
+// (proto/v2i.proto FixWithheld), authenticated like a correction.
+struct ReceivedFixWithheld {
+  v2i::FixWithheld notice;
+  TimeNs received_time = 0;  // client clock
+  std::string sender;        // "ADDR:PORT" of the datagram's source
+};
+
 struct VehicleClientStats {
   std::uint64_t announcements_sent = 0;  // datagrams, one per RSU per announcement
   std::uint64_t keepalive_announcements = 0;
@@ -62,20 +70,27 @@ struct VehicleClientStats {
   std::uint64_t announcements_refused = 0;  // announce() refused the state (see announce())
   std::uint64_t datagrams_received = 0;
   std::uint64_t receive_errors = 0;
-  EnumCounter<CorrectionVerdict> corrections;  // accepted, and rejected by reason (and refusal notices)
-  EnumCounter<v2i::RefusalReason> refusals;    // refusal notices received, by the RSU's reason
+  // accepted, rejected by reason, and the RSUs' other messages (notices, advertisements)
+  EnumCounter<CorrectionVerdict> corrections;
+  EnumCounter<v2i::RefusalReason> refusals;  // refusal notices received, by the RSU's reason
   std::optional<ReceivedRefusal> last_refusal;
   // Advertisements received, by what they say about the fixes (none: corrections are sent).
   EnumCounter<v2i::FixesWithheld> advertisements;
   std::optional<ReceivedAdvertisement> last_advertisement;
+  // Fixes an RSU withheld and said so (FixWithheld notices), by its reason.
+  EnumCounter<v2i::FixWithheldReason> fixes_withheld;
+  std::optional<ReceivedFixWithheld> last_fix_withheld;
   EnumCounter<v2i::AuthVerdict> authentication;  // every datagram's signature/replay verdict
   std::uint64_t sequence_restarts = 0;           // an RSU restarted (CorrectionFilter)
   std::uint64_t dropped_unpolled = 0;            // over max_pending_corrections
 
   std::uint64_t accepted() const { return corrections.count(CorrectionVerdict::kAccepted); }
+  // Datagrams refused as corrections, not counting the RSUs' other messages it took (notices,
+  // advertisements).
   std::uint64_t rejected() const {
     return corrections.total() - accepted() - corrections.count(CorrectionVerdict::kRefusal) -
-           corrections.count(CorrectionVerdict::kAdvertisement);
+           corrections.count(CorrectionVerdict::kAdvertisement) -
+           corrections.count(CorrectionVerdict::kFixWithheld);
   }
 };
 

@@ -33,6 +33,8 @@ const char* to_string(CorrectionVerdict verdict) {
       return "refusal";
     case CorrectionVerdict::kAdvertisement:
       return "advertisement";
+    case CorrectionVerdict::kFixWithheld:
+      return "fix_withheld";
     case CorrectionVerdict::kCount:
       break;
   }
@@ -66,6 +68,12 @@ CorrectionVerdict CorrectionFilter::classify(std::span<const std::uint8_t> datag
       return CorrectionVerdict::kWrongVehicleId;
     last_refusal_ = std::move(*refusal);
     return CorrectionVerdict::kRefusal;
+  }
+  if (auto* withheld = std::get_if<v2i::FixWithheld>(&authenticated.message.body)) {
+    if (withheld->vehicle_id != config_.vehicle_id)
+      return CorrectionVerdict::kWrongVehicleId;
+    last_fix_withheld_ = *withheld;
+    return CorrectionVerdict::kFixWithheld;
   }
   if (auto* advertisement = std::get_if<v2i::RsuAdvertisement>(&authenticated.message.body)) {
     last_advertisement_ = *advertisement;

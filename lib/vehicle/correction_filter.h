@@ -34,6 +34,8 @@ enum class CorrectionVerdict : std::uint8_t {
                     // (authenticated like a correction; last_refusal() says why)
   kAdvertisement,   // not a correction: an RSU's advertisement (authenticated like a correction;
                     // last_advertisement() holds it: whether that RSU withholds its fixes, and why)
+  kFixWithheld,     // not a correction: an RSU swept this vehicle and says why it sends no fix
+                    // (authenticated like a correction; last_fix_withheld() says why)
   kCount,
 };
 
@@ -61,6 +63,8 @@ class CorrectionFilter {
   const EnumCounter<CorrectionVerdict>& counts() const { return counts_; }
   // The refusal notice of the last check() that returned kRefusal.
   const v2i::AnnouncementRefusal& last_refusal() const { return last_refusal_; }
+  // The notice of the last check() that returned kFixWithheld.
+  const v2i::FixWithheld& last_fix_withheld() const { return last_fix_withheld_; }
   // The advertisement of the last check() that returned kAdvertisement.
   const v2i::RsuAdvertisement& last_advertisement() const { return last_advertisement_; }
   // Every datagram's authentication verdict (accepted, or refused by reason).
@@ -86,6 +90,7 @@ class CorrectionFilter {
   EnumCounter<CorrectionVerdict> counts_;
   v2i::AnnouncementRefusal last_refusal_;
   v2i::RsuAdvertisement last_advertisement_;
+  v2i::FixWithheld last_fix_withheld_;
   std::map<std::uint64_t, RsuOrder> order_by_rsu_;
   std::uint64_t checks_ = 0;
   std::uint64_t sequence_restarts_ = 0;

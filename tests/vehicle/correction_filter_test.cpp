@@ -157,5 +157,53 @@ TEST(CorrectionFilter, AdvertisementSayingFixesAreWithheldIsKeptNotFused) {
   EXPECT_EQ(filter.counts().count(CorrectionVerdict::kAdvertisement), 1U);
 }
 
+// An RSU's notice that it withheld this vehicle's fix is authenticated like a correction: kept and
+// counted (never taken for a correction); one for another vehicle, unsigned, forged, signed by a vehicle
+// key or replayed is dropped and counted by its reason, and the last genuine one stays.
+TEST(CorrectionFilter, FixWithheldNoticeIsKeptOnlyWhenGenuineAndOurs) {
+  const v2i::security::SigningKey rsu_key = key_from(1);
+  const v2i::security::SigningKey car_key = key_from(3);
+  CorrectionFilterConfig config{kVehicleId, 64, {}, {}};
+  config.trust_list.add({rsu_key.public_key(), v2i::security::SignerRole::kRsu, {1}});
+  config.trust_list.add({car_key.public_key(), v2i::security::SignerRole::kVehicle, {kVehicleId}});
+  CorrectionFilter filter(config);
+  v2i::MessageSigner rsu(rsu_key);
+  v2i::FixWithheld notice;
+  notice.rsu_id = 1;
+  notice.vehicle_id = kVehicleId;
+  notice.sweep_time = kNow - 40 * kNsPerMs;
+  notice.reason = v2i::FixWithheldReason::kPositionUnbounded;
+  notice.position_sigma_m = 0.73;
+  notice.max_position_sigma_m = 0.5;
+  v2i::Correction out;
+  const std::vector<std::uint8_t> genuine = rsu.encode(notice, kNow);
+  EXPECT_EQ(filter.check(genuine, kNow, out), CorrectionVerdict::kFixWithheld);
+  EXPECT_EQ(filter.last_fix_withheld().reason, v2i::FixWithheldReason::kPositionUnbounded);
+  EXPECT_EQ(filter.last_fix_withheld().position_sigma_m, 0.73);
+
+  v2i::FixWithheld other = notice;
+  other.vehicle_id = kVehicleId + 1;
+  other.reason = v2i::FixWithheldReason::kNoFit;
+  EXPECT_EQ(filter.check(rsu.encode(other, kNow), kNow, out), CorrectionVerdict::kWrongVehicleId);
+  v2i::FixWithheld forged = notice;
+  forged.reason = v2i::FixWithheldReason::kMount;
+  EXPECT_EQ(filter.check(v2i::encode_v2i_message(forged), kNow, out), CorrectionVerdict::kNotAuthentic);
+  EXPECT_EQ(filter.check(v2i::MessageSigner(key_from(2)).encode(forged, kNow), kNow, out),
+            CorrectionVerdict::kNotAuthentic);
+  EXPECT_EQ(filter.check(v2i::MessageSigner(car_key).encode(forged, kNow), kNow, out),
+            CorrectionVerdict::kNotAuthentic);
+  EXPECT_EQ(filter.check(genuine, kNow + 10, out), CorrectionVerdict::kNotAuthentic);
+  EXPECT_EQ(filter.last_fix_withheld().reason, v2i::FixWithheldReason::kPositionUnbounded);
+
+  EXPECT_EQ(filter.counts().count(CorrectionVerdict::kFixWithheld), 1U);
+  EXPECT_EQ(filter.counts().count(CorrectionVerdict::kWrongVehicleId), 1U);
+  EXPECT_EQ(filter.counts().count(CorrectionVerdict::kNotAuthentic), 4U);
+  const auto& a = filter.authentication_counts();
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kUnsigned), 1U);
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kUnknownSigner), 1U);
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kWrongRole), 1U);
+  EXPECT_EQ(a.count(v2i::AuthVerdict::kDuplicate), 1U);
+}
+
 }  // namespace
 }  // namespace rsu::vehicle

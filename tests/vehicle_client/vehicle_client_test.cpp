@@ -370,6 +370,40 @@ v2i::security::SigningKey key_from(std::uint8_t fill) {
 
 // Signed mode over loopback: the RSU can verify the announcements as this vehicle's, and the client
 // uses a correction only when the RSU's key signed it, fresh and not replayed.
+// An RSU's notices that it withheld this vehicle's fix are counted by reason and the latest kept, with
+// who sent it; none is delivered as a correction or counted as a rejected one.
+TEST(VehicleClient, FixWithheldNoticesAreCountedByReasonNeverPolled) {
+  test::FakeRsu rsu;
+  asio::io_context io;
+  VehicleClient client(io, config_for(rsu));
+  const v2i::VehicleAnnouncement a = announce_once(io, client, rsu);
+  auto notice = [&](v2i::FixWithheldReason reason, std::uint64_t vehicle_id) {
+    v2i::FixWithheld n;
+    n.rsu_id = 7;
+    n.vehicle_id = vehicle_id;
+    n.announcement_sequence = a.sequence;
+    n.sweep_time = kStart - 20 * kNsPerMs;
+    n.reason = reason;
+    rsu.send_to(v2i::encode_v2i_message(n), a.reply_to.address, a.reply_to.port);
+  };
+  notice(v2i::FixWithheldReason::kPositionUnbounded, kVehicleId);
+  notice(v2i::FixWithheldReason::kPositionUnbounded, kVehicleId);
+  notice(v2i::FixWithheldReason::kInconsistent, kVehicleId + 1);  // another vehicle's
+  notice(v2i::FixWithheldReason::kNoOwnCluster, kVehicleId);
+  ASSERT_TRUE(run_until(io, [&] { return client.stats().datagrams_received == 4; }));
+  const VehicleClientStats stats = client.stats();
+  EXPECT_EQ(stats.fixes_withheld.count(v2i::FixWithheldReason::kPositionUnbounded), 2U);
+  EXPECT_EQ(stats.fixes_withheld.count(v2i::FixWithheldReason::kNoOwnCluster), 1U);
+  EXPECT_EQ(stats.fixes_withheld.count(v2i::FixWithheldReason::kInconsistent), 0U);
+  EXPECT_EQ(stats.corrections.count(CorrectionVerdict::kFixWithheld), 3U);
+  EXPECT_EQ(stats.corrections.count(CorrectionVerdict::kWrongVehicleId), 1U);
+  EXPECT_EQ(stats.rejected(), 1U);
+  ASSERT_TRUE(stats.last_fix_withheld.has_value());
+  EXPECT_EQ(stats.last_fix_withheld->notice.reason, v2i::FixWithheldReason::kNoOwnCluster);
+  EXPECT_EQ(stats.last_fix_withheld->sender, rsu.endpoint_text());
+  EXPECT_TRUE(client.poll().empty());
+}
+
 TEST(VehicleClient, SignedModeSignsAnnouncementsAndVerifiesCorrectionsBeforeUse) {
   const v2i::security::SigningKey car = key_from(3);
   const v2i::security::SigningKey rsu_key = key_from(4);

@@ -77,6 +77,13 @@ constexpr const char* kAbout =
     "  estimate and the other RSUs; one that disagrees beyond both covariances is excluded, logged,\n"
     "  counted, and readmitted only after a run of consistent fixes).\n"
     "\n"
+    "stderr: what the RSUs say when they send no correction, each logged when its reason changes, else\n"
+    "  once a minute: an announcement refused (\"RSU 1 (ADDR:PORT) refused announcement 12: ...\"), and a\n"
+    "  rotation that swept this vehicle without a fix (\"RSU 1 (ADDR:PORT) withheld the fix of sweep T:\n"
+    "  position_unbounded (sigma S m, at most B m)\"; the reasons: position_unbounded,\n"
+    "  yaw_unobserved, inconsistent, no_own_cluster, no_fit, out_of_coverage, mount), counted in --stats as\n"
+    "  refusal.<reason> and fix_withheld.<reason>.\n"
+    "\n"
     "On EOF it waits --drain-ms for late corrections, prints statistics on stderr (--stats FILE: every\n"
     "counter as \"key value\" lines) and exits 0.\n"
     "\n"
@@ -229,6 +236,23 @@ std::optional<Options> parse_options(int argc, char** argv) {
   return o;
 }
 
+// Whether a line about `what` is due: when it differs from the last one logged, else once a minute.
+class RepeatLimiter {
+ public:
+  bool due(const std::string& what) {
+    const auto now = Steady::now();
+    if (what == last_ && now - at_ < std::chrono::minutes(1))
+      return false;
+    last_ = what;
+    at_ = now;
+    return true;
+  }
+
+ private:
+  std::string last_;
+  Steady::time_point at_{};
+};
+
 class Session {
  public:
   explicit Session(const Options& options)
@@ -277,17 +301,30 @@ class Session {
       return;
     refusals_seen_ = stats.refusals.total();
     const v2i::AnnouncementRefusal& r = stats.last_refusal->refusal;
-    const std::string what = std::to_string(r.rsu_id) + " " + v2i::to_string(r.reason) + ":" + r.detail;
-    const auto now = Steady::now();
-    if (what == last_refusal_logged_ && now - last_refusal_log_ < std::chrono::minutes(1))
+    if (!refusal_log_.due(std::to_string(r.rsu_id) + " " + v2i::to_string(r.reason) + ":" + r.detail))
       return;
-    last_refusal_logged_ = what;
-    last_refusal_log_ = now;
     std::fprintf(stderr,
                  "rsu-vehicle: RSU %llu (%s) refused announcement %u: %s (%s); %llu refusal(s) so far\n",
                  static_cast<unsigned long long>(r.rsu_id), stats.last_refusal->sender.c_str(),
                  r.announcement_sequence, v2i::to_string(r.reason), r.detail.c_str(),
                  static_cast<unsigned long long>(refusals_seen_));
+  }
+
+  // An RSU swept this vehicle and says why it sends no fix: logged when the reason changes, else once a
+  // minute.
+  void log_fixes_withheld() {
+    const VehicleClientStats stats = threaded_.client().stats();
+    if (!stats.last_fix_withheld || stats.fixes_withheld.total() == withheld_seen_)
+      return;
+    withheld_seen_ = stats.fixes_withheld.total();
+    const v2i::FixWithheld& n = stats.last_fix_withheld->notice;
+    if (!withheld_log_.due(std::to_string(n.rsu_id) + " " + v2i::to_string(n.reason)))
+      return;
+    std::fprintf(
+        stderr, "rsu-vehicle: RSU %llu (%s) withheld the fix of sweep %lld: %s; %llu such notice(s) so far\n",
+        static_cast<unsigned long long>(n.rsu_id), stats.last_fix_withheld->sender.c_str(),
+        static_cast<long long>(n.sweep_time), describe(n).c_str(),
+        static_cast<unsigned long long>(withheld_seen_));
   }
 
   // An RSU's advertisement says it withholds its fixes (its LiDAR moved), or that it sends them again:
@@ -318,6 +355,7 @@ class Session {
   // Fuses and records whatever corrections arrived.
   void handle_corrections() {
     log_refusals();
+    log_fixes_withheld();
     log_advertisements();
     for (const ReceivedCorrection& r : threaded_.client().poll()) {
       const vehicle::CorrectionStep step = core_.on_correction(r.correction);
@@ -374,9 +412,10 @@ class Session {
   int refusals_logged_ = 0;
   int events_logged_ = 0;
   std::uint64_t refusals_seen_ = 0;
-  std::string last_refusal_logged_;
+  RepeatLimiter refusal_log_;
+  std::uint64_t withheld_seen_ = 0;
+  RepeatLimiter withheld_log_;
   std::map<std::uint64_t, v2i::FixesWithheld> rsu_withholding_;  // each RSU's latest advertised word
-  Steady::time_point last_refusal_log_{};
   Steady::time_point last_insecure_warning_{};
 };
 

@@ -29,6 +29,21 @@ void for_each_count(const EnumCounter<Enum>& counts, std::size_t first, Write wr
 
 }  // namespace
 
+std::string describe(const v2i::FixWithheld& n) {
+  std::string out = v2i::to_string(n.reason);
+  char detail[96];
+  if (n.position_sigma_m && n.max_position_sigma_m) {
+    std::snprintf(detail, sizeof detail, " (sigma %.3f m, at most %.3f m)", *n.position_sigma_m,
+                  *n.max_position_sigma_m);
+    out += detail;
+  }
+  if (n.reason == v2i::FixWithheldReason::kMount)
+    out += std::string(" (") + v2i::to_string(n.mount_cause) + ")";
+  if (n.packets_lost_nearby)
+    out += ", packets lost nearby";
+  return out;
+}
+
 void print_summary(std::FILE* out, const VehicleClientStats& c, const vehicle::VehicleCore& core,
                    v2i::SecurityMode mode) {
   std::fprintf(out,
@@ -47,6 +62,16 @@ void print_summary(std::FILE* out, const VehicleClientStats& c, const vehicle::V
     if (c.last_refusal) {
       std::fprintf(out, " (latest: RSU %llu, %s: %s)", ull(c.last_refusal->refusal.rsu_id),
                    v2i::to_string(c.last_refusal->refusal.reason), c.last_refusal->refusal.detail.c_str());
+    }
+  }
+  if (c.fixes_withheld.total() > 0) {
+    std::fprintf(out, "; fixes withheld by RSUs");
+    for_each_count(c.fixes_withheld, 0, [&](v2i::FixWithheldReason r, std::uint64_t n) {
+      std::fprintf(out, " %s=%llu", v2i::to_string(r), ull(n));
+    });
+    if (c.last_fix_withheld) {
+      std::fprintf(out, " (latest: RSU %llu, %s)", ull(c.last_fix_withheld->notice.rsu_id),
+                   describe(c.last_fix_withheld->notice).c_str());
     }
   }
   if (c.advertisements.total() > 0) {
@@ -102,6 +127,14 @@ void write_stats_file(const std::string& path, const VehicleClientStats& c,
     out << "refusal.last " << v2i::to_string(c.last_refusal->refusal.reason) << ':'
         << c.last_refusal->refusal.detail << "\n";
   }
+  // Fixes the RSUs withheld and told the vehicle about (FixWithheld notices), by their reason
+  // (unspecified: a reason this client does not know).
+  for (std::size_t i = 0; i < static_cast<std::size_t>(v2i::FixWithheldReason::kCount); ++i) {
+    const auto r = static_cast<v2i::FixWithheldReason>(i);
+    out << "fix_withheld." << v2i::to_string(r) << ' ' << c.fixes_withheld.count(r) << "\n";
+  }
+  if (c.last_fix_withheld)
+    out << "fix_withheld.last " << describe(c.last_fix_withheld->notice) << "\n";
   // RSU advertisements received, by what they said about the fixes (none: sent).
   for (std::size_t i = 0; i < static_cast<std::size_t>(v2i::FixesWithheld::kCount); ++i) {
     const auto w = static_cast<v2i::FixesWithheld>(i);

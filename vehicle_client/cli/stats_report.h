@@ -21,6 +21,10 @@ void print_summary(std::FILE* out, const VehicleClientStats& client, const vehic
 void write_stats_file(const std::string& path, const VehicleClientStats& client,
                       const vehicle::VehicleCore& core);
 
+// A withheld fix's reason with what the notice adds to it: "position_unbounded (sigma S m, at most B m)",
+// "mount (mount_moved)", ", packets lost nearby".
+std::string describe(const v2i::FixWithheld& notice);
+
 // One line for an exclusion or readmission this fix caused (empty when it caused none).
 std::string integrity_event(const v2i::Correction& fix, const vehicle::FixCheck& check,
                             const vehicle::IntegrityMonitor& monitor);
