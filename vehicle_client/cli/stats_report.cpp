@@ -133,8 +133,16 @@ void write_stats_file(const std::string& path, const VehicleClientStats& c,
     const auto r = static_cast<v2i::FixWithheldReason>(i);
     out << "fix_withheld." << v2i::to_string(r) << ' ' << c.fixes_withheld.count(r) << "\n";
   }
-  if (c.last_fix_withheld)
-    out << "fix_withheld.last " << describe(c.last_fix_withheld->notice) << "\n";
+  // The latest notice, one value per key like every line of the file ("key value": tools split on the
+  // space): its reason, and the sigma the fix would have stated beside the largest sent, when given.
+  if (c.last_fix_withheld) {
+    const v2i::FixWithheld& n = c.last_fix_withheld->notice;
+    out << "fix_withheld.last " << v2i::to_string(n.reason) << "\n";
+    if (n.position_sigma_m && n.max_position_sigma_m) {
+      out << "fix_withheld.last_sigma_m " << *n.position_sigma_m << "\nfix_withheld.last_max_sigma_m "
+          << *n.max_position_sigma_m << "\n";
+    }
+  }
   // RSU advertisements received, by what they said about the fixes (none: sent).
   for (std::size_t i = 0; i < static_cast<std::size_t>(v2i::FixesWithheld::kCount); ++i) {
     const auto w = static_cast<v2i::FixesWithheld>(i);
