@@ -16,7 +16,8 @@
 #               ASan-built rsud with the per-rotation mount check no longer keeps on 2 shared cores:
 #               the kernel dropped its packets); nor those
 #               labelled `experiment` (a whole experiment's computation, e.g. NDT over a drive: 11 s in
-#               Release, 100 s under ASan; its parts run under ASan in the shorter tests)
+#               Release, 100 s under ASan; the fix covariance's honesty over the pilot's cells, on both
+#               cores; their parts run under ASan in the shorter tests)
 #   TSan        only the tests labelled `threads` (tests/CMakeLists.txt): the vehicle client (io
 #               thread), the pilot's workers, the DDS wrapper (Cyclone's threads), and rsud as a
 #               process (integration tests, DDS peers); not those also labelled `realtime` (fault,
