@@ -9,17 +9,6 @@
 #include "common/angles.h"
 
 namespace rsu::core {
-namespace {
-
-double azimuth_spread_rad(const lidar::SweepGeometry& geometry) {
-  const std::vector<double>& offsets = geometry.ring_azimuth_offset_rad;
-  if (offsets.empty())
-    return 0.0;
-  const auto [lo, hi] = std::minmax_element(offsets.begin(), offsets.end());
-  return *hi - *lo;
-}
-
-}  // namespace
 
 SweepPosition::SweepPosition(const LidarMount& mount, double cluster_tolerance_m, double release_margin_deg,
                              const lidar::SweepGeometry& geometry)
@@ -31,7 +20,21 @@ SweepPosition::SweepPosition(const LidarMount& mount, double cluster_tolerance_m
 }
 
 void SweepPosition::follow(const lidar::SweepGeometry& geometry) {
-  lag_rad_ = azimuth_spread_rad(geometry) + geometry.azimuth_lead_rad + release_margin_rad_;
+  ring_offset_rad_ = geometry.ring_azimuth_offset_rad;
+  min_offset_rad_ = 0.0;
+  max_offset_rad_ = 0.0;
+  if (!ring_offset_rad_.empty()) {
+    const auto [lo, hi] = std::minmax_element(ring_offset_rad_.begin(), ring_offset_rad_.end());
+    min_offset_rad_ = *lo;
+    max_offset_rad_ = *hi;
+  }
+  lead_rad_ = geometry.azimuth_lead_rad;
+}
+
+double SweepPosition::lag_rad(const lidar::LidarPoint& newest) const {
+  const double offset =
+      newest.ring < ring_offset_rad_.size() ? ring_offset_rad_[newest.ring] : max_offset_rad_;
+  return offset - min_offset_rad_ + lead_rad_ + release_margin_rad_;
 }
 
 void SweepPosition::advance(std::span<const lidar::LidarPoint> points) {
@@ -54,10 +57,11 @@ TimeNs SweepPosition::passed_time(std::span<const Eigen::Vector2d> outline) cons
     nearest = std::min(nearest, (q - mount_.xy()).norm());
   }
   // The clusterer's rule: a point at range r is closed once the earliest future firing is asin(d / r)
-  // past it, and future firings lag the sweep by the offset spread plus the margin.
+  // past it, and future firings lag the newest point by its laser's offset above the smallest, the lead
+  // and the margin (file comment).
   const double d = tolerance_m_;
   const double closing = nearest > d ? std::asin(d / nearest) : std::numbers::pi / 2.0;
-  const double target = reference + ahead + closing + lag_rad_;
+  const double target = reference + ahead + closing + lag_rad(latest_);
   const double forward = wrap_angle_positive(target - static_cast<double>(latest_.azimuth_rad));
   if (forward > std::numbers::pi)
     return latest_.time_ns;  // already behind the sweep

@@ -3,9 +3,17 @@
 // when it will have passed a place on the map far enough that no cluster there can still grow (the
 // perception::SweepClusterer's closing rule, sweep_clusterer.h): what tells RsuCore that every cluster of a
 // vehicle has been released.
+//
+// The rule is the clusterer's, per laser: the newest point was fired at the encoder azimuth of its beam
+// azimuth minus its laser's offset, and every later firing of any laser points at least that encoder
+// azimuth plus the smallest offset. (It used to assume the newest point came from the laser that leads
+// most, i.e. subtract the whole offset spread: an OS1-128's four-beam stagger, 8.5 deg, held every
+// vehicle three packets (2.3 ms) longer than the sweep needed whenever the stream's last pixel was
+// beam 127, which trails. Issue 16, latency.)
 #pragma once
 
 #include <span>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -38,10 +46,17 @@ class SweepPosition {
   TimeNs passed_time(std::span<const Eigen::Vector2d> outline) const;
 
  private:
+  // How far behind the newest point's beam azimuth later firings may point: its laser's offset above the
+  // smallest, the lead and the margin (the whole spread for a point whose laser is not in the table).
+  double lag_rad(const lidar::LidarPoint& newest) const;
+
   LidarMount mount_;
   double tolerance_m_;
   double release_margin_rad_;
-  double lag_rad_ = 0.0;  // how far future firings lag the sweep: offsets' spread + lead + margin
+  std::vector<double> ring_offset_rad_;  // SweepGeometry::ring_azimuth_offset_rad
+  double min_offset_rad_ = 0.0;
+  double max_offset_rad_ = 0.0;
+  double lead_rad_ = 0.0;
   double rotation_hz_;
   bool known_ = false;
   lidar::LidarPoint latest_;
