@@ -73,7 +73,7 @@ void RsuDaemon::start() {
                           config_.v2i_port);
   bind_udp(v2i_socket_, v2i, "V2I");
   // Room for bursts of announcements while a cluster is being corrected.
-  request_receive_buffer(v2i_socket_, config_.v2i_receive_buffer_bytes, "V2I");
+  v2i_receive_buffer_bytes_ = request_receive_buffer(v2i_socket_, config_.v2i_receive_buffer_bytes, "V2I");
   boost::system::error_code ignored;
   if (config_.advertisement.enabled)
     v2i_socket_.set_option(asio::socket_base::broadcast(true), ignored);
@@ -145,6 +145,10 @@ void RsuDaemon::start_input() {
     const auto address = edge::parse_ip_address(u->bind_address, "lidar.input.udp.bind_address");
     const udp::endpoint endpoint(address, u->port != 0 ? u->port : ports.data);
     bind_udp(lidar_socket_, endpoint, "LiDAR");
+    // Room for the packets that arrive while a rotation's work (a fix, the mount check) holds the loop:
+    // the kernel's default (net.core.rmem_default, 208 KiB on Debian) holds about a dozen of an OS1-128's
+    // 24.8 KB packets, 10 ms of its stream.
+    lidar_receive_buffer_bytes_ = request_receive_buffer(lidar_socket_, u->receive_buffer_bytes, "LiDAR");
     spdlog::info("receiving {} packets on {}:{}", core_.lidar_decoder().model_name(),
                  endpoint.address().to_string(), endpoint.port());
     receive_lidar(lidar_socket_, lidar_buffer_, lidar_sender_);
@@ -745,6 +749,7 @@ CounterList RsuDaemon::stats() {
   // Datagrams the kernel dropped before rsud could read them (its socket buffer was full): what was
   // sent is what rsud counted plus these.
   report_kernel_drops(out, "v2i", v2i_socket_);
+  out.add_level("v2i", "receive_buffer_bytes", v2i_receive_buffer_bytes_);  // as the kernel granted it
   if (v2i_receiver_) {
     // Received but not handed to the core: the loop had stalled with this many waiting.
     out.add("v2i", "receiver_queue_full", v2i_receiver_->dropped_full());
@@ -752,6 +757,8 @@ CounterList RsuDaemon::stats() {
     out.add_level("v2i", "receiver_waiting_max", v2i_receiver_->waiting_max());
   }
   report_kernel_drops(out, "lidar", lidar_socket_);
+  if (lidar_socket_.is_open())
+    out.add_level("lidar", "receive_buffer_bytes", lidar_receive_buffer_bytes_);
   if (capture_) {
     const lidar::PcapSkipped skipped = capture_->skipped();
     out.add("capture", "records", capture_->records());

@@ -202,6 +202,9 @@ class RsuDaemon {
                                           5e-4, 1e-3, 2e-3, 5e-3, 0.01, 0.1, 1.0}};
   std::uint64_t v2i_kernel_drops_ = 0;  // as last warned about
   std::uint64_t lidar_kernel_drops_ = 0;
+  // The receive buffers the kernel granted (request_receive_buffer; 0: not read back).
+  std::size_t v2i_receive_buffer_bytes_ = 0;
+  std::size_t lidar_receive_buffer_bytes_ = 0;
   steady::time_point started_ = steady::now();
   steady::time_point last_insecure_warning_{};
   steady::time_point last_clock_warning_{};

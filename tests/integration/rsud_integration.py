@@ -256,6 +256,14 @@ def case_corrections(h):
         assert 0 < c["recv_ns"] - c["sweep_ns"] < 50e6, c  # swept at most 50 ms before it arrived
     vehicle.wait(timeout=10)
     h.stop_rsud()
+    # Both sockets' receive buffers as the kernel granted them: what rsud asks for by default (8 MiB for
+    # V2I, 4 MiB for the LiDAR), capped by net.core.rmem_max.
+    with open("/proc/sys/net/core/rmem_max") as f:
+        rmem_max = int(f.read())
+    s = h.stats()
+    for key, asked in (("v2i.receive_buffer_bytes", 8 << 20), ("lidar.receive_buffer_bytes", 4 << 20)):
+        assert s.get(key) == min(asked, rmem_max), "%s = %s, expected min(%d, rmem_max %d)" % (
+            key, s.get(key), asked, rmem_max)
     print("ok: %d corrections, worst error %.3f m" % (
         len(cs), max(math.hypot(c["x"] - TRUTH[0], c["y"] - TRUTH[1]) for c in cs)))
 

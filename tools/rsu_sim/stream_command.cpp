@@ -10,6 +10,7 @@
 #include <boost/asio.hpp>
 #include <boost/program_options.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -86,7 +87,9 @@ int stream_ouster(const po::variables_map& vm, const sim::Scenario& scenario, do
   const std::int64_t first = simulator.packet_index_at(sim_start);
   const std::int64_t last = simulator.packet_index_at(sim_start + from_seconds(seconds));
   std::vector<std::uint8_t> payload;
-  std::uint64_t sent = 0, failed = 0;
+  std::uint64_t sent = 0, failed = 0, late = 0;
+  constexpr TimeNs kLateNs = 1'000'000;
+  TimeNs max_behind = 0;
   for (std::int64_t k = first; k < last; ++k) {
     // The packet leaves once its last column has fired.
     const TimeNs due = simulator.packet_time_ns(k + 1);
@@ -98,16 +101,31 @@ int stream_ouster(const po::variables_map& vm, const sim::Scenario& scenario, do
       std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(due - sim_start));
     }
     simulator.packet(k, clock_offset, payload);
+    // How far behind its firing the packet leaves: a sender behind its schedule sends back to back,
+    // faster than the sensor would, until it has caught up.
+    if (!fast) {
+      const TimeNs now = has_epoch ? edge::host_now_ns() - clock_offset
+                                   : sim_start + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                     std::chrono::steady_clock::now() - wall_start)
+                                                     .count();
+      const TimeNs behind = now - due;
+      if (behind > kLateNs)
+        ++late;
+      max_behind = std::max(max_behind, behind);
+    }
     boost::system::error_code ec;
     socket.send_to(asio::buffer(payload), destination, 0, ec);
     ec ? ++failed : ++sent;
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  std::printf("sent %llu %s packets (%s, %s, %zu bytes; %llu failed) to %s in %.2f s; metadata %s\n",
-              static_cast<unsigned long long>(sent), spec.model.c_str(), spec.lidar_mode.c_str(),
-              std::string(lidar::ouster::to_string(spec.profile)).c_str(), payload.size(),
-              static_cast<unsigned long long>(failed), vm["to"].as<std::string>().c_str(), wall,
-              metadata_path.c_str());
+  std::printf(
+      "sent %llu %s packets (%s, %s, %zu bytes; %llu failed) to %s in %.2f s; metadata %s; "
+      "%llu sent more than 1 ms after their last column fired (at most %.1f ms)\n",
+      static_cast<unsigned long long>(sent), spec.model.c_str(), spec.lidar_mode.c_str(),
+      std::string(lidar::ouster::to_string(spec.profile)).c_str(), payload.size(),
+      static_cast<unsigned long long>(failed), vm["to"].as<std::string>().c_str(), wall,
+      metadata_path.c_str(), static_cast<unsigned long long>(late),
+      static_cast<double>(std::max<TimeNs>(max_behind, 0)) * 1e-6);
   return failed == 0 ? 0 : 1;
 }
 
