@@ -187,7 +187,7 @@ class RsuCore {
   // sensor_points: this batch in the sensor frame (the rotations are kept so); map_scratch_ holds them
   // in the map frame.
   LidarStepResult learn(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame);
-  void add_background_frame(std::span<const lidar::LidarPoint> sensor_points);
+  void add_background_frame(std::vector<lidar::LidarPoint>&& sensor_points);
   // The mount monitor from the background's rotations (once the background is ready).
   void start_mount_monitor();
   // A sample of the sweep's static points (sensor frame; map_scratch_ holds them in the map frame) for

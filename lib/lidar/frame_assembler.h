@@ -74,6 +74,7 @@ class FrameAssembler {
   void finish(OpenFrame&& open, bool whole, std::vector<LidarFrame>& done);
 
   FrameAssemblerConfig config_;
+  std::size_t largest_emitted_ = 0;  // points of the largest frame emitted: a new frame's reserve
   double cut_rad_;
   double margin_rad_;
   TimeNs max_gap_ns_;
