@@ -273,79 +273,6 @@ void RsuCore::follow_geometry() {
   occluders_.set_rotation_period(sweep_.rotation_period_ns());
 }
 
-v2i::FixesWithheld RsuCore::fixes_withheld() const {
-  return mount_serving() ? v2i::FixesWithheld::kNone : mount_withheld(monitor_->cause());
-}
-
-std::vector<std::uint8_t> RsuCore::advertisement(TimeNs now) {
-  const v2i::FixesWithheld withheld = fixes_withheld();
-  const bool estimated = monitor_ && withheld != v2i::FixesWithheld::kMountMismatch;
-  return corrections_.advertisement(now, withheld,
-                                    estimated ? monitor_->stopped_by().error_at_radius_m : 0.0);
-}
-
-void RsuCore::start_mount_monitor() {
-  if (!config_.mount_monitor.enabled || background_frames_.empty())
-    return;
-  // Fixes lie about a vehicle's half height above the road, below the sensor by its height over it.
-  const double fix_height = config_.mount.z - config_.perception.ground.ground_z;
-  monitor_.emplace(background_frames_, config_.mount, config_.coverage_radius_m, fix_height,
-                   config_.mount_monitor);
-  missing_at_last_rotation_ = packets_.order_stats().lost + lidar_stats_.packets_too_late;
-}
-
-void RsuCore::watch_mount(std::span<const lidar::LidarPoint> points, bool whole_frame) {
-  if (!monitor_)
-    return;
-  // The static scene only: what the background model calls background (vehicles and passers-by would
-  // pull the registration). Every 4th point is plenty (the monitor takes at most sample_points of a
-  // rotation) and keeps the copies small. map_scratch_ holds `points` in the map frame.
-  constexpr std::size_t kEvery = 4;
-  monitor_scratch_.clear();
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (++monitor_skip_ < kEvery)
-      continue;
-    monitor_skip_ = 0;
-    if (background_.classify(map_scratch_[i]) == perception::PointClass::background)
-      monitor_scratch_.push_back(points[i]);
-  }
-  if (whole_frame) {
-    const TimeNs end = points.empty() ? 0 : points.back().time_ns;
-    mount_rotations_pending_.push_back(lidar::LidarFrame{end, end, monitor_scratch_});
-    return;
-  }
-  // A rotation that lacked many of its packets (a daemon too slow for its LiDAR loses them in the kernel,
-  // or sheds them) is no evidence either way: its registration rests on what is left of the scene, and
-  // read as motion it stopped the fixes of a still sensor (a TSan rsud on busy cores). Not checked, and
-  // counted (mount.rotations_gappy). A few lost packets (network loss) leave it checked on what it has.
-  const std::uint64_t missing = packets_.order_stats().lost + lidar_stats_.packets_too_late;
-  const TimeNs packet_period = packets_.decoder().geometry().packet_period_ns;
-  const double packets_per_rotation = packet_period > 0 ? static_cast<double>(sweep_.rotation_period_ns()) /
-                                                              static_cast<double>(packet_period)
-                                                        : 0.0;
-  for (lidar::LidarFrame& rotation : monitor_assembler_.add(monitor_scratch_)) {
-    const double lacked = static_cast<double>(missing - missing_at_last_rotation_);
-    missing_at_last_rotation_ = missing;
-    if (lacked > config_.mount_monitor.max_missing_fraction * packets_per_rotation) {
-      ++mount_rotations_gappy_;
-      continue;
-    }
-    mount_rotations_pending_.push_back(std::move(rotation));
-  }
-}
-
-std::size_t RsuCore::check_mount_pending() {
-  const std::size_t n = mount_rotations_pending_.size();
-  if (monitor_) {
-    for (const lidar::LidarFrame& rotation : mount_rotations_pending_) {
-      if (monitor_->check_rotation(rotation.points, rotation.end_ns))
-        mount_notices_.push_back(monitor_->notice());
-    }
-  }
-  mount_rotations_pending_.clear();
-  return monitor_ ? n : 0;
-}
-
 std::vector<std::string> RsuCore::take_lidar_notices() {
   std::vector<std::string> notices = packets_.take_notices();
   for (std::string& n : mount_notices_)
@@ -410,6 +337,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
     fresh.background_frames_ = std::move(background_frames_);
     fresh.occluders_.take_static(std::move(occluders_));
     fresh.monitor_ = std::move(monitor_);
+    fresh.monitor_due_ = monitor_due_;
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }
   fresh.packets_ = std::move(packets_).reloaded(next);

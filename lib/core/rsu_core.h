@@ -190,6 +190,7 @@ class RsuCore {
   void add_background_frame(std::vector<lidar::LidarPoint>&& sensor_points);
   // The mount monitor from the background's rotations (once the background is ready).
   void start_mount_monitor();
+  void build_mount_monitor();
   // A sample of the sweep's static points (sensor frame; map_scratch_ holds them in the map frame) for
   // the mount monitor, which checks each whole rotation.
   void watch_mount(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame);
@@ -224,6 +225,7 @@ class RsuCore {
   TimeNs last_loss_ns_ = std::numeric_limits<TimeNs>::min();
   std::vector<lidar::LidarPoint> map_scratch_;
   std::optional<calibration::MountMonitor> monitor_;
+  bool monitor_due_ = false;                 // learned: monitor_ is built before the first rotation it checks
   lidar::FrameAssembler monitor_assembler_;  // rotations of a sample of the points, for monitor_
   std::vector<lidar::LidarPoint> monitor_scratch_;
   std::vector<lidar::LidarFrame> mount_rotations_pending_;  // for check_mount_pending()
