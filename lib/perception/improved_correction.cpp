@@ -424,12 +424,11 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   CorrectedPose out = corrected_pose(frame, *box, yaw.decision, prior);
   probe_yaw(view, frame, out, size, yaw_information, *box, yaw_basis);
   out.covariance = covariance_of(out, yaw_basis, *box, yaw.decision, lidar, config);
-  if (position_sigma_m(out) > max_position_sigma_m(lidar.complete_sweep, config)) {
-    // Refused, with the covariance it would have stated (position_sigma_m): how far from a fix it was.
-    CorrectedPose unbounded = refused(CorrectionStatus::position_unbounded);
-    unbounded.covariance = out.covariance;
-    return unbounded;
-  }
+  out.length_axis = box->evidence[0];
+  // Refused, with the pose and covariance it would have stated (position_sigma_m): how far from a fix
+  // it was, and the interval its centre was confined to (length_axis).
+  if (position_sigma_m(out) > max_position_sigma_m(lidar.complete_sweep, config))
+    out.status = CorrectionStatus::position_unbounded;
   return out;
 }
 

@@ -100,6 +100,11 @@ struct CorrectedPose {
   // 1: the points told nothing about it and the fix carries the vehicle's own yaw back).
   double yaw_prior_share = 0.0;
   Eigen::Vector2d alignment_point = Eigen::Vector2d::Zero();  // the point the box was anchored at
+  // (improved correction) How the centre was placed along the length axis (box_axis.h): for an interval,
+  // the centre is its middle and interval_m its width (the widest of the yaw probes'). Kept, with the
+  // pose, for a fix refused as position_unbounded: what rsud's footprint track combines over rotations
+  // (core/footprint_track.h).
+  AxisEvidence length_axis;
 
   bool ok() const { return status == CorrectionStatus::ok; }
 };
