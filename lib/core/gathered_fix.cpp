@@ -22,6 +22,8 @@ void count(const GatheredFix& f, LidarStats& stats) {
     ++stats.corrections_inconsistent;
   else if (f.outcome == GatheredFixOutcome::no_assigned_cluster)
     ++stats.corrections_unassigned;
+  else if (f.outcome == GatheredFixOutcome::track_conflict)
+    return;  // counted by the footprint track (lidar.track_conflicts)
   else if (!f.ok())
     ++stats.corrections_failed;  // no assigned cluster, no rectangle, or the correction refused it
 }

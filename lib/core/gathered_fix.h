@@ -29,6 +29,8 @@ enum class GatheredFixOutcome {
   out_of_coverage,      // beyond RsuCoreConfig::coverage_radius_m
   inconsistent,         // the known-size box contradicts the points, or they do not place it
   correction_failed,    // the size correction refused it for another reason
+  // its bound contradicts what earlier rotations bounded (footprint_track.h): one of them is wrong
+  track_conflict,
 };
 
 struct GatheredFix {

@@ -36,6 +36,10 @@ void report(const lidar::PacketOrderStats& o, const perception::SweepClustererSt
   out.add("lidar", "corrections_encode_failed", l.corrections_encode_failed);
   out.add("lidar", "corrections", l.corrections);
   out.add("lidar", "corrections_withheld_mount", l.corrections_withheld_mount);
+  out.add("lidar", "fixes_bounded_by_track", l.track_bounded);
+  out.add("lidar", "fixes_tightened_by_track", l.track_tightened);
+  out.add("lidar", "track_conflicts", l.track_conflicts);
+  out.add("lidar", "track_resets", l.track_resets);
   out.add("lidar", "fixes_prepared", l.fixes_prepared);
   out.add("lidar", "fixes_prepared_used", l.fixes_prepared_used);
 }

@@ -34,6 +34,13 @@ struct LidarStats {
   // its release used (its inputs unchanged)
   std::uint64_t fixes_prepared = 0;
   std::uint64_t fixes_prepared_used = 0;
+  // the footprint tracked over rotations (footprint_track.h): fixes withheld as unbounded that its
+  // intersection bounded and sent; sent fixes it tightened; rotations whose bound contradicted the
+  // track's (withheld); tracks forgotten because the chain broke (a gap, a turn, a new size, ...)
+  std::uint64_t track_bounded = 0;
+  std::uint64_t track_tightened = 0;
+  std::uint64_t track_conflicts = 0;
+  std::uint64_t track_resets = 0;
   std::uint64_t packets_too_late = 0;      // older than RsuCoreConfig::max_packet_age when processed
   std::uint64_t packets_clock_offset = 0;  // time_source sensor: the sensor's clock beyond the tolerance
 };

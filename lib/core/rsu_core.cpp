@@ -78,6 +78,7 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       gatherer_(config.gathering, config.association, mount_.xy()),
       occluders_(mount_.xy(), sweep_.rotation_period_ns()),
       fixer_(config, mount_),
+      tracks_(config.footprint_track),
       corrections_(config),
       refusals_(config.refusal_notices),
       withheld_(config.withheld_notices),
@@ -166,8 +167,15 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
   // Packets lost while the sweep crossed the vehicle (or just before its first points: its leading part
   // may be what was lost).
   const bool lost = lost_near(held);
-  const GatheredFix fix =
+  GatheredFix fix =
       prepared_.fix(fixer_, held, vehicle->announcement, lost, occluders_.of(held), lidar_stats_);
+  // Combined with what earlier rotations bounded (footprint_track.h); a stopped mount breaks every chain.
+  if (mount_serving())
+    tracks_.combine(fix, vehicle->announcement, held.assigned_size > 0, sweep_.rotation_period_ns(),
+                    perception::max_position_sigma_m(!lost, config_.perception.fix.correction),
+                    config_.hypothesis, lidar_stats_);
+  else
+    tracks_.reset(lidar_stats_);
   count(fix, lidar_stats_);
   if (fix.ok() && !mount_serving())
     ++lidar_stats_.corrections_withheld_mount;  // the LiDAR moved: its fixes are off (rsu_core.h)
@@ -321,6 +329,7 @@ std::size_t RsuCore::expire(TimeNs now) {
   corrections_.forget_unregistered(announcements_.registry(), now);
   refusals_.prune(now);
   withheld_.prune(now);
+  tracks_.prune(now - kNsPerSecond);
   return n;
 }
 

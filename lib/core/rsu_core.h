@@ -29,6 +29,7 @@
 #include "core/announcement_intake.h"
 #include "core/correction_builder.h"
 #include "core/datagram_outcome.h"
+#include "core/footprint_track.h"
 #include "core/gathered_fix.h"
 #include "core/lidar_mount.h"
 #include "core/lidar_stats.h"
@@ -211,6 +212,7 @@ class RsuCore {
   SweepOccluders occluders_;  // the sweep's other objects, which may hide part of a vehicle
   GatheredVehicleFixer fixer_;
   PreparedFixes prepared_;  // fits and fixes prepared ahead of the release (prepare_fixes)
+  FootprintTracks tracks_;  // each vehicle's footprint bounded over rotations
   // The held vehicles fixed ahead, as (vehicle id, parts gathered, points).
   std::vector<std::tuple<std::uint64_t, std::size_t, std::size_t>> prepared_held_;
   CorrectionBuilder corrections_;

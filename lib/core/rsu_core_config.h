@@ -9,6 +9,7 @@
 #include <string>
 
 #include "calibration/mount_monitor.h"
+#include "common/angles.h"
 #include "common/pose.h"
 #include "common/time.h"
 #include "lidar/lidar_decoder.h"
@@ -86,6 +87,29 @@ struct NoticeConfig {
   bool operator==(const NoticeConfig&) const = default;
 };
 
+// How each vehicle's footprint is tracked over rotations (core/footprint_track.h).
+struct FootprintTrackConfig {
+  bool enabled = true;
+  // The chain breaks when the vehicle's previous bound is older than this many rotations.
+  double max_gap_rotations = 1.5;
+  // Bounds on the error of the vehicle's motion between two sweeps (the announced speed's error, an
+  // acceleration since the announcement, its heading's error), and a floor for the sweep's own smear
+  // (the points' mean firing time stands for the whole vehicle).
+  double speed_error_mps = 0.5;
+  double speed_error_fraction = 0.05;
+  double max_accel_mps2 = 4.0;
+  double heading_error_rad = deg_to_rad(10.0);
+  double motion_floor_m = 0.05;
+  // A fix placed otherwise than in an interval bounds its centre within this many sigmas of its
+  // length-axis variance, and never tighter than min_bound_half_m.
+  double bound_sigmas = 3.0;
+  double min_bound_half_m = 0.3;
+  // The yaw may change between rotations by the announced yaw rate, plus this many combined sigmas of
+  // the two fixes' yaw (at least min_yaw_jump_rad); more breaks the chain.
+  double yaw_jump_sigmas = 3.0;
+  double min_yaw_jump_rad = deg_to_rad(3.0);
+};
+
 struct RsuCoreConfig {
   std::uint64_t rsu_id = 1;
 
@@ -117,6 +141,9 @@ struct RsuCoreConfig {
   // bit (rsu_core.h, prepare_fixes): the corrections are the same, sent sooner. false: the baseline.
   bool prepare_fixes = true;
   GatheringConfig gathering;
+  // Each connected vehicle's footprint tracked over rotations: what earlier rotations bounded along its
+  // length, carried by its own motion and intersected with the current one (core/footprint_track.h).
+  FootprintTrackConfig footprint_track;
   // Background, clustering and the per-vehicle fix (perception::fix_vehicle): the library's defaults,
   // the same the pilot experiment measures, unless the configuration file changes them.
   perception::PerceptionConfig perception;

@@ -20,6 +20,7 @@ std::optional<v2i::FixWithheldReason> reason_of(const GatheredFix& fix, v2i::Fix
     case GatheredFixOutcome::out_of_coverage:
       return Reason::kOutOfCoverage;
     case GatheredFixOutcome::inconsistent:
+    case GatheredFixOutcome::track_conflict:
       return Reason::kInconsistent;
     case GatheredFixOutcome::correction_failed:
       break;
