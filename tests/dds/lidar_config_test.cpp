@@ -123,5 +123,16 @@ TEST(LidarConfig, CalibrationFileIsReadIntoTheDecodersTables) {
   std::filesystem::remove_all(dir);
 }
 
+// perception.footprint_track (issue 12): on by default, off when the operator says so; not a boolean: refused
+// with the field named.
+TEST(LidarConfig, FootprintTrackIsOnUnlessTurnedOff) {
+  EXPECT_TRUE(parse("  input: {udp: {}}\n").core.footprint_track.enabled);
+  EXPECT_FALSE(
+      parse("  input: {udp: {}}\nperception: {footprint_track: false}\n").core.footprint_track.enabled);
+  EXPECT_NE(refusal("  input: {udp: {}}\nperception: {footprint_track: sometimes}\n")
+                .find("perception.footprint_track"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace rsu::daemon
