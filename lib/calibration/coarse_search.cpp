@@ -39,7 +39,9 @@ std::int64_t voxel_key(const Eigen::Vector3d& p, double resolution_m) {
 }
 
 bool VoxelOccupancy::occupied(const Eigen::Vector3d& p) const {
-  return voxels_.contains(voxel_key(p, resolution_m_));
+  // A point without a key (NaN, beyond the key's range) is never occupied: converting its cell to an
+  // integer is undefined (clang's UBSan reports it as float-cast-overflow; GCC's leaves that check out).
+  return has_voxel_key(p, resolution_m_) && voxels_.contains(voxel_key(p, resolution_m_));
 }
 
 CoarseMatch search_pose(const std::vector<Eigen::Vector3d>& sensor_points, const VoxelOccupancy& map,
