@@ -235,7 +235,8 @@ void read_background(const YamlField& f, DaemonConfig& c, const std::filesystem:
 void read_perception(const YamlField& f, DaemonConfig& c) {
   f.expect_map({"background_method", "ground_z", "ground_min_height_m", "range_image_margin_m",
                 "reference_match_radius_m", "cluster_tolerance_m", "cluster_min_points", "cluster_max_points",
-                "correction", "coverage_radius_m", "release_margin_deg", "footprint_track"});
+                "correction", "coverage_radius_m", "release_margin_deg", "joint_release_range_gap_m",
+                "footprint_track"});
   auto& p = c.core.perception;
   if (f.has("background_method")) {
     const YamlField m = f.child("background_method");
@@ -279,6 +280,8 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
   c.core.sweep.release_margin_deg = f.non_negative_or("release_margin_deg", c.core.sweep.release_margin_deg);
   if (c.core.sweep.release_margin_deg > 30)
     f.child("release_margin_deg").fail("must be <= 30 deg");
+  c.core.sweep.joint_release_range_gap_m =
+      f.non_negative_or("joint_release_range_gap_m", c.core.sweep.joint_release_range_gap_m);
   if (f.has("footprint_track"))
     c.core.footprint_track.enabled = bool_of(f.child("footprint_track"));
 }

@@ -245,13 +245,24 @@ lidar::LidarPoint LidarSimulator::to_point(const lidar::Firing& f, const Outcome
 }
 
 lidar::PacketReturns LidarSimulator::simulate_packet(std::int64_t k,
-                                                     const std::optional<AzimuthSector>& sector) const {
+                                                     const std::optional<AzimuthSector>& sector,
+                                                     std::vector<std::uint32_t>* vehicles_hit) const {
   if (!model().has_packet_format()) {
     throw std::invalid_argument("LidarSimulator::simulate_packet: sensor model '" + model().name +
                                 "' has no Velodyne packet format");
   }
   PacketScratch scratch;
-  return packet_returns(k, sector, scratch);
+  lidar::PacketReturns returns = packet_returns(k, sector, scratch);
+  if (vehicles_hit != nullptr) {
+    vehicles_hit->clear();
+    for (const Outcome& o : scratch.outcomes) {
+      if (o.raw != 0 && o.truth.surface == SurfaceClass::kVehicle)
+        vehicles_hit->push_back(o.truth.vehicle_id);
+    }
+    std::sort(vehicles_hit->begin(), vehicles_hit->end());
+    vehicles_hit->erase(std::unique(vehicles_hit->begin(), vehicles_hit->end()), vehicles_hit->end());
+  }
+  return returns;
 }
 
 void LidarSimulator::simulate_packets(std::int64_t first, std::span<lidar::PacketReturns> out,

@@ -85,9 +85,12 @@ class LidarSimulator {
                  const Scene& scene, TimeNs schedule_t0 = 0, double start_azimuth_deg = 0.0);
 
   // Packet k of the schedule, as the Velodyne encoder packs it (strongest return). Firings outside
-  // `sector` report no return. Throws std::invalid_argument if the model has no packet format.
+  // `sector` report no return. vehicles_hit, when given, receives the ids of the vehicles its returns
+  // are on (ascending, each once: the ray caster's truth of which packets cover a vehicle, for latency
+  // measured from the last of them). Throws std::invalid_argument if the model has no packet format.
   lidar::PacketReturns simulate_packet(std::int64_t k,
-                                       const std::optional<AzimuthSector>& sector = std::nullopt) const;
+                                       const std::optional<AzimuthSector>& sector = std::nullopt,
+                                       std::vector<std::uint32_t>* vehicles_hit = nullptr) const;
   // Packets first, first + 1, ... into out[0], out[1], ..., each as simulate_packet makes it, on `threads`
   // threads (the caller's among them; started per call: for many packets, not one). Throws as
   // simulate_packet, and std::invalid_argument for threads < 1.

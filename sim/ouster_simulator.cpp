@@ -145,9 +145,9 @@ std::int64_t OusterSimulator::packet_index_at(TimeNs t) const {
   return k;
 }
 
-std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns,
-                                    std::vector<std::uint8_t>& out) const {
-  return packet(k, clock_offset_ns, out, scratch_);
+std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out,
+                                    std::vector<std::uint32_t>* vehicles_hit) const {
+  return packet(k, clock_offset_ns, out, scratch_, vehicles_hit);
 }
 
 std::size_t OusterSimulator::packets(std::int64_t first, TimeNs clock_offset_ns,
@@ -159,14 +159,14 @@ std::size_t OusterSimulator::packets(std::int64_t first, TimeNs clock_offset_ns,
     Scratch scratch;
     std::size_t sum = 0;
     for (std::size_t i = begin; i < end; ++i)
-      sum += packet(first + static_cast<std::int64_t>(i), clock_offset_ns, out[i], scratch);
+      sum += packet(first + static_cast<std::int64_t>(i), clock_offset_ns, out[i], scratch, nullptr);
     vehicle_returns[run] = sum;
   });
   return std::accumulate(vehicle_returns.begin(), vehicle_returns.end(), std::size_t{0});
 }
 
 std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out,
-                                    Scratch& scratch) const {
+                                    Scratch& scratch, std::vector<std::uint32_t>* vehicles_hit) const {
   const ouster::Metadata& m = metadata_;
   const bool legacy = m.profile == ouster::UdpProfile::legacy;
   const std::int64_t frame = floor_div(k, packets_per_frame_);
@@ -223,6 +223,8 @@ std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std:
   }
   raycaster_->cast_batch(rays, hits);
   std::size_t vehicle_returns = 0;
+  if (vehicles_hit != nullptr)
+    vehicles_hit->clear();
 
   for (int c = 0; c < m.columns_per_packet; ++c) {
     const int column = first_column + c;
@@ -247,7 +249,11 @@ std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std:
       const double range_m = hit.range + range_noise[i];
       if (!(range_m > 0.0) || range_m > max_range_m_)
         continue;  // no return
-      vehicle_returns += hit.surface == SurfaceClass::kVehicle ? 1 : 0;
+      if (hit.surface == SurfaceClass::kVehicle) {
+        ++vehicle_returns;
+        if (vehicles_hit != nullptr)
+          vehicles_hit->push_back(hit.vehicle_id);
+      }
       const auto range = static_cast<std::uint32_t>(std::lround(range_m * 1000.0 / range_unit_mm_));
       const double cos_incidence = std::abs(hit.normal.dot(rays[i].direction));
       const auto reflectivity =
@@ -267,6 +273,10 @@ std::size_t OusterSimulator::packet(std::int64_t k, TimeNs clock_offset_ns, std:
                                 reflectivity);  // signal: the return's strength, as reflectivity
       }
     }
+  }
+  if (vehicles_hit != nullptr) {
+    std::sort(vehicles_hit->begin(), vehicles_hit->end());
+    vehicles_hit->erase(std::unique(vehicles_hit->begin(), vehicles_hit->end()), vehicles_hit->end());
   }
   return vehicle_returns;
 }

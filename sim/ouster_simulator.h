@@ -60,9 +60,11 @@ class OusterSimulator {
   std::int64_t packet_index_at(TimeNs t) const;
   // Packet k's bytes (the metadata's profile), its column timestamps on the sensor clock
   // (simulation time + clock_offset_ns), into `out` (resized). Returns how many of its returns are a
-  // vehicle's (the ray caster's truth: which packets hold a vehicle, for latency benchmarks).
+  // vehicle's (the ray caster's truth: which packets hold a vehicle, for latency benchmarks);
+  // vehicles_hit, when given, receives those vehicles' ids (ascending, each once).
   // Not thread-safe: it reuses the simulator's buffers (one simulator per thread).
-  std::size_t packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out) const;
+  std::size_t packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out,
+                     std::vector<std::uint32_t>* vehicles_hit = nullptr) const;
   // Packets first, first + 1, ... into out[0], out[1], ..., each as packet() makes it, on `threads`
   // threads (the caller's among them; started per call: for a frame's packets, not one's). Returns
   // their vehicle returns summed. Throws std::invalid_argument for threads < 1.
@@ -88,8 +90,8 @@ class OusterSimulator {
     std::vector<double> range_noise;  // m, per ray
   };
 
-  std::size_t packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out,
-                     Scratch& scratch) const;
+  std::size_t packet(std::int64_t k, TimeNs clock_offset_ns, std::vector<std::uint8_t>& out, Scratch& scratch,
+                     std::vector<std::uint32_t>* vehicles_hit) const;
 
   lidar::ouster::Metadata metadata_;
   std::vector<Beam> beams_;

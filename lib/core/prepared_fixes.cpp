@@ -163,10 +163,20 @@ void RsuCore::prepare_fix(const HeldVehicle& held, TimeNs now) {
   if (vehicle == nullptr || held.points.empty())
     return;
   const bool lost_nearby = lost_near(held);
-  const std::vector<Eigen::Vector2d> occluders = occluders_.of(held);
+  const std::vector<Eigen::Vector2d> occluders = occluders_of(held);
   prepared_.add(held, vehicle->announcement, lost_nearby, occluders,
                 fixer_.fix(held, vehicle->announcement, lost_nearby, occluders));
   ++lidar_stats_.fixes_prepared;
+}
+
+// A cluster released ahead of a nearer one still open in its line of sight: what of that one the sweep
+// has passed may hide part of it (perception::SweepClusterer::overtaken_open_points).
+std::vector<Eigen::Vector2d> RsuCore::occluders_of(const HeldVehicle& held) {
+  if (!unfinished_current_) {
+    occluders_.set_unfinished(clusterer_.overtaken_open_points());
+    unfinished_current_ = true;
+  }
+  return occluders_.of(held);
 }
 
 bool RsuCore::lost_near(const HeldVehicle& held) const {

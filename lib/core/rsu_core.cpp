@@ -101,6 +101,7 @@ LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Rele
   // Clusters: Euclidean clustering, each cluster released as soon as the sweep has passed it.
   std::vector<perception::SweptCluster> clusters =
       release == Release::everything ? clusterer_.release_all() : clusterer_.release_closed();
+  unfinished_current_ = false;  // the clusters open now (occluders_of)
   // Fit: a rectangle for each cluster (L-shape fitting, paper Sec. 3.1).
   std::vector<perception::Detection> detections = detect(std::move(clusters));
   if (!detections.empty()) {
@@ -168,7 +169,7 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
   // may be what was lost).
   const bool lost = lost_near(held);
   GatheredFix fix =
-      prepared_.fix(fixer_, held, vehicle->announcement, lost, occluders_.of(held), lidar_stats_);
+      prepared_.fix(fixer_, held, vehicle->announcement, lost, occluders_of(held), lidar_stats_);
   // Combined with what earlier rotations bounded (footprint_track.h); a stopped mount breaks every chain.
   if (mount_serving())
     tracks_.combine(fix, vehicle->announcement, held.assigned_size > 0, sweep_.rotation_period_ns(),

@@ -184,6 +184,10 @@ class RsuCore {
   void prepare_fix(const HeldVehicle& held, TimeNs now);
   // Whether LiDAR packets were lost while the sweep crossed `held` (or just before its first points).
   bool lost_near(const HeldVehicle& held) const;
+  // occluders_.of(held), with the points of the open clusters this batch's releases went ahead of
+  // (fetched once a batch, when a fix needs them: copying a dense sensor's open car costs per packet).
+  std::vector<Eigen::Vector2d> occluders_of(const HeldVehicle& held);
+  bool unfinished_current_ = false;
 
   // sensor_points: this batch in the sensor frame (the rotations are kept so); map_scratch_ holds them
   // in the map frame.

@@ -130,6 +130,7 @@ std::vector<Eigen::Vector2d> SweepOccluders::of(const HeldVehicle& held) const {
       continue;  // another rotation's, or one of its own detections
     take_nearer_within_span(k.xy);
   }
+  take_nearer_within_span(unfinished_);
   const int first = azimuth_bucket(ref_azimuth + lo - kAzimuthMarginRad);
   const int buckets = static_cast<int>(std::ceil((hi - lo + 2.0 * kAzimuthMarginRad) / kBucketRad)) + 1;
   for (int i = 0; i < std::min(buckets, kAzimuthBuckets); ++i)

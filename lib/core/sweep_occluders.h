@@ -39,6 +39,9 @@ class SweepOccluders {
   void add_static(std::span<const lidar::LidarPoint> points_in_map_frame, double min_z);
   // The static points of `from` (a reload that keeps the background), instead of these.
   void take_static(SweepOccluders&& from);
+  // The points swept so far of clusters still open that a released one went ahead of
+  // (perception::SweepClusterer::overtaken_open_points), in place of the previous batch's.
+  void set_unfinished(std::vector<Eigen::Vector2d>&& points) { unfinished_ = std::move(points); }
   // The other objects' points (xy, map frame) that may hide part of `held`.
   std::vector<Eigen::Vector2d> of(const HeldVehicle& held) const;
 
@@ -55,6 +58,7 @@ class SweepOccluders {
   Eigen::Vector2d lidar_xy_;
   TimeNs rotation_period_;
   std::vector<Kept> kept_;
+  std::vector<Eigen::Vector2d> unfinished_;
   // The static points by azimuth about the LiDAR (one bucket a degree) and the grid cells they fill.
   std::vector<std::vector<Eigen::Vector2d>> static_by_azimuth_;
   std::unordered_set<std::uint64_t> static_cells_;

@@ -45,6 +45,8 @@ struct ComponentSummary {
   double min_azimuth = std::numeric_limits<double>::infinity();
   double max_azimuth = -std::numeric_limits<double>::infinity();
   double close_at = -std::numeric_limits<double>::infinity();  // largest of its points'
+  double min_range = std::numeric_limits<double>::infinity();  // planar, from the LiDAR
+  double max_range = -std::numeric_limits<double>::infinity();
   std::uint64_t first_seq = std::numeric_limits<std::uint64_t>::max();
   std::size_t size = 0;
 };

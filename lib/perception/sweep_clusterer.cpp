@@ -61,6 +61,7 @@ void SweepClusterer::init(double rotation_hz) {
     throw std::invalid_argument("SweepClusterer: rotation rate must be finite and > 0");
   }
   if (!std::isfinite(config_.release_margin_deg) || config_.release_margin_deg < 0.0 ||
+      std::isnan(config_.joint_release_range_gap_m) || config_.joint_release_range_gap_m < 0.0 ||
       !(config_.max_gap_rotations > 0.0) || !lidar_xy_.allFinite()) {
     throw std::invalid_argument("SweepClusterer: margin, gap and LiDAR position must be finite, >= 0");
   }
@@ -184,6 +185,23 @@ std::vector<SweptCluster> SweepClusterer::release_all() {
   return release(true);
 }
 
+std::vector<Eigen::Vector2d> SweepClusterer::overtaken_open_points() {
+  std::vector<Eigen::Vector2d> out;
+  if (overtaken_.empty())
+    return out;
+  std::vector<std::uint64_t> still_open;
+  for (const std::uint32_t c : clusters_.components()) {
+    const std::uint64_t seq = clusters_.summary(c).first_seq;
+    if (std::find(overtaken_.begin(), overtaken_.end(), seq) == overtaken_.end())
+      continue;
+    still_open.push_back(seq);
+    for (const PendingPoint& m : clusters_.copy(c))
+      out.emplace_back(m.point.x, m.point.y);
+  }
+  overtaken_ = std::move(still_open);
+  return out;
+}
+
 std::vector<SweptCluster> SweepClusterer::swept_open() {
   std::vector<SweptCluster> out;
   const double a_future = sweep_ - lag_rad_;
@@ -227,13 +245,13 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   // Closed: no later point can join (file comment); at the end of the stream, every component.
   const double a_future = sweep_ - lag_rad_;
   std::vector<std::uint32_t> closed;
-  std::vector<std::pair<double, double>> open_spans;
+  std::vector<ComponentSummary> open;  // copies: take() below changes the components
   for (const std::uint32_t c : clusters_.components()) {
     const ComponentSummary& s = clusters_.summary(c);
     if (everything || a_future > s.close_at)
       closed.push_back(c);
     else
-      open_spans.emplace_back(s.min_azimuth, s.max_azimuth);
+      open.push_back(s);
   }
   if (closed.empty()) {
     return out;
@@ -243,11 +261,20 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   });
   for (const std::uint32_t c : closed) {
     const ComponentSummary& s = clusters_.summary(c);
-    const bool overlaps_open = std::any_of(open_spans.begin(), open_spans.end(), [&](const auto& o) {
-      return o.first <= s.max_azimuth && o.second >= s.min_azimuth;
+    const double gap = config_.joint_release_range_gap_m;
+    const auto in_line_of_sight = [&](const ComponentSummary& o) {
+      return o.min_azimuth <= s.max_azimuth && o.max_azimuth >= s.min_azimuth;
+    };
+    const bool overlaps_open = std::any_of(open.begin(), open.end(), [&](const ComponentSummary& o) {
+      return in_line_of_sight(o) && o.min_range - s.max_range < gap && s.min_range - o.max_range < gap;
     });
     if (overlaps_open) {
       continue;
+    }
+    for (const ComponentSummary& o : open) {
+      if (in_line_of_sight(o) && o.min_range < s.max_range &&
+          std::find(overtaken_.begin(), overtaken_.end(), o.first_seq) == overtaken_.end())
+        overtaken_.push_back(o.first_seq);
     }
     const std::vector<PendingPoint> members = clusters_.take(c);
     if (cut_at_start(members)) {

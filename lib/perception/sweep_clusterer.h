@@ -30,9 +30,13 @@
 // `margin` (SweepConfig::release_margin_deg) covers the VLP-16's interpolated second-sequence
 // azimuths (not exactly monotone across packets) and a slightly tilted mount (azimuths are the
 // sensor's, ranges are measured from the LiDAR's map position).
-// A closed cluster is released when, in addition, no open cluster overlaps its azimuth span, so that
-// vehicles side by side in one line of sight reach association together (the RSU associates each
-// released batch with one global assignment: lib/core/rsu_core.h).
+// A closed cluster is released when, in addition, no open cluster overlaps its azimuth span within
+// SweepConfig::joint_release_range_gap_m of its ranges, so that vehicles side by side in one line of
+// sight reach association together (the RSU associates each released batch with one global assignment:
+// lib/core/rsu_core.h). Clusters farther apart than that in range (|p - q| >= ||p| - |q||: in plane
+// too) cannot fall in one vehicle's association gate, and waiting for them cost a car parked behind a
+// passing one 10-20 ms (issue 16, load test: p99 17 ms with another vehicle in the line of sight, 5 ms
+// without).
 //
 // Each point's bound is a threshold: it can gain no neighbour once a_future > a + asin(d / r) (the
 // test r sin(a_future - a) > d rearranged; never while r <= d), so a cluster closes once a_future passes the
@@ -74,6 +78,11 @@ struct SweepConfig {
   std::size_t max_pending_points = 200000;
   // A gap in the point stream longer than this many rotations, or time going backwards, restarts it.
   double max_gap_rotations = 2.0;
+  // A closed cluster waits for an open one at overlapping azimuths only if their planar ranges from the
+  // LiDAR come this close (file comment). Twice the reach of a vehicle's association gate (3 sigma of an
+  // announced position 1 m uncertain) beyond its own half length; a larger gate is still guarded by
+  // the RSU's hold of a vehicle whose assigned cluster is not its own (core/vehicle_gatherer.h).
+  double joint_release_range_gap_m = 6.0;
 };
 
 struct SweptCluster {
@@ -127,6 +136,11 @@ class SweepClusterer {
   // that, exactly, after its last packet). The points as release_closed would give them now; each
   // cluster once (by its first point); none that release would drop (size, cut at the start).
   std::vector<SweptCluster> swept_open();
+  // The points (xy, map frame) swept so far of the open clusters that a released one went ahead of
+  // while nearer the LiDAR than its far end (the joint release gap, file comment): they may hide part of
+  // it, and every one of them at its azimuths is already there (the sweep has passed them), so the fix
+  // reasons about its shadow as if they had been released with it.
+  std::vector<Eigen::Vector2d> overtaken_open_points();
 
   // Drops every pending point (counted as points_dropped_restart) and starts the stream afresh, as a
   // gap does: the caller skipped part of the stream (RsuCore sheds packets it is too late for), so
@@ -169,6 +183,7 @@ class SweepClusterer {
   IncrementalClustering clusters_;
   std::uint64_t next_seq_ = 0;
   std::vector<std::uint64_t> swept_open_given_;  // first_seq of the clusters swept_open gave
+  std::vector<std::uint64_t> overtaken_;         // first_seq of open clusters a release went ahead of
   SweepClustererStats stats_;
 };
 

@@ -134,5 +134,22 @@ TEST(LidarConfig, FootprintTrackIsOnUnlessTurnedOff) {
             std::string::npos);
 }
 
+// perception.joint_release_range_gap_m (issue 16, latency): the clusterer's default unless given; a
+// negative or non-numeric gap is refused with the field named.
+TEST(LidarConfig, JointReleaseRangeGapIsReadAndChecked) {
+  EXPECT_EQ(parse("  input: {udp: {}}\n").core.sweep.joint_release_range_gap_m,
+            perception::SweepConfig{}.joint_release_range_gap_m);
+  EXPECT_EQ(parse("  input: {udp: {}}\nperception: {joint_release_range_gap_m: 2.5}\n")
+                .core.sweep.joint_release_range_gap_m,
+            2.5);
+  for (const char* bad : {"-1", "far"}) {
+    EXPECT_NE(
+        refusal(std::string("  input: {udp: {}}\nperception: {joint_release_range_gap_m: ") + bad + "}\n")
+            .find("perception.joint_release_range_gap_m"),
+        std::string::npos)
+        << bad;
+  }
+}
+
 }  // namespace
 }  // namespace rsu::daemon

@@ -6,7 +6,9 @@ by `rsu-sim stream` (tests/load/load_street.yaml), the rest beyond the coverage;
 
 Prints: announcements sent / accepted / rejected by reason; corrections rsud sent and the vehicles received
 (lost in transport), and per vehicle in view: received vs rotations (missing ones listed); latency from the
-sweep to the correction's arrival (p50 / p99 / max); rsud's RSS sampled every 0.25 s (first, last, max and
+sweep to the correction's arrival (p50 / p99 / max) and from the last LiDAR packet that covered the vehicle
+in that rotation (the ray caster's truth, `rsu-sim stream --truth-out`) to the correction's arrival (issue
+16: "from the last packet covering a vehicle to its correction on the wire"); rsud's RSS sampled every 0.25 s (first, last, max and
 the slope of a least-squares line over the second half of the run, MB per minute); rsud's CPU (share of one
 core, from /proc/<pid>/stat).
 
@@ -85,6 +87,51 @@ def slope_mb_per_min(samples):
     return 60.0 * sum((t - mt) * (m - mm) for t, m in half) / var if var > 0 else float("nan")
 
 
+def covering_passes(path, rotation_s):
+    """Per vehicle id, the rotations' passes of the LiDAR over it: (first, last) host-clock send times of
+    the packets with returns on it, a new pass after a gap of half a rotation."""
+    sent = {}
+    for line in read_text(path).splitlines():
+        if line.startswith("#"):
+            continue
+        w = line.split()
+        for v in w[2:]:
+            sent.setdefault(int(v), []).append(int(w[0]))
+    gap_ns = int(rotation_s * 0.5e9)
+    passes = {}
+    for v, times in sent.items():
+        times.sort()
+        out = [[times[0], times[0]]]
+        for t in times[1:]:
+            if t - out[-1][1] > gap_ns:
+                out.append([t, t])
+            else:
+                out[-1][1] = t
+        passes[v] = out
+    return passes
+
+
+def last_packet_latency(cs, passes, rotation_s):
+    """For each correction, received minus the send time of the last packet of the pass its sweep time
+    falls in (or lies nearest, within half a rotation), and whether another vehicle's pass overlapped that
+    one (the two in one line of sight: rsud releases them together, sweep_clusterer.h); and how many found
+    no pass."""
+    latency, unmatched = [], 0
+    for c in cs:
+        best = None
+        for first, last in passes.get(c["vehicle"], []):
+            d = max(first - c["sweep_ns"], c["sweep_ns"] - last, 0)
+            if best is None or d < best[0]:
+                best = (d, first, last)
+        if best is None or best[0] > rotation_s * 0.5e9:
+            unmatched += 1
+            continue
+        _, first, last = best
+        shared = any(f <= last and l >= first for v, ps in passes.items() if v != c["vehicle"] for f, l in ps)
+        latency.append(((c["recv_ns"] - last) * 1e-6, shared))
+    return latency, unmatched
+
+
 def percentile(values, q):
     s = sorted(values)
     return s[min(len(s) - 1, max(0, int(round(q * (len(s) - 1)))))] if s else float("nan")
@@ -107,7 +154,9 @@ def run(args):
             h.write_trust_list(extra=args.vehicles - len(IN_VIEW))
         h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=args.verifier_thread,
                        learning_frames=3 if args.ouster else None,
-                       extra="" if args.mount_integrity == "on" else "mount_integrity: {enabled: false}\n")
+                       extra=("" if args.mount_integrity == "on" else "mount_integrity: {enabled: false}\n") + (
+                           "" if args.joint_release_gap is None else
+                           "perception: {joint_release_range_gap_m: %g}\n" % args.joint_release_gap))
         if args.ouster:
             # rsud learns the background from the scene without its vehicles, streamed for the 3 s before
             # scenario time 0 (the Velodyne runs load rsu-sim simulate's frames instead); the stream
@@ -128,7 +177,7 @@ def run(args):
             h.wait_for(lambda: "ready: serving" in h.log(), 20, "rsud to learn the background and serve")
         else:
             h.epoch_ns = time.time_ns() + 1_000_000_000
-        stream = h.stream(0.0, args.seconds)
+        stream = h.stream(0.0, args.seconds, options=["--truth-out", h.path("stream.truth")])
         fleet = h.fleet(args.seconds + 0.5, extra=args.vehicles - len(IN_VIEW))
         samples, cpu0, threads0, t0 = [], cpu_s(rsud.pid), thread_cpu_s(rsud.pid), time.time()
         deadline = t0 + args.seconds + 30
@@ -224,6 +273,16 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
     p50, p99, worst_ms = percentile(latency, 0.5), percentile(latency, 0.99), max(latency, default=float("nan"))
     print("latency sweep -> received: p50 %.1f ms, p99 %.1f ms, max %.1f ms (%d corrections)" % (
         p50, p99, worst_ms, len(latency)))
+    timed, unmatched = last_packet_latency(cs, covering_passes(h.path("stream.truth"), rotation_s), rotation_s)
+    last_latency = [ms for ms, _ in timed]
+    for what, values in (("every correction", last_latency),
+                         ("vehicle alone in its line of sight", [ms for ms, shared in timed if not shared]),
+                         ("another vehicle in its line of sight", [ms for ms, shared in timed if shared])):
+        print("latency last covering packet sent -> received, %s: p50 %.2f ms, p99 %.2f ms, max %.2f ms "
+              "(%d corrections)" % (what, percentile(values, 0.5), percentile(values, 0.99),
+                                    max(values, default=float("nan")), len(values)))
+    if unmatched:
+        print("  %d corrections without a pass of the LiDAR over their vehicle" % unmatched)
     slope = slope_mb_per_min(samples)
     print("rsud RSS: first %.1f MB, last %.1f MB, max %.1f MB, slope over the second half %+.2f MB/min "
           "(%d samples)" % (samples[0][1], samples[-1][1], max(m for _, m in samples), slope, len(samples)))
@@ -237,6 +296,7 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
         assert worst_share >= 0.95, "a vehicle in view was corrected in only %.0f %% of its rotations" % (
             100 * worst_share)
         assert p99 < 50.0, "p99 latency %.1f ms" % p99
+        assert unmatched == 0 and last_latency, "%d corrections without a pass over their vehicle" % unmatched
         assert abs(slope) < 5.0, "RSS grows %.2f MB/min" % slope
         print("ok")
     return 0
@@ -270,6 +330,9 @@ def main():
     ap.add_argument("--mount-integrity", choices=("on", "off"), default="on",
                     help="off: rsud does not check its mount (to compare with: what the check costs and "
                          "withholds)")
+    ap.add_argument("--joint-release-gap", type=float, default=None, metavar="M",
+                    help="rsud's perception.joint_release_range_gap_m (default: its own); 1000 waits for every "
+                         "unfinished cluster in a vehicle's line of sight (the rule before issue 16's change)")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.smoke:

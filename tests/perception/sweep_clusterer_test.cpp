@@ -115,25 +115,77 @@ TEST(SweepClusterer, ObjectAcrossTheZeroAzimuthIsOneCluster) {
   EXPECT_EQ(released[0].points.size(), 20U);
 }
 
-TEST(SweepClusterer, WaitsForAnOverlappingOpenCluster) {
-  // A near object (3 m, needs ~13 deg past it) and a far one (30 m, ~1.3 deg) at the same azimuths:
-  // the far one is closed first but waits so both reach association together.
-  SweepClusterer sweep({}, clustering(), Eigen::Vector2d::Zero(), kHz, 0.0);
+// A near object (3 m, needs ~13 deg past it) and a farther one at the same azimuths: the farther one
+// closes first. Returns how many clusters the first release held and the sweep azimuth it came at.
+std::pair<std::size_t, double> first_release_near_and(double far_m, const SweepConfig& config = {}) {
+  SweepClusterer sweep(config, clustering(), Eigen::Vector2d::Zero(), kHz, 0.0);
   start_stream(sweep);
   for (int i = 0; i < 20; ++i) {
     sweep.add(at(3.0, 40.0 + 0.25 * i), true);
-    sweep.add(at(30.0, 40.0 + 0.25 * i), true);
+    sweep.add(at(far_m, 40.0 + 0.25 * i), true);
   }
-  std::size_t first_release_count = 0;
-  double first_release_at = 0.0;
-  for (double a = 45.0; a < 80.0 && first_release_count == 0; a += 0.1) {
+  for (double a = 45.0; a < 80.0; a += 0.1) {
     sweep.add(at(50.0, a), false);
     const auto released = sweep.release_closed();
-    first_release_count = released.size();
-    first_release_at = a;
+    if (!released.empty())
+      return {released.size(), a};
   }
-  EXPECT_EQ(first_release_count, 2U);
-  EXPECT_GT(first_release_at - 44.75, rad_to_deg(std::asin(0.7 / 3.0)));
+  return {0, 0.0};
+}
+
+TEST(SweepClusterer, WaitsForAnOverlappingOpenClusterAtNearbyRanges) {
+  // 3 m and 8.5 m apart by 5.5 m, within the 6 m of joint release: the far one waits so that both
+  // reach association together.
+  const auto [count, at_deg] = first_release_near_and(8.5);
+  EXPECT_EQ(count, 2U);
+  EXPECT_GT(at_deg - 44.75, rad_to_deg(std::asin(0.7 / 3.0)));
+}
+
+TEST(SweepClusterer, ReleasesAClusterFarInRangeFromTheOpenOneAlone) {
+  // 3 m and 9.5 m: beyond the joint release gap, the far one goes as soon as it is closed (its bound:
+  // asin(0.7 / 9.5) = 4.2 deg past its last point plus the margin), the near one later.
+  const auto [count, at_deg] = first_release_near_and(9.5);
+  EXPECT_EQ(count, 1U);
+  EXPECT_LT(at_deg - 44.75, rad_to_deg(std::asin(0.7 / 9.5)) + 0.5 + 0.2);
+  // An infinite gap keeps the rule of old: every overlapping open cluster is waited for.
+  SweepConfig always;
+  always.joint_release_range_gap_m = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(first_release_near_and(30.0, always).first, 2U);
+}
+
+// The nearer objects a far one was released ahead of: their points swept so far are offered as what may
+// hide part of it (RsuCore's occluders) while they stay open; none once they are released too.
+TEST(SweepClusterer, OffersTheOpenClustersAReleaseWentAheadOf) {
+  SweepClusterer sweep({}, clustering(), Eigen::Vector2d::Zero(), kHz, 0.0);
+  start_stream(sweep);
+  // And one farther still over the last 1 deg of their span (a dense column of 4 points an azimuth).
+  for (int i = 0; i < 20; ++i) {
+    sweep.add(at(3.0, 40.0 + 0.25 * i), true);
+    sweep.add(at(12.0, 40.0 + 0.25 * i), true);
+    for (int k = 0; k < 4 && i >= 16; ++k)
+      sweep.add(at(40.0 + 0.1 * k, 40.0 + 0.25 * i), true);
+  }
+  EXPECT_TRUE(sweep.overtaken_open_points().empty());
+  std::vector<std::size_t> released_sizes;
+  std::vector<std::size_t> offered;
+  for (double a = 45.0; a < 80.0; a += 0.1) {
+    sweep.add(at(50.0, a), false);
+    for (const SweptCluster& c : sweep.release_closed())
+      released_sizes.push_back(c.points.size());
+    offered.push_back(sweep.overtaken_open_points().size());
+  }
+  ASSERT_EQ(released_sizes.size(), 3U);
+  EXPECT_EQ(released_sizes.back(), 20U);  // the 3 m object, last
+  // The 40 m object goes first, ahead of both (their 40 points offered), then the 12 m one, ahead of
+  // the 3 m one (its 20), then the 3 m one.
+  EXPECT_EQ(released_sizes.front(), 16U);
+  const auto first_offer = std::find_if(offered.begin(), offered.end(), [](std::size_t n) { return n > 0; });
+  ASSERT_NE(first_offer, offered.end());
+  EXPECT_EQ(*first_offer, 40U);
+  EXPECT_NE(std::find(offered.begin(), offered.end(), 20U), offered.end());
+  EXPECT_EQ(offered.back(), 0U);
+  for (const std::size_t n : offered)
+    EXPECT_TRUE(n == 0U || n == 20U || n == 40U) << n;
 }
 
 TEST(SweepClusterer, TimeGoingBackwardsRestartsAndDropsPending) {
@@ -243,6 +295,12 @@ TEST(SweepClusterer, CutAtTheStreamsStartIsDroppedThenSeenWhole) {
 TEST(SweepClusterer, RejectsBadParameters) {
   EXPECT_THROW(SweepClusterer({}, clustering(), Eigen::Vector2d::Zero(), 0.0, 0.0), std::invalid_argument);
   EXPECT_THROW(SweepClusterer({}, clustering(), Eigen::Vector2d::Zero(), kHz, -1.0), std::invalid_argument);
+  for (const double gap : {-1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    SweepConfig config;
+    config.joint_release_range_gap_m = gap;
+    EXPECT_THROW(SweepClusterer(config, clustering(), Eigen::Vector2d::Zero(), kHz, 0.0),
+                 std::invalid_argument);
+  }
 }
 
 // --- Laser-aware rule --------------------------------------------------------------------------
@@ -434,12 +492,14 @@ std::vector<int> offline_components(const std::vector<lidar::LidarPoint>& points
 // The release rule as a batch, as the sweep clusterer ran it before it clustered incrementally (issue
 // 16): on each packet, every pending foreground point clustered again (cluster_grid), each
 // component closed when every point is farther than the tolerance from the future wedge (r sin(behind)
-// > d), released when closed, clear of the stream's start and overlapping no open component; stale
+// > d), released when closed, clear of the stream's start and overlapping no open component at ranges
+// within the joint release gap; stale
 // points (half a turn behind) dropped first. The incremental clusterer must release exactly the same
 // clusters, packet by packet, in the same order.
 class BatchReleaseReference {
  public:
-  BatchReleaseReference(double tolerance, double lag_rad) : tolerance_(tolerance), lag_rad_(lag_rad) {}
+  BatchReleaseReference(double tolerance, double lag_rad, double joint_gap)
+      : tolerance_(tolerance), lag_rad_(lag_rad), joint_gap_(joint_gap) {}
 
   // `encoder`: the newest unwrapped encoder azimuth; `start_u`: where the stream began (beam azimuth).
   void add(const lidar::LidarPoint& p, double u, double range) { pending_.push_back({p, u, range}); }
@@ -459,6 +519,8 @@ class BatchReleaseReference {
     struct State {
       double lo = std::numeric_limits<double>::infinity();
       double hi = -std::numeric_limits<double>::infinity();
+      double near = std::numeric_limits<double>::infinity();  // planar range
+      double far = -std::numeric_limits<double>::infinity();
       bool closed = true;
       std::size_t first = 0;
     };
@@ -470,6 +532,8 @@ class BatchReleaseReference {
         st.first = i;
       st.lo = std::min(st.lo, pending_[i].u);
       st.hi = std::max(st.hi, pending_[i].u);
+      st.near = std::min(st.near, pending_[i].range);
+      st.far = std::max(st.far, pending_[i].range);
       const double behind = a_future - pending_[i].u;
       const double r = pending_[i].range;
       const double distance = behind <= 0.0 ? 0.0 : behind >= kPi / 2.0 ? r : r * std::sin(behind);
@@ -483,7 +547,8 @@ class BatchReleaseReference {
     for (const auto& [first, l] : by_first) {
       const State& st = state.at(l);
       const bool overlaps_open = std::any_of(state.begin(), state.end(), [&](const auto& o) {
-        return !o.second.closed && o.second.lo <= st.hi && o.second.hi >= st.lo;
+        return !o.second.closed && o.second.lo <= st.hi && o.second.hi >= st.lo &&
+               o.second.near - st.far < joint_gap_ && st.near - o.second.far < joint_gap_;
       });
       if (!st.closed || overlaps_open)
         continue;
@@ -535,6 +600,7 @@ class BatchReleaseReference {
   }
   double tolerance_;
   double lag_rad_;
+  double joint_gap_;
   std::vector<Pending> pending_;
 };
 
@@ -661,7 +727,7 @@ void check_exact_against_offline(const lidar::SensorModel& model, const std::vec
     }
   };
 
-  BatchReleaseReference batch(kTolerance, margin - min_offset);
+  BatchReleaseReference batch(kTolerance, margin - min_offset, config.joint_release_range_gap_m);
   const double max_offset = *std::max_element(offsets.begin(), offsets.end());
   double start_u = 0.0;
   std::size_t batch_releases = 0;

@@ -5,6 +5,8 @@
 // wall the simulation clock is shifted so that the first packet is "now" on the host clock (the common clock
 // of tests on one machine). --loss and --reorder impair the stream as a bad network would (issue 7's
 // fault tests), drawn per packet from a counter-based random stream, so a seed repeats a run exactly.
+// --truth-out logs, for each packet sent with returns on a vehicle, when it left and which vehicles: the
+// ray caster's truth of the last packet covering a vehicle, from which the load test measures latency.
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20
 
 #include <boost/asio.hpp>
@@ -38,6 +40,38 @@ namespace {
 double impairment_draw(std::uint64_t seed, std::uint64_t stream, std::int64_t k) {
   return uniform_open01(mix64(seed ^ mix64(stream ^ mix64(static_cast<std::uint64_t>(k)))));
 }
+
+// --truth-out: one line per sent packet whose returns lie on vehicles, "SENT_NS K ID [ID ...]" (host clock
+// just after the send, the packet's index in the schedule, the vehicles' ids).
+class TruthLog {
+ public:
+  explicit TruthLog(const po::variables_map& vm) {
+    if (!vm.count("truth-out"))
+      return;
+    path_ = vm["truth-out"].as<std::string>();
+    out_.open(path_);
+    if (!out_)
+      throw std::runtime_error("stream: cannot write " + path_);
+    out_ << "# sent_host_ns packet vehicle_ids: packets with returns on vehicles, as sent\n";
+  }
+  bool enabled() const { return out_.is_open(); }
+  void sent(std::int64_t k, const std::vector<std::uint32_t>& vehicles) {
+    if (!enabled() || vehicles.empty())
+      return;
+    out_ << edge::host_now_ns() << ' ' << k;
+    for (const std::uint32_t id : vehicles)
+      out_ << ' ' << id;
+    out_ << '\n';
+  }
+  void close() {
+    if (enabled() && !out_.flush())
+      throw std::runtime_error("stream: cannot write " + path_);
+  }
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+};
 
 double fraction_option(const po::variables_map& vm, const char* name) {
   const double v = vm[name].as<double>();
@@ -87,6 +121,8 @@ int stream_ouster(const po::variables_map& vm, const sim::Scenario& scenario, do
   const std::int64_t first = simulator.packet_index_at(sim_start);
   const std::int64_t last = simulator.packet_index_at(sim_start + from_seconds(seconds));
   std::vector<std::uint8_t> payload;
+  std::vector<std::uint32_t> vehicles;
+  TruthLog truth(vm);
   std::uint64_t sent = 0, failed = 0, late = 0;
   constexpr TimeNs kLateNs = 1'000'000;
   TimeNs max_behind = 0;
@@ -100,7 +136,7 @@ int stream_ouster(const po::variables_map& vm, const sim::Scenario& scenario, do
     } else if (!fast) {
       std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(due - sim_start));
     }
-    simulator.packet(k, clock_offset, payload);
+    simulator.packet(k, clock_offset, payload, truth.enabled() ? &vehicles : nullptr);
     // How far behind its firing the packet leaves: a sender behind its schedule sends back to back,
     // faster than the sensor would, until it has caught up.
     if (!fast) {
@@ -116,7 +152,10 @@ int stream_ouster(const po::variables_map& vm, const sim::Scenario& scenario, do
     boost::system::error_code ec;
     socket.send_to(asio::buffer(payload), destination, 0, ec);
     ec ? ++failed : ++sent;
+    if (!ec)
+      truth.sent(k, vehicles);
   }
+  truth.close();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   std::printf(
       "sent %llu %s packets (%s, %s, %zu bytes; %llu failed) to %s in %.2f s; metadata %s; "
@@ -154,7 +193,9 @@ int run_stream(const std::vector<std::string>& args) {
       "profile", po::value<std::string>()->default_value("RNG19_RFL8_SIG16_NIR16"),
       "with --ouster: LEGACY, RNG19_RFL8_SIG16_NIR16 or RNG15_RFL8_NIR8")(
       "metadata-out", po::value<std::string>(),
-      "with --ouster: write the sensor's metadata JSON here (rsud's lidar.metadata) and start");
+      "with --ouster: write the sensor's metadata JSON here (rsud's lidar.metadata) and start")(
+      "truth-out", po::value<std::string>(),
+      "log each sent packet with returns on vehicles: host-clock send time (ns), packet index, vehicle ids");
   add_scenario_options(options);
   po::positional_options_description positional;
   positional.add("scenario", 1);
@@ -206,36 +247,49 @@ int run_stream(const std::vector<std::string>& args) {
   const TimeNs clock_offset = has_epoch         ? static_cast<TimeNs>(vm["epoch-ns"].as<long long>())
                               : clock == "wall" ? edge::host_now_ns() - sim_start
                                                 : 0;
-  std::array<std::uint8_t, lidar::kPacketBytes> payload{};
-  std::optional<std::array<std::uint8_t, lidar::kPacketBytes>> held_back;  // sent after the next packet
-  std::uint64_t sent = 0, failed = 0, dropped = 0, reordered = 0;
-  const auto send = [&](const std::array<std::uint8_t, lidar::kPacketBytes>& bytes) {
-    boost::system::error_code ec;
-    socket.send_to(asio::buffer(bytes), destination, 0, ec);
-    ec ? ++failed : ++sent;
+  // A packet with the vehicles its returns are on (--truth-out).
+  struct Packet {
+    std::int64_t k = 0;
+    std::array<std::uint8_t, lidar::kPacketBytes> bytes{};
+    std::vector<std::uint32_t> vehicles;
   };
+  Packet packet;
+  std::optional<Packet> held_back;  // sent after the next packet
+  TruthLog truth(vm);
+  std::uint64_t sent = 0, failed = 0, dropped = 0, reordered = 0;
+  const auto send = [&](const Packet& p) {
+    boost::system::error_code ec;
+    socket.send_to(asio::buffer(p.bytes), destination, 0, ec);
+    ec ? ++failed : ++sent;
+    if (!ec)
+      truth.sent(p.k, p.vehicles);
+  };
+  const TimeNs packet_period = simulator.schedule().packet_period_ns();
   for (std::int64_t k = first; k < last; ++k) {
-    lidar::PacketReturns returns = simulator.simulate_packet(k);
-    const TimeNs since_start = returns.blocks.first_firing_ns - sim_start;
+    lidar::PacketReturns returns =
+        simulator.simulate_packet(k, std::nullopt, truth.enabled() ? &packet.vehicles : nullptr);
+    packet.k = k;
+    // The packet leaves once its last firing has fired, as a sensor sends it.
+    const TimeNs due = returns.blocks.first_firing_ns + packet_period;
     if (has_epoch && !vm.count("fast")) {
       std::this_thread::sleep_until(std::chrono::system_clock::time_point(
           std::chrono::duration_cast<std::chrono::system_clock::duration>(
-              std::chrono::nanoseconds(returns.blocks.first_firing_ns + clock_offset))));
+              std::chrono::nanoseconds(due + clock_offset))));
     } else if (!vm.count("fast")) {
-      std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(since_start));
+      std::this_thread::sleep_until(wall_start + std::chrono::nanoseconds(due - sim_start));
     }
     returns.blocks.first_firing_ns += clock_offset;
-    lidar::encode_packet(scenario.lidar.model, returns, payload);
+    lidar::encode_packet(scenario.lidar.model, returns, packet.bytes);
     if (loss > 0.0 && impairment_draw(impair_seed, 1, k) < loss) {
       ++dropped;
       continue;
     }
     if (!held_back && reorder > 0.0 && impairment_draw(impair_seed, 2, k) < reorder) {
-      held_back = payload;
+      held_back = packet;
       ++reordered;
       continue;
     }
-    send(payload);
+    send(packet);
     if (held_back) {
       send(*held_back);
       held_back.reset();
@@ -243,6 +297,7 @@ int run_stream(const std::vector<std::string>& args) {
   }
   if (held_back)
     send(*held_back);
+  truth.close();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   std::printf("sent %llu packets (%llu failed, %llu dropped, %llu reordered) to %s in %.2f s\n",
               static_cast<unsigned long long>(sent), static_cast<unsigned long long>(failed),
