@@ -130,6 +130,7 @@ std::vector<perception::Detection> RsuCore::detect(std::vector<perception::Swept
     if (cluster.points.empty())
       continue;
     auto d = prepared_.fit(cluster.points, mount_.xy(), config_.perception.fix.fit, fixer_.fit_thinning());
+    d.ahead_of_open = cluster.ahead_of_open;
     ++lidar_stats_.clusters_fitted;
     if (!d.fit.ok()) {
       ++lidar_stats_.fits_failed;  // too small or thin to fit alone, but maybe a fragment of a vehicle

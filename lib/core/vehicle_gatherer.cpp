@@ -84,13 +84,15 @@ HeldVehicle& VehicleGatherer::held_for(std::uint64_t vehicle_id, TimeNs first_ti
 // that detection may be a neighbour's released first (an unconnected car beside it, farther from the
 // LiDAR, whose visible face falls inside the vehicle's gate): the vehicle is held until the sweep has
 // passed its grown footprint, so that its own detection, released later, is assigned too and wins as
-// the nearer (mis-association, README "Robustness").
+// the nearer (mis-association, README "Robustness"). A vehicle released ahead of a nearer cluster still
+// open in its line of sight (perception::SweptCluster::ahead_of_open) is held as a far one: the rest of
+// it may show beyond that cluster.
 TimeNs VehicleGatherer::release_time(const HeldVehicle& held, const tracking::VehicleHypothesis& vehicle,
                                      const GrownFootprint& footprint,
                                      std::span<const Eigen::Vector2d> outline, bool own,
                                      const SweepPosition& sweep) const {
   const bool far = (vehicle.centre - lidar_xy_).norm() > config_.hold_beyond_m;
-  if (!far && own)
+  if (!far && own && !held.ahead_of_open)
     return held.first_time;
   const std::span<const Eigen::Vector2d> passed =
       far ? outline : std::span<const Eigen::Vector2d>(footprint.corners());
@@ -126,6 +128,7 @@ std::size_t VehicleGatherer::gather(std::vector<perception::Detection>&& detecti
       } else if (c != parts.front() || !assigned) {
         held.gathered_own = held.gathered_own && footprints[j].inside_lane(part);
       }
+      held.ahead_of_open = held.ahead_of_open || part.ahead_of_open;
       held.points.insert(held.points.end(), part.points.begin(), part.points.end());
       held.weighted_offset +=
           static_cast<TimeNs>(part.points.size()) * (part.sweep_time_ns - held.first_time);

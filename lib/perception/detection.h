@@ -24,6 +24,7 @@ struct Detection {
   std::vector<Eigen::Vector3d> points;  // map frame
   TimeNs sweep_time_ns = 0;             // mean firing time of its points: when the LiDAR swept it
   RectangleFit fit;                     // its status says whether a rectangle could be fitted
+  bool ahead_of_open = false;           // SweptCluster::ahead_of_open: may continue behind a nearer one
 };
 
 // Which of a dense cluster's points the rectangle is fitted to: every k-th azimuth column of each laser's

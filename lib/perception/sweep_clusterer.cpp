@@ -271,9 +271,12 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     if (overlaps_open) {
       continue;
     }
+    bool ahead_of_open = false;
     for (const ComponentSummary& o : open) {
-      if (in_line_of_sight(o) && o.min_range < s.max_range &&
-          std::find(overtaken_.begin(), overtaken_.end(), o.first_seq) == overtaken_.end())
+      if (!in_line_of_sight(o) || !(o.min_range < s.max_range))
+        continue;
+      ahead_of_open = true;
+      if (std::find(overtaken_.begin(), overtaken_.end(), o.first_seq) == overtaken_.end())
         overtaken_.push_back(o.first_seq);
     }
     const std::vector<PendingPoint> members = clusters_.take(c);
@@ -290,6 +293,7 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
       continue;
     }
     SweptCluster cluster;
+    cluster.ahead_of_open = ahead_of_open;
     cluster.points.reserve(members.size());
     for (const PendingPoint& m : members) {
       cluster.points.push_back(m.point);

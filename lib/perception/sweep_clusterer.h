@@ -79,14 +79,19 @@ struct SweepConfig {
   // A gap in the point stream longer than this many rotations, or time going backwards, restarts it.
   double max_gap_rotations = 2.0;
   // A closed cluster waits for an open one at overlapping azimuths only if their planar ranges from the
-  // LiDAR come this close (file comment). Twice the reach of a vehicle's association gate (3 sigma of an
-  // announced position 1 m uncertain) beyond its own half length; a larger gate is still guarded by
-  // the RSU's hold of a vehicle whose assigned cluster is not its own (core/vehicle_gatherer.h).
+  // LiDAR come this close (file comment): nearer, they may be one vehicle's fragments or fall in one
+  // vehicle's association gate, and are associated together. Farther apart, a vehicle whose gate took
+  // the other's cluster is held until its own is released and takes that instead
+  // (core/vehicle_gatherer.h): what the early release can cost is the other vehicle's fix in that
+  // rotation. Infinite: wait for every open cluster in the line of sight (the rule before issue 16).
   double joint_release_range_gap_m = 6.0;
 };
 
 struct SweptCluster {
   std::vector<lidar::LidarPoint> points;  // map frame, in arrival order
+  // Released while a nearer cluster in its line of sight was still open (joint_release_range_gap_m):
+  // part of it may be hidden behind that one and show again beyond it.
+  bool ahead_of_open = false;
 };
 
 struct SweepClustererStats {
