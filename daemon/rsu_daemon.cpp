@@ -414,7 +414,7 @@ void RsuDaemon::load_saved_background() {
     return refuse("learned with a " + saved->sensor_model + ", the LiDAR is a " + config_.core.sensor_model);
   if (!(saved->mount == config_.core.mount))
     return refuse("learned under another mount (the mount was changed or recalibrated since)");
-  core_.load_background(saved->frames);
+  core_.load_background(saved->frames, true);  // checked before it serves (RsuCore::mount_unverified_)
   ++state_counts_.background_loaded;
   spdlog::info("background loaded from {} ({} rotations saved by an earlier run)", config_.state.directory,
                saved->frames.size());

@@ -289,6 +289,7 @@ bool MountMonitor::check_rotation(std::span<const lidar::LidarPoint> rotation, T
     ++stats_.rotations_mismatched;
   if (beyond)
     ++stats_.rotations_beyond_tolerance;
+  within_run_ = beyond ? 0 : within_run_ + 1;
   // Directions held while the window's mean gathers evidence along them (start-up) do not say yet that
   // the scene cannot verify the tolerance.
   const bool gathering = last_.weak_held && time - first_checked_ < config_.weak_evidence_window;

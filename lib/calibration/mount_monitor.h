@@ -145,6 +145,9 @@ class MountMonitor {
   bool serving() const { return state_ == MountState::kServing; }
   const MountDrift& last() const { return last_; }
   const MountMonitorStats& stats() const { return stats_; }
+  // Observable rotations in a row, up to the last, within the tolerance (not beyond it; unobservable
+  // ones neither break nor extend the run).
+  int rotations_within_in_a_row() const { return within_run_; }
   std::size_t reference_planes() const { return planes_[0].size() + planes_[1].size() + planes_[2].size(); }
   // Why the fixes stopped or resumed, for the log (set when check_rotation() returns true).
   const std::string& notice() const { return notice_; }
@@ -210,6 +213,7 @@ class MountMonitor {
   TimeNs calm_since_ = 0;  // the first of the rotations in a row within resume_fraction (while moved)
   bool calm_ = false;
   int suspect_run_ = 0;          // rotations in a row with a suspected motion
+  int within_run_ = 0;           // rotations in a row within the tolerance
   std::deque<Evidence> recent_;  // the rotations matching the reference over weak_evidence_window
   TimeNs first_checked_ = 0;     // the first rotation's time
   MountDrift last_;

@@ -29,7 +29,7 @@ struct LidarStats {
   std::uint64_t corrections_unassigned = 0;
   std::uint64_t corrections_encode_failed = 0;
   std::uint64_t corrections = 0;
-  std::uint64_t corrections_withheld_mount = 0;  // fixed, not sent: the LiDAR moved (MountMonitor)
+  std::uint64_t corrections_withheld_mount = 0;  // fixed, not sent: the LiDAR moved, or unchecked (RsuCore)
   // fixes computed ahead of their vehicle's release (RsuCoreConfig::prepare_fixes), and those of them
   // its release used (its inputs unchanged)
   std::uint64_t fixes_prepared = 0;

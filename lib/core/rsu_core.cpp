@@ -319,11 +319,13 @@ LidarStepResult RsuCore::learn(std::span<const lidar::LidarPoint> sensor_points,
   return result;
 }
 
-void RsuCore::load_background(const std::vector<std::vector<lidar::LidarPoint>>& frames) {
+void RsuCore::load_background(const std::vector<std::vector<lidar::LidarPoint>>& frames,
+                              bool saved_by_earlier_run) {
   for (const auto& frame : frames)
     add_background_frame(std::vector<lidar::LidarPoint>(frame));
   background_ready_ = true;
   start_mount_monitor();
+  mount_unverified_ = saved_by_earlier_run && monitor_due_;  // it may have moved since (rsu_core.h)
 }
 
 std::size_t RsuCore::expire(TimeNs now) {
@@ -349,6 +351,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
     fresh.occluders_.take_static(std::move(occluders_));
     fresh.monitor_ = std::move(monitor_);
     fresh.monitor_due_ = monitor_due_;
+    fresh.mount_unverified_ = mount_unverified_;
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }
   fresh.packets_ = std::move(packets_).reloaded(next);

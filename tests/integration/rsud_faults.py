@@ -31,7 +31,8 @@
                        the still sensor; the lean stops the fixes within 1 s of crossing the tolerance (the
                        street cannot verify 5 cm at 50 m: a suspected motion, three rotations), none beyond
                        3 sigma after it; killed and started again (a LiDAR moved while rsud was down), it
-                       loads the saved background and stops the fixes within 1 s of being ready; the log,
+                       loads the saved background, sends nothing before checking the LiDAR against it and
+                       stops the fixes within 1 s of being ready; the log,
                        the counters and the advertisements (advertisement.saying_fixes_withheld) say why
   persisted_restart    (issue 17) rsud learns the background from the empty street and saves it in its
                        state directory; killed mid-run and started again, it loads it (no learning: its
@@ -310,6 +311,10 @@ def case_mount_lean(h):
     assert not beyond, "%d corrections during the lean beyond 3 sigma (worst %.1f)" % (
         len(beyond), max(c["sigmas"] for c in beyond))
     restarted = [c for c in cs if c["recv_ns"] > t_restart]
+    # Its saved background is a reference it has not checked the LiDAR against yet: nothing until it has
+    # (before, the fixes of its first rotations went out from the leaned LiDAR, one 3.1 sigma off).
+    assert not restarted, "the restarted rsud sent %d corrections from the moved LiDAR (worst %.1f sigma)" % (
+        len(restarted), max(c["sigmas"] for c in restarted))
     # Suspected or confirmed: since the street's length is held at the reference (mount_monitor.cpp,
     # held_step on the stated information) the yaw it holds confirms the lean.
     assert "fixes stopped: the LiDAR " in first_log and " moved by" in first_log, "the log does not say why (lean)"
