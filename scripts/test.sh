@@ -7,7 +7,8 @@
 # What runs where, and why (budget: the whole command under 30 min on 2 cores, fresh machine; measured
 # on a fresh clone at 9ccea79: install 1 s, Release build 429 s, tests 180 s, ASan build 583 s, tests
 # 109 s, TSan build 162 s, tests 14 s, fuzz 158 s: 27.3 min; the CI run of 2026-11-29 at 70787cd took
-# 2522 s, 42 min, over the budget: the GCC ASan+UBSan build about 1050 s of it, README Known shortfalls):
+# 2522 s, 42 min, over the budget: the GCC ASan+UBSan build about 1050 s of it; the next, at 17d86b8,
+# 1507 s; README Known shortfalls):
 #   Release     every test
 #   ASan+UBSan  every test (memory errors and UB anywhere, our parsers above all) but those labelled
 #               `throughput` (the load smoke and the mis-association run): they assert the speed of an
