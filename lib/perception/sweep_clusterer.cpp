@@ -260,7 +260,7 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     return clusters_.summary(a).first_seq < clusters_.summary(b).first_seq;
   });
   for (const std::uint32_t c : closed) {
-    const ComponentSummary& s = clusters_.summary(c);
+    const ComponentSummary s = clusters_.summary(c);  // a copy: take() below removes the component
     const double gap = config_.joint_release_range_gap_m;
     const auto in_line_of_sight = [&](const ComponentSummary& o) {
       return o.min_azimuth <= s.max_azimuth && o.max_azimuth >= s.min_azimuth;
@@ -270,14 +270,6 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     });
     if (overlaps_open) {
       continue;
-    }
-    bool ahead_of_open = false;
-    for (const ComponentSummary& o : open) {
-      if (!in_line_of_sight(o) || !(o.min_range < s.max_range))
-        continue;
-      ahead_of_open = true;
-      if (std::find(overtaken_.begin(), overtaken_.end(), o.first_seq) == overtaken_.end())
-        overtaken_.push_back(o.first_seq);
     }
     const std::vector<PendingPoint> members = clusters_.take(c);
     if (cut_at_start(members)) {
@@ -292,8 +284,16 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
       ++stats_.clusters_dropped_large;
       continue;
     }
+    // Released ahead of nearer open clusters in its line of sight: they become its occluders
+    // (overtaken_open_points), and it may continue behind them. Only for clusters released, not dropped.
     SweptCluster cluster;
-    cluster.ahead_of_open = ahead_of_open;
+    for (const ComponentSummary& o : open) {
+      if (!in_line_of_sight(o) || !(o.min_range < s.max_range))
+        continue;
+      cluster.ahead_of_open = true;
+      if (std::find(overtaken_.begin(), overtaken_.end(), o.first_seq) == overtaken_.end())
+        overtaken_.push_back(o.first_seq);
+    }
     cluster.points.reserve(members.size());
     for (const PendingPoint& m : members) {
       cluster.points.push_back(m.point);
