@@ -441,10 +441,12 @@ void read_metrics(const YamlField& f, DaemonConfig& c) {
 }
 
 void read_mount_integrity(const YamlField& f, DaemonConfig& c) {
-  f.expect_map({"enabled", "max_position_error_m", "resume_after_s"});
+  f.expect_map({"enabled", "max_position_error_m", "resume_after_s", "check_thread"});
   calibration::MountMonitorConfig& m = c.core.mount_monitor;
   if (f.has("enabled"))
     m.enabled = bool_of(f.child("enabled"));
+  if (f.has("check_thread"))
+    c.mount_check_thread = bool_of(f.child("check_thread"));
   m.max_position_error_m = f.positive_or("max_position_error_m", m.max_position_error_m);
   const double resume_s = f.non_negative_or("resume_after_s", to_seconds(m.resume_after));
   if (resume_s > 3600)

@@ -165,6 +165,10 @@ struct DaemonConfig {
   // (daemon/v2i_receiver.h). Off by default: on 2 cores the event loop alone measured lower latency and
   // less CPU at 1000 signed vehicles x 10 Hz, nothing lost either way (README, "Robustness", load).
   bool v2i_verifier_thread = false;
+  // mount_integrity.check_thread: the mount check's registration on a thread of its own (live input;
+  // a capture replay checks on the loop, so that its output does not depend on the host's timing).
+  // Taking effect at a restart.
+  bool mount_check_thread = true;
   AdvertisementConfig advertisement;
   DdsConfig dds;
   LoggingConfig logging;

@@ -11,6 +11,7 @@
 
 #include "daemon/dds_edge.h"
 #include "daemon/metrics_text.h"
+#include "daemon/mount_check_thread.h"
 #include "daemon/peer_bus.h"
 #include "daemon/systemd_notify.h"
 #include "daemon/udp_socket.h"
@@ -89,6 +90,15 @@ void RsuDaemon::start() {
     load_saved_background();
   start_dds();
   start_input();
+  if (config_.mount_check_thread && !replaying_) {
+    // 4 rotations: 0.2-0.4 s of a LiDAR's, a lag well within the second the fixes must stop in.
+    mount_checks_ = std::make_unique<MountCheckThread>(
+        io_,
+        [this](const core::MountRotations& checked, const std::vector<calibration::MountDrift>& drifts) {
+          core_.record_mount_checks(checked, drifts);  // its notices logged with the next LiDAR result
+        },
+        4);
+  }
 
   signals_.async_wait([this](const boost::system::error_code& ec, int signal_number) {
     if (!ec)
@@ -449,8 +459,12 @@ void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
   }
   send_corrections(result.corrections);
   send_withheld_notices(result.withheld_notices);
-  // The mount check of a rotation just completed (~1 ms), once its corrections are on the wire.
-  core_.check_mount_pending();
+  // The mount check of the rotations just completed, once their corrections are on the wire: on its own
+  // thread (live input), or here (a capture replay, whose output must not depend on the host's timing).
+  if (mount_checks_)
+    mount_checks_->submit(core_.take_mount_rotations());
+  else
+    core_.check_mount_pending();
 }
 
 bool RsuDaemon::send_to_vehicle(const v2i::UdpEndpoint& destination, std::span<const std::uint8_t> bytes,
@@ -756,6 +770,8 @@ CounterList RsuDaemon::stats() {
     out.add("v2i", "receiver_errors", v2i_receiver_->receive_errors());
     out.add_level("v2i", "receiver_waiting_max", v2i_receiver_->waiting_max());
   }
+  // Rotations the mount check thread dropped unchecked: it lagged 4 rotations behind (starved of CPU).
+  out.add("mount", "rotations_dropped_busy", mount_checks_ ? mount_checks_->dropped() : 0);
   report_kernel_drops(out, "lidar", lidar_socket_);
   if (lidar_socket_.is_open())
     out.add_level("lidar", "receive_buffer_bytes", lidar_receive_buffer_bytes_);
@@ -862,6 +878,7 @@ void RsuDaemon::reload() {
     const bool inputs_changed =
         next.v2i_listen_address != config_.v2i_listen_address || next.v2i_port != config_.v2i_port ||
         next.v2i_verifier_thread != config_.v2i_verifier_thread ||
+        next.mount_check_thread != config_.mount_check_thread ||
         next.input.index() != config_.input.index() || next.dds.enabled != config_.dds.enabled ||
         next.dds.peers.enabled != config_.dds.peers.enabled ||
         next.dds.peers.topic != config_.dds.peers.topic ||
@@ -876,6 +893,7 @@ void RsuDaemon::reload() {
     next.v2i_listen_address = config_.v2i_listen_address;
     next.v2i_port = config_.v2i_port;
     next.v2i_verifier_thread = config_.v2i_verifier_thread;
+    next.mount_check_thread = config_.mount_check_thread;
     config_ = std::move(next);
     if (v2i_receiver_)
       v2i_receiver_->set_trust(config_.core.security.mode == v2i::SecurityMode::kSigned,

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One io_context on one
-// thread, which alone touches RsuCore, and with v2i.verifier_thread the V2I receiver thread
-// (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has: sockets
+// thread, which alone touches RsuCore; the mount check thread (mount_check_thread.h: it registers each
+// rotation against the mount's immutable reference); and with v2i.verifier_thread the V2I receiver
+// thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has: sockets
 // (V2I announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog,
 // advertisement, log summaries, PCD replay pacing) and signals (SIGHUP reload, SIGTERM / SIGINT drain).
 // Everything it decides is RsuCore's; this file only moves bytes, reads the clock and logs.
@@ -32,6 +33,7 @@
 namespace rsu::daemon {
 
 class DdsEdge;
+class MountCheckThread;
 class PeerBus;
 class V2iReceiver;
 
@@ -143,6 +145,7 @@ class RsuDaemon {
 
   std::optional<lidar::SensorModel> sensor_model_;  // the Velodyne tables in use (none for other sensors)
   std::unique_ptr<V2iReceiver> v2i_receiver_;       // when v2i.verifier_thread (after the socket it reads)
+  std::unique_ptr<MountCheckThread> mount_checks_;  // live input: the mount check off the loop
   std::unique_ptr<DdsEdge> dds_;                    // when dds.enabled (after bad_input_: it reports there)
   std::unique_ptr<PeerBus> peers_;  // when dds.peers.enabled (after dds_: it uses its participant)
   std::uint32_t peers_seen_ = 0;    // other RSUs on the peer bus at the last housekeeping

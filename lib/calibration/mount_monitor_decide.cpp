@@ -42,16 +42,16 @@ Pose3 from_parameters(const Vector6d& v) {
 // sigma verifies the tolerance (start-up; a spread too wide), those directions are held at the reference
 // as a free one is, their covariance saying so: a motion along them is seen once the mean shows it.
 MountDrift MountMonitor::decide(const MountDrift& newest) const {
-  const Vector6d scale = at_radius_scale();
+  const Vector6d scale = reference_->at_radius_scale();
   const Matrix6d covariance = scale.asDiagonal() * newest.covariance * scale.asDiagonal();
   const SymmetricEigen6 eigen(covariance);
-  const double tolerance = config_.max_position_error_m;
-  const double verified_sigma = tolerance / config_.significance_sigmas;
+  const double tolerance = config().max_position_error_m;
+  const double verified_sigma = tolerance / config().significance_sigmas;
   std::vector<int> weak;
   for (int k = 0; k < 6; ++k) {
     const double variance = eigen.eigenvalues()[k];
     if (variance > verified_sigma * verified_sigma &&
-        variance <= config_.max_free_sigma_m * config_.max_free_sigma_m)
+        variance <= config().max_free_sigma_m * config().max_free_sigma_m)
       weak.push_back(k);
   }
   if (weak.empty())
@@ -87,7 +87,7 @@ MountDrift MountMonitor::decide(const MountDrift& newest) const {
   // the 6 x 6 solver is compiled once, common/symmetric_eigen.h).
   Matrix6d padded = Matrix6d::Zero();
   padded.topLeftCorner(m, m) = mean_covariance;
-  const bool verified = static_cast<int>(estimates.size()) >= config_.suspect_rotations &&
+  const bool verified = static_cast<int>(estimates.size()) >= config().suspect_rotations &&
                         SymmetricEigen6(padded).eigenvalues().maxCoeff() <= verified_sigma * verified_sigma;
   if (verified) {
     d.rotations_averaged = static_cast<int>(estimates.size());
@@ -106,12 +106,12 @@ MountDrift MountMonitor::decide(const MountDrift& newest) const {
   d.covariance = scale.cwiseInverse().asDiagonal() *
                  Matrix6d(others + directions * mean_covariance * directions.transpose()) *
                  scale.cwiseInverse().asDiagonal();
-  std::tie(d.error_at_radius_m, d.error_sigma_m) = error_at_radius(d.motion, d.covariance);
+  std::tie(d.error_at_radius_m, d.error_sigma_m) = reference_->error_at_radius(d.motion, d.covariance);
   if (verified) {
     const Matrix6d weak_covariance = scale.cwiseInverse().asDiagonal() *
                                      Matrix6d(directions * mean_covariance * directions.transpose()) *
                                      scale.cwiseInverse().asDiagonal();
-    d.weak_sigma_m = error_at_radius(d.motion, weak_covariance).second;
+    d.weak_sigma_m = reference_->error_at_radius(d.motion, weak_covariance).second;
   }
   return d;
 }

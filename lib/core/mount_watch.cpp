@@ -86,24 +86,39 @@ void RsuCore::watch_mount(std::span<const lidar::LidarPoint> points, bool whole_
 }
 
 std::size_t RsuCore::check_mount_pending() {
-  const std::size_t n = mount_rotations_pending_.size();
-  if (monitor_due_ && n > 0)
+  const MountRotations pending = take_mount_rotations();
+  std::vector<calibration::MountDrift> drifts;
+  for (const lidar::LidarFrame& rotation : pending.rotations)
+    drifts.push_back(pending.reference->estimate(rotation.points, Pose3{}));
+  record_mount_checks(pending, drifts);
+  return drifts.size();
+}
+
+MountRotations RsuCore::take_mount_rotations() {
+  MountRotations taken;
+  if (monitor_due_ && !mount_rotations_pending_.empty())
     build_mount_monitor();
-  if (monitor_) {
-    for (const lidar::LidarFrame& rotation : mount_rotations_pending_) {
-      if (monitor_->check_rotation(rotation.points, rotation.end_ns))
-        mount_notices_.push_back(monitor_->notice());
-    }
+  if (monitor_ && monitor_->reference()->config().enabled) {
+    taken.reference = monitor_->reference();
+    taken.rotations = std::move(mount_rotations_pending_);
   }
   mount_rotations_pending_.clear();
-  if (!monitor_)
-    return 0;
+  return taken;
+}
+
+void RsuCore::record_mount_checks(const MountRotations& checked,
+                                  std::span<const calibration::MountDrift> drifts) {
+  if (!monitor_ || checked.reference != monitor_->reference())
+    return;  // checked against a reference replaced since (a reload with a new mount)
+  for (std::size_t i = 0; i < drifts.size() && i < checked.rotations.size(); ++i) {
+    if (monitor_->record(drifts[i], checked.rotations[i].end_ns))
+      mount_notices_.push_back(monitor_->notice());
+  }
   // Where the scene holds the LiDAR weakly one rotation within says less (single rotations of a LiDAR
   // turned 1 deg there read 0.02 m and 0.29 m by turns), as it does for a motion: the monitor's
   // suspect_rotations rule stops such fixes later, as it does in service.
   if (monitor_->rotations_within_in_a_row() > 0)
     mount_unverified_ = false;
-  return n;
 }
 
 }  // namespace rsu::core

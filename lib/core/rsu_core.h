@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -65,6 +66,12 @@ struct ReloadSummary {
   bool background_kept = false;  // false: the LiDAR or background setup changed, learning restarts
   std::size_t vehicles_before = 0;
   std::size_t vehicles_after = 0;
+};
+
+// Rotations of the static scene (sensor frame, a sample of its points) for the mount check.
+struct MountRotations {
+  std::shared_ptr<const calibration::MountReference> reference;
+  std::vector<lidar::LidarFrame> rotations;
 };
 
 class RsuCore {
@@ -162,12 +169,19 @@ class RsuCore {
   std::string mount_reason() const { return monitor_ ? monitor_->reason() : std::string(); }
   // The mount monitor (nullopt before the background is ready or when disabled).
   const std::optional<calibration::MountMonitor>& mount_monitor() const { return monitor_; }
-  // The mount check (calibration::MountMonitor, ~1 ms of CPU per rotation) of the rotations the LiDAR
+  // The mount check (calibration::MountMonitor, 1-3 ms of CPU per rotation) of the rotations the LiDAR
   // steps completed since the last call. A step leaves it pending, so that the corrections it returns
-  // do not wait for it (issue 16: correction latency); a caller that sends them first calls this after
-  // (rsud does). A step first checks what is still pending, so nothing is skipped when a caller never
-  // calls it. Returns how many rotations were checked.
+  // do not wait for it (issue 16: correction latency); a caller that sends them first calls this after.
+  // A step first checks what is still pending, so nothing is skipped when a caller never calls it.
+  // Returns how many rotations were checked.
   std::size_t check_mount_pending();
+  // The same check in two halves, for a caller that registers the rotations on a thread of its own (rsud:
+  // a dense LiDAR's check held its loop for 2-3 ms a rotation, and the packets behind it): the pending
+  // rotations with the reference they are checked against (MountReference is immutable; no rotations:
+  // nothing to check), and their estimates, in the same order, back. Estimates of a reference that a
+  // reload has replaced since are dropped.
+  MountRotations take_mount_rotations();
+  void record_mount_checks(const MountRotations& checked, std::span<const calibration::MountDrift> drifts);
 
  private:
   enum class Release { passed, everything };

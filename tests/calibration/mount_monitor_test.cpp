@@ -297,7 +297,7 @@ WeakStreetRun run_still(const Street& street, calibration::MountMonitor& m, int 
   int run = 0;
   for (int k = 3; k < 3 + rotations; ++k) {
     const std::vector<lidar::LidarPoint> r = street.rotation(k, {});
-    const bool single_beyond = m.estimate(r, Pose3{}).error_at_radius_m > 0.05;
+    const bool single_beyond = m.reference()->estimate(r, Pose3{}).error_at_radius_m > 0.05;
     out.single_beyond += single_beyond ? 1 : 0;
     run = single_beyond ? run + 1 : 0;
     out.longest_single_run = std::max(out.longest_single_run, run);
@@ -385,7 +385,7 @@ TEST(MountMonitorWeakStreet, DISABLED_MeasureWeakStreets) {
     double sum_sq = 0.0;
     for (int k = 3; k < 3 + still_rotations; ++k) {
       const std::vector<lidar::LidarPoint> r = street.rotation(k, {});
-      const calibration::MountDrift single = reference.estimate(r, Pose3{});
+      const calibration::MountDrift single = reference.reference()->estimate(r, Pose3{});
       still.check_rotation(r, k * dt);
       const calibration::MountDrift& d = still.last();
       if (!d.matches_reference)

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <future>
 #include <limits>
 #include <string>
 #include <utility>
@@ -872,6 +873,67 @@ TEST(RsuCore, VehicleWithheldForTheMountIsToldSo) {
   // Sent before the stop (its first rotations), withheld after it: never both in one rotation.
   for (const auto& [out, emitted_at] : stream.corrections())
     EXPECT_LT(out.correction.sweep_time, n.sweep_time);
+}
+
+// The mount check in two halves, the rotations registered on another thread (rsud does so: issue 16's
+// latency): the same verdicts as the check within the steps, and nothing recorded against a reference
+// that a reload with a new mount has replaced.
+std::vector<calibration::MountDrift> estimate_on_a_thread(const MountRotations& taken) {
+  return std::async(std::launch::async,
+                    [&taken] {
+                      std::vector<calibration::MountDrift> drifts;
+                      for (const lidar::LidarFrame& rotation : taken.rotations)
+                        drifts.push_back(taken.reference->estimate(rotation.points, Pose3{}));
+                      return drifts;
+                    })
+      .get();
+}
+
+TEST(RsuCore, MountCheckedOnAnotherThreadDecidesAsWithinTheSteps) {
+  Pose3 turned = testing::roadside_mount();
+  turned.yaw += deg_to_rad(1.0);
+  RsuCore within(test_config());
+  RsuCore split(test_config());
+  within.load_background(saved_background());
+  split.load_background(saved_background());
+  SimStream a(testing::street_scene(), {}, lidar::make_vlp16(), turned, sim::NoiseModel{}, 100);
+  SimStream b(testing::street_scene(), {}, lidar::make_vlp16(), turned, sim::NoiseModel{}, 100);
+  const TimeNs end = 8 * a.rotation_ns();
+  a.run_until(within, end);
+  within.check_mount_pending();
+  std::size_t taken_rotations = 0;
+  b.run_until(split, end, [&](const LidarStepResult&, TimeNs) {
+    const MountRotations taken = split.take_mount_rotations();
+    if (taken.rotations.empty())
+      return;
+    taken_rotations += taken.rotations.size();
+    split.record_mount_checks(taken, estimate_on_a_thread(taken));
+  });
+  EXPECT_EQ(split.take_mount_rotations().rotations.size(), 0U);  // nothing left for the steps
+  EXPECT_GT(taken_rotations, 5U);
+  EXPECT_EQ(counter(split, "mount.rotations_checked"), taken_rotations);
+  EXPECT_EQ(counter(split, "mount.rotations_checked"), counter(within, "mount.rotations_checked"));
+  EXPECT_EQ(counter(split, "mount.stops"), 1U);
+  EXPECT_EQ(counter(within, "mount.stops"), 1U);
+  EXPECT_FALSE(split.mount_serving());
+  EXPECT_EQ(split.mount_monitor()->last().error_at_radius_m,
+            within.mount_monitor()->last().error_at_radius_m);
+
+  // A rotation taken, then a reload with another mount (a recalibration: a new reference to come).
+  RsuCore remounted(test_config());
+  remounted.load_background(saved_background());
+  SimStream c(testing::street_scene(), {}, lidar::make_vlp16(), turned, sim::NoiseModel{}, 100);
+  MountRotations taken;
+  c.run_until(remounted, end, [&](const LidarStepResult&, TimeNs) {
+    if (taken.rotations.empty())
+      taken = remounted.take_mount_rotations();
+  });
+  ASSERT_FALSE(taken.rotations.empty());
+  RsuCoreConfig next = test_config();
+  next.mount.yaw += deg_to_rad(1.0);
+  remounted.reload(next, end);
+  remounted.record_mount_checks(taken, estimate_on_a_thread(taken));
+  EXPECT_EQ(counter(remounted, "mount.rotations_checked"), 0U);  // dropped, not recorded
 }
 
 // A reference saved by an earlier run may belong to a LiDAR that has moved while rsud was down: no fix

@@ -154,7 +154,8 @@ def run(args):
             h.write_trust_list(extra=args.vehicles - len(IN_VIEW))
         h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=args.verifier_thread,
                        learning_frames=3 if args.ouster else None,
-                       extra=("" if args.mount_integrity == "on" else "mount_integrity: {enabled: false}\n") + (
+                       extra={"on": "", "off": "mount_integrity: {enabled: false}\n",
+                              "on-loop": "mount_integrity: {check_thread: false}\n"}[args.mount_integrity] + (
                            "" if args.joint_release_gap is None else
                            "perception: {joint_release_range_gap_m: %g}\n" % args.joint_release_gap))
         if args.ouster:
@@ -327,9 +328,10 @@ def main():
                          "street's VLP-32C; rsud learns the background from the first 3 s of stream")
     ap.add_argument("--lidar-mode", default="2048x10", help="with --ouster: columns x Hz (2048x10, 1024x20, ...)")
     ap.add_argument("--profile", default="RNG19_RFL8_SIG16_NIR16", help="with --ouster: the packet profile")
-    ap.add_argument("--mount-integrity", choices=("on", "off"), default="on",
+    ap.add_argument("--mount-integrity", choices=("on", "on-loop", "off"), default="on",
                     help="off: rsud does not check its mount (to compare with: what the check costs and "
-                         "withholds)")
+                         "withholds); on-loop: it checks on its event loop (mount_integrity.check_thread: "
+                         "false), the baseline for the check's own thread")
     ap.add_argument("--joint-release-gap", type=float, default=None, metavar="M",
                     help="rsud's perception.joint_release_range_gap_m (default: its own); 1000 waits for every "
                          "unfinished cluster in a vehicle's line of sight (the rule before issue 16's change)")
