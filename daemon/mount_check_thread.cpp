@@ -27,19 +27,16 @@ MountCheckThread::~MountCheckThread() {
 }
 
 void MountCheckThread::submit(core::MountRotations rotations) {
-  if (!rotations.reference || rotations.rotations.empty())
+  if (!rotations.reference && !rotations.source)
     return;
   {
     const std::lock_guard lock(mutex_);
-    // One rotation an entry, so that the bound counts rotations and the oldest go first.
-    for (lidar::LidarFrame& rotation : rotations.rotations) {
-      std::vector<lidar::LidarFrame> one;
-      one.push_back(std::move(rotation));
-      waiting_.push_back(core::MountRotations{rotations.reference, std::move(one)});
-    }
-    while (waiting_.size() > max_waiting_) {
+    waiting_rotations_ += rotations.rotations.size();
+    waiting_.push_back(std::move(rotations));
+    while (waiting_rotations_ > max_waiting_ && waiting_.size() > 1 && !waiting_.front().source) {
+      waiting_rotations_ -= waiting_.front().rotations.size();
+      dropped_.fetch_add(waiting_.front().rotations.size(), std::memory_order_relaxed);
       waiting_.pop_front();
-      dropped_.fetch_add(1, std::memory_order_relaxed);
     }
   }
   wake_.notify_one();
@@ -55,16 +52,12 @@ void MountCheckThread::run() {
         return;
       next = std::move(waiting_.front());
       waiting_.pop_front();
+      waiting_rotations_ -= next.rotations.size();
     }
-    auto drifts = std::make_shared<std::vector<calibration::MountDrift>>();
-    for (const lidar::LidarFrame& rotation : next.rotations)
-      drifts->push_back(next.reference->estimate(rotation.points, Pose3{}));
-    // Handlers posted from this one thread run in the order posted: the rotations' order.
-    // (The callback is copied: a handler still queued when this object is gone must not reach into it.)
-    boost::asio::post(
-        io_, [checked = checked_, done = std::make_shared<core::MountRotations>(std::move(next)), drifts] {
-          checked(*done, *drifts);
-        });
+    auto checks = std::make_shared<const core::MountChecks>(core::check_mount_rotations(std::move(next)));
+    // Handlers posted from this one thread run in the order posted: the rotations' order. (The callback
+    // is copied: a handler still queued when this object is gone must not reach into it.)
+    boost::asio::post(io_, [checked = checked_, checks] { checked(*checks); });
   }
 }
 

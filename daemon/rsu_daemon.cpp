@@ -94,8 +94,8 @@ void RsuDaemon::start() {
     // 4 rotations: 0.2-0.4 s of a LiDAR's, a lag well within the second the fixes must stop in.
     mount_checks_ = std::make_unique<MountCheckThread>(
         io_,
-        [this](const core::MountRotations& checked, const std::vector<calibration::MountDrift>& drifts) {
-          core_.record_mount_checks(checked, drifts);  // its notices logged with the next LiDAR result
+        [this](const core::MountChecks& checks) {
+          core_.record_mount_checks(checks);  // its notices logged with the next LiDAR result
         },
         4);
   }

@@ -4,6 +4,7 @@
 // the vehicles and the advertisement are told while the fixes are stopped.
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <utility>
@@ -28,21 +29,21 @@ std::vector<std::uint8_t> RsuCore::advertisement(TimeNs now) {
 }
 
 void RsuCore::start_mount_monitor() {
-  if (!config_.mount_monitor.enabled || background_frames_.empty())
+  if (!config_.mount_monitor.enabled || background_frames_->empty())
     return;
   // Its reference (planes of the background's rotations: 40-52 ms for three 128 x 2048 rotations) is
   // built when the first rotation is to be checked, a rotation after learning ended, not on top of the
   // last learning rotation's work: together they held a dense stream's loop long enough to lose packets.
+  // rsud builds it on its mount check thread (check_mount_rotations).
   monitor_due_ = true;
   missing_at_last_rotation_ = packets_.order_stats().lost + lidar_stats_.packets_too_late;
 }
 
-void RsuCore::build_mount_monitor() {
-  monitor_due_ = false;
+calibration::MountReferenceSource RsuCore::mount_reference_source() const {
   // Fixes lie about a vehicle's half height above the road, below the sensor by its height over it.
-  const double fix_height = config_.mount.z - config_.perception.ground.ground_z;
-  monitor_.emplace(background_frames_, config_.mount, config_.coverage_radius_m, fix_height,
-                   config_.mount_monitor);
+  return calibration::MountReferenceSource{background_frames_, config_.mount, config_.coverage_radius_m,
+                                           config_.mount.z - config_.perception.ground.ground_z,
+                                           config_.mount_monitor};
 }
 
 void RsuCore::watch_mount(std::span<const lidar::LidarPoint> points, bool whole_frame) {
@@ -85,33 +86,55 @@ void RsuCore::watch_mount(std::span<const lidar::LidarPoint> points, bool whole_
   }
 }
 
+MountChecks check_mount_rotations(MountRotations taken) {
+  MountChecks out;
+  if (!taken.reference && taken.source)
+    taken.reference = std::make_shared<const calibration::MountReference>(*taken.source);
+  for (const lidar::LidarFrame& rotation : taken.rotations)
+    out.drifts.push_back(taken.reference->estimate(rotation.points, Pose3{}));
+  out.checked = std::move(taken);
+  return out;
+}
+
 std::size_t RsuCore::check_mount_pending() {
-  const MountRotations pending = take_mount_rotations();
-  std::vector<calibration::MountDrift> drifts;
-  for (const lidar::LidarFrame& rotation : pending.rotations)
-    drifts.push_back(pending.reference->estimate(rotation.points, Pose3{}));
-  record_mount_checks(pending, drifts);
-  return drifts.size();
+  MountRotations taken = take_mount_rotations();
+  if (!taken.reference && !taken.source)
+    return 0;
+  const MountChecks checks = check_mount_rotations(std::move(taken));
+  record_mount_checks(checks);
+  return checks.drifts.size();
 }
 
 MountRotations RsuCore::take_mount_rotations() {
   MountRotations taken;
-  if (monitor_due_ && !mount_rotations_pending_.empty())
-    build_mount_monitor();
-  if (monitor_ && monitor_->reference()->config().enabled) {
+  if (monitor_building_)
+    return taken;  // kept pending until the reference is back
+  if (monitor_due_ && !mount_rotations_pending_.empty()) {
+    monitor_building_ = true;
+    taken.source = mount_reference_source();
+  } else if (monitor_) {
     taken.reference = monitor_->reference();
-    taken.rotations = std::move(mount_rotations_pending_);
   }
+  if (taken.reference || taken.source)
+    taken.rotations = std::move(mount_rotations_pending_);
   mount_rotations_pending_.clear();
   return taken;
 }
 
-void RsuCore::record_mount_checks(const MountRotations& checked,
-                                  std::span<const calibration::MountDrift> drifts) {
+void RsuCore::record_mount_checks(const MountChecks& checks) {
+  const MountRotations& checked = checks.checked;
+  if (checked.source) {
+    // The reference built from this run's background (not from one a reload has replaced since).
+    if (!monitor_building_ || checked.source->frames != background_frames_ || !checked.reference)
+      return;
+    monitor_building_ = false;
+    monitor_due_ = false;
+    monitor_.emplace(checked.reference);
+  }
   if (!monitor_ || checked.reference != monitor_->reference())
     return;  // checked against a reference replaced since (a reload with a new mount)
-  for (std::size_t i = 0; i < drifts.size() && i < checked.rotations.size(); ++i) {
-    if (monitor_->record(drifts[i], checked.rotations[i].end_ns))
+  for (std::size_t i = 0; i < checks.drifts.size() && i < checked.rotations.size(); ++i) {
+    if (monitor_->record(checks.drifts[i], checked.rotations[i].end_ns))
       mount_notices_.push_back(monitor_->notice());
   }
   // Where the scene holds the LiDAR weakly one rotation within says less (single rotations of a LiDAR

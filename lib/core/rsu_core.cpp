@@ -294,8 +294,8 @@ std::vector<std::string> RsuCore::take_lidar_notices() {
 void RsuCore::add_background_frame(std::vector<lidar::LidarPoint>&& sensor_points) {
   // Kept as it came, moved, not copied: a 128 x 2048 rotation is 8 MB, and writing 8 MB of memory
   // touched for the first time took 31-34 ms here (1 ms warm), on the loop.
-  background_frames_.push_back(std::move(sensor_points));
-  const std::vector<lidar::LidarPoint>& frame = background_frames_.back();
+  background_frames_->push_back(std::move(sensor_points));
+  const std::vector<lidar::LidarPoint>& frame = background_frames_->back();
   mount_.to_map_frame(frame, map_scratch_);
   background_.add_background_frame(map_scratch_);
   const perception::GroundHeightFilterConfig& ground = config_.perception.ground;
@@ -351,6 +351,7 @@ ReloadSummary RsuCore::reload(const RsuCoreConfig& next, TimeNs now) {
     fresh.occluders_.take_static(std::move(occluders_));
     fresh.monitor_ = std::move(monitor_);
     fresh.monitor_due_ = monitor_due_;
+    fresh.monitor_building_ = monitor_building_;
     fresh.mount_unverified_ = mount_unverified_;
     fresh.lidar_stats_.background_frames = lidar_stats_.background_frames;
   }

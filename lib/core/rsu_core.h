@@ -68,11 +68,22 @@ struct ReloadSummary {
   std::size_t vehicles_after = 0;
 };
 
-// Rotations of the static scene (sensor frame, a sample of its points) for the mount check.
+// Rotations of the static scene (sensor frame, a sample of its points) for the mount check, with the
+// reference they are checked against, or what to build it from (the first rotations after learning).
 struct MountRotations {
   std::shared_ptr<const calibration::MountReference> reference;
+  std::optional<calibration::MountReferenceSource> source;  // when reference is null
   std::vector<lidar::LidarFrame> rotations;
 };
+
+// The mount check of `taken` (its reference built first when it came with a source): the reference, and
+// each rotation's estimate in order, for RsuCore::record_mount_checks. Pure, and touching nothing of the
+// core: rsud runs it on a thread of its own.
+struct MountChecks {
+  MountRotations checked;
+  std::vector<calibration::MountDrift> drifts;
+};
+MountChecks check_mount_rotations(MountRotations taken);
 
 class RsuCore {
  public:
@@ -119,7 +130,7 @@ class RsuCore {
   bool background_ready() const { return background_ready_; }
   // The rotations the background was learned or loaded from, in the SENSOR frame (independent of the
   // mount): what the daemon persists so that a restart serves at once.
-  const std::vector<std::vector<lidar::LidarPoint>>& background_frames() const { return background_frames_; }
+  const std::vector<std::vector<lidar::LidarPoint>>& background_frames() const { return *background_frames_; }
 
   // Forgets silent vehicles (call about once a second); returns how many.
   std::size_t expire(TimeNs now);
@@ -177,11 +188,11 @@ class RsuCore {
   std::size_t check_mount_pending();
   // The same check in two halves, for a caller that registers the rotations on a thread of its own (rsud:
   // a dense LiDAR's check held its loop for 2-3 ms a rotation, and the packets behind it): the pending
-  // rotations with the reference they are checked against (MountReference is immutable; no rotations:
-  // nothing to check), and their estimates, in the same order, back. Estimates of a reference that a
-  // reload has replaced since are dropped.
+  // rotations with the reference they are checked against (MountReference is immutable) or, the first
+  // time, what to build it from (no rotations: nothing to check); their checks back, in the order taken.
+  // Checks against a reference (or a background) that a reload has replaced since are dropped.
   MountRotations take_mount_rotations();
-  void record_mount_checks(const MountRotations& checked, std::span<const calibration::MountDrift> drifts);
+  void record_mount_checks(const MountChecks& checks);
 
  private:
   enum class Release { passed, everything };
@@ -212,7 +223,7 @@ class RsuCore {
   void add_background_frame(std::vector<lidar::LidarPoint>&& sensor_points);
   // The mount monitor from the background's rotations (once the background is ready).
   void start_mount_monitor();
-  void build_mount_monitor();
+  calibration::MountReferenceSource mount_reference_source() const;
   // A sample of the sweep's static points (sensor frame; map_scratch_ holds them in the map frame) for
   // the mount monitor, which checks each whole rotation.
   void watch_mount(std::span<const lidar::LidarPoint> sensor_points, bool whole_frame);
@@ -227,7 +238,9 @@ class RsuCore {
   perception::SweepClusterer clusterer_;
   SweepPosition sweep_;
   bool background_ready_ = false;
-  std::vector<std::vector<lidar::LidarPoint>> background_frames_;  // sensor frame
+  // Sensor frame; shared with the mount check's reference build (not changed once learned).
+  std::shared_ptr<std::vector<std::vector<lidar::LidarPoint>>> background_frames_ =
+      std::make_shared<std::vector<std::vector<lidar::LidarPoint>>>();
   AnnouncementIntake announcements_;
   VehicleGatherer gatherer_;
   SweepOccluders occluders_;  // the sweep's other objects, which may hide part of a vehicle
@@ -248,7 +261,8 @@ class RsuCore {
   TimeNs last_loss_ns_ = std::numeric_limits<TimeNs>::min();
   std::vector<lidar::LidarPoint> map_scratch_;
   std::optional<calibration::MountMonitor> monitor_;
-  bool monitor_due_ = false;                 // learned: monitor_ is built before the first rotation it checks
+  bool monitor_due_ = false;       // learned: monitor_ is built before the first rotation it checks
+  bool monitor_building_ = false;  // its reference's source taken (take_mount_rotations), not back yet
   lidar::FrameAssembler monitor_assembler_;  // rotations of a sample of the points, for monitor_
   std::vector<lidar::LidarPoint> monitor_scratch_;
   std::vector<lidar::LidarFrame> mount_rotations_pending_;  // for check_mount_pending()

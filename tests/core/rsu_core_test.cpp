@@ -878,15 +878,8 @@ TEST(RsuCore, VehicleWithheldForTheMountIsToldSo) {
 // The mount check in two halves, the rotations registered on another thread (rsud does so: issue 16's
 // latency): the same verdicts as the check within the steps, and nothing recorded against a reference
 // that a reload with a new mount has replaced.
-std::vector<calibration::MountDrift> estimate_on_a_thread(const MountRotations& taken) {
-  return std::async(std::launch::async,
-                    [&taken] {
-                      std::vector<calibration::MountDrift> drifts;
-                      for (const lidar::LidarFrame& rotation : taken.rotations)
-                        drifts.push_back(taken.reference->estimate(rotation.points, Pose3{}));
-                      return drifts;
-                    })
-      .get();
+MountChecks check_on_a_thread(MountRotations taken) {
+  return std::async(std::launch::async, [&taken] { return check_mount_rotations(std::move(taken)); }).get();
 }
 
 TEST(RsuCore, MountCheckedOnAnotherThreadDecidesAsWithinTheSteps) {
@@ -903,11 +896,11 @@ TEST(RsuCore, MountCheckedOnAnotherThreadDecidesAsWithinTheSteps) {
   within.check_mount_pending();
   std::size_t taken_rotations = 0;
   b.run_until(split, end, [&](const LidarStepResult&, TimeNs) {
-    const MountRotations taken = split.take_mount_rotations();
+    MountRotations taken = split.take_mount_rotations();
     if (taken.rotations.empty())
       return;
     taken_rotations += taken.rotations.size();
-    split.record_mount_checks(taken, estimate_on_a_thread(taken));
+    split.record_mount_checks(check_on_a_thread(std::move(taken)));
   });
   EXPECT_EQ(split.take_mount_rotations().rotations.size(), 0U);  // nothing left for the steps
   EXPECT_GT(taken_rotations, 5U);
@@ -932,7 +925,7 @@ TEST(RsuCore, MountCheckedOnAnotherThreadDecidesAsWithinTheSteps) {
   RsuCoreConfig next = test_config();
   next.mount.yaw += deg_to_rad(1.0);
   remounted.reload(next, end);
-  remounted.record_mount_checks(taken, estimate_on_a_thread(taken));
+  remounted.record_mount_checks(check_on_a_thread(std::move(taken)));
   EXPECT_EQ(counter(remounted, "mount.rotations_checked"), 0U);  // dropped, not recorded
 }
 
