@@ -160,11 +160,13 @@ int main(int argc, char** argv) {
     }
     if (dump)
       std::printf("received %s\n", rsu::v2i::security::to_hex(datagram).c_str());
-    std::printf("correction %lld %llu %u %lld %.4f %.4f %.5f %u %u %llu\n",
+    // The stated position covariance last (xx, xy, yy): what the vehicle was promised.
+    std::printf("correction %lld %llu %u %lld %.4f %.4f %.5f %u %u %llu %.6g %.6g %.6g\n",
                 static_cast<long long>(rsu::edge::host_now_ns()),
                 static_cast<unsigned long long>(c->vehicle_id), c->sequence,
                 static_cast<long long>(c->sweep_time), c->pose.x, c->pose.y, c->pose.yaw,
-                c->quality.points_used, c->quality.faces_seen, static_cast<unsigned long long>(c->rsu_id));
+                c->quality.points_used, c->quality.faces_seen, static_cast<unsigned long long>(c->rsu_id),
+                c->pose_covariance(0, 0), c->pose_covariance(0, 1), c->pose_covariance(1, 1));
     std::fflush(stdout);
   }
   close(fd);

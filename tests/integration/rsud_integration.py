@@ -207,10 +207,10 @@ logging:
         with open(self.path("vehicle.out")) as f:
             for line in f:
                 w = line.split()
-                if len(w) == 11 and w[0] == "correction":
+                if len(w) == 14 and w[0] == "correction":
                     out.append({"recv_ns": int(w[1]), "vehicle": int(w[2]), "seq": int(w[3]), "sweep_ns": int(w[4]),
                                 "x": float(w[5]), "y": float(w[6]), "yaw": float(w[7]), "points": int(w[8]),
-                                "rsu": int(w[10])})
+                                "rsu": int(w[10]), "cov": (float(w[11]), float(w[12]), float(w[13]))})
         return out
 
     def stats(self):
@@ -231,11 +231,23 @@ logging:
         assert "SIGTERM received: draining" in self.log() and "stopped:" in self.log(), self.log()
 
 
-def check_accuracy(corrections, max_error_m=0.10):
+def position_sigmas(c):
+    """The position error in standard deviations of the correction's own stated covariance (Mahalanobis)."""
+    dx, dy = c["x"] - TRUTH[0], c["y"] - TRUTH[1]
+    xx, xy, yy = c["cov"]
+    det = xx * yy - xy * xy
+    return math.sqrt(max(0.0, (yy * dx * dx - 2 * xy * dx * dy + xx * dy * dy) / det)) if det > 0 else float("inf")
+
+
+def check_accuracy(corrections, max_error_m=0.10, or_within_sigmas=None):
+    """Every correction within max_error_m of the truth; with or_within_sigmas, beyond it only if its own
+    stated covariance covers the error by that many sigmas (a fix may be less accurate, never less honest)."""
     assert corrections, "no corrections"
     for c in corrections:
         err = math.hypot(c["x"] - TRUTH[0], c["y"] - TRUTH[1])
-        assert err < max_error_m, "correction %s is %.3f m from the truth" % (c, err)
+        covered = or_within_sigmas is not None and position_sigmas(c) <= or_within_sigmas
+        assert err < max_error_m or covered, "correction %s is %.3f m from the truth (%.1f sigma)" % (
+            c, err, position_sigmas(c))
         dyaw = abs((c["yaw"] - TRUTH[2] + math.pi / 2) % math.pi - math.pi / 2)  # modulo pi
         assert dyaw < math.radians(3.0), "yaw %f vs %f" % (c["yaw"], TRUTH[2])
         assert c["vehicle"] == 1
@@ -416,10 +428,11 @@ def case_security(h):
     time.sleep(1.2)  # stats written, corrections flowing
     served_after = [c for c in h.corrections() if c["recv_ns"] > t_attack]
     assert len(served_after) >= 5, "the genuine flow stopped after the attacks: %d" % len(served_after)
-    # And no forged fix (2 m off) was taken. The genuine ones are held to 0.25 m here, not 0.10: in the
-    # ASan pass the attackers' helper processes starve rsud, which sheds 61-75 packets (packet.too_late)
-    # and fixes the next rotation with packets lost nearby, 0.109 m off (README Known shortfalls); what
-    # this test guards is that no forgery gets through, the accuracy tests guard the 0.10 m.
+    # And no forged fix (2 m off) was taken. The genuine ones within 0.10 m, or beyond it (up to 0.25 m)
+    # only as far as their stated covariance covers by 3 sigma: in the ASan pass the attackers' helper
+    # processes starve rsud, which sheds 61-75 packets (packet.too_late) and fixes the next rotation with
+    # packets lost nearby, 0.109 m off (README Known shortfalls).
+    check_accuracy(served_after, max_error_m=0.10, or_within_sigmas=3.0)
     check_accuracy(served_after, max_error_m=0.25)
     refused = [w[0] for w in h.vehicle_lines("refused")]
     expect_vehicle = {"unknown_signer": 2, "unsigned": 1, "duplicate": 1}
