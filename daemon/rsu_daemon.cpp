@@ -459,6 +459,8 @@ void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
   }
   send_corrections(result.corrections);
   send_withheld_notices(result.withheld_notices);
+  // What the step prepares for the next releases, once its corrections are on the wire.
+  core_.prepare_pending();
   // The mount check of the rotations just completed, once their corrections are on the wire: on its own
   // thread (live input), or here (a capture replay, whose output must not depend on the host's timing).
   if (mount_checks_)

@@ -120,8 +120,18 @@ LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Rele
   for (const HeldVehicle& held : gatherer_.release(release == Release::everything, sweep_))
     correct(held, now, result);
   if (release == Release::passed && config_.prepare_fixes)
-    prepare_fixes(now);
+    prepare_due_ = now;  // after the corrections are sent (prepare_pending)
+  else
+    prepare_due_.reset();
   return result;
+}
+
+void RsuCore::prepare_pending() {
+  if (!prepare_due_)
+    return;
+  const TimeNs now = *prepare_due_;
+  prepare_due_.reset();
+  prepare_fixes(now);
 }
 
 std::vector<perception::Detection> RsuCore::detect(std::vector<perception::SweptCluster>&& clusters) {
@@ -243,7 +253,8 @@ LidarStepResult RsuCore::on_lidar_packet(std::span<const std::uint8_t> payload, 
 LidarStepResult RsuCore::on_lidar_points(std::span<const lidar::LidarPoint> points, TimeNs now) {
   if (!background_ready_)
     return learn(points, false);
-  check_mount_pending();  // what the caller left (rsu_core.h)
+  prepare_pending();  // what the caller left (rsu_core.h)
+  check_mount_pending();
   mount_.to_map_frame(points, map_scratch_);
   LidarStepResult result = process(map_scratch_, Release::passed, now);
   watch_mount(points, false);  // after the corrections: the check waits for check_mount_pending()
@@ -253,6 +264,7 @@ LidarStepResult RsuCore::on_lidar_points(std::span<const lidar::LidarPoint> poin
 LidarStepResult RsuCore::on_lidar_frame(std::span<const lidar::LidarPoint> points, TimeNs now) {
   if (!background_ready_)
     return learn(points, true);
+  prepare_pending();
   check_mount_pending();
   mount_.to_map_frame(points, map_scratch_);
   LidarStepResult result = process(map_scratch_, Release::everything, now);  // every vehicle swept

@@ -186,6 +186,11 @@ class RsuCore {
   // A step first checks what is still pending, so nothing is skipped when a caller never calls it.
   // Returns how many rotations were checked.
   std::size_t check_mount_pending();
+  // The fits and fixes prepared ahead of a release (prepared_fixes.h) for what the last step left swept
+  // but not released. A step leaves them pending, so that the corrections it returns do not wait for
+  // another vehicle's preparation (issue 16: a dense sensor's near car takes 2-4 ms); a caller that sends
+  // them first calls this after (rsud does). A step first prepares what is still pending.
+  void prepare_pending();
   // The same check in two halves, for a caller that registers the rotations on a thread of its own (rsud:
   // a dense LiDAR's check held its loop for 2-3 ms a rotation, and the packets behind it): the pending
   // rotations with the reference they are checked against (MountReference is immutable) or, the first
@@ -216,6 +221,7 @@ class RsuCore {
   // (fetched once a batch, when a fix needs them: copying a dense sensor's open car costs per packet).
   std::vector<Eigen::Vector2d> occluders_of(const HeldVehicle& held);
   bool unfinished_current_ = false;
+  std::optional<TimeNs> prepare_due_;  // the last step's time, its preparation pending (prepare_pending)
 
   // sensor_points: this batch in the sensor frame (the rotations are kept so); map_scratch_ holds them
   // in the map frame.
