@@ -5,9 +5,9 @@
 // Along an axis the box [c - D/2, c + D/2] must hold every point (containment). Each of its two sides is
 // then one of:
 //  - a face: lower-body points (the full footprint: doors, bumpers; below lower_body_fraction of the
-//    announced height, and at the front and back below the bonnet: BoxPoint) spread along a side that
-//    faces the LiDAR. The side is their outer envelope
-//    (face_envelope.h), c = envelope -+ D/2.
+//    announced height, at a side where they make no face up to full_plan_height_m, and at the front and
+//    back below the bonnet: BoxPoint) spread along a side that faces the LiDAR. The side is their outer
+//    envelope (face_envelope.h), c = envelope -+ D/2.
 //  - an end: the extreme point on that side is a lower-body point and the LiDAR would have seen the body
 //    continue beyond it (field of view, self-occlusion): the body ends within end_allowance_m of it
 //    (rounded corners, the azimuth step).
@@ -35,13 +35,14 @@ struct CorrectionConfig;
 class FaceEnvelopeMemo;
 
 // A point in the box's frame: (along axis 0, along axis 1), its height above the road, whether it can
-// be on the lower body (whose outline is the footprint's: the sides), whether it lies low enough to be on
-// the ends of the footprint too (below the bonnet, CorrectionConfig::max_end_body_height_m), and its
-// horizontal range from the LiDAR.
+// be on the lower body (whose outline is the footprint's: the sides), whether it can be on the sides where
+// the lower body shows no face (below full_plan_height_m too: side_body_height), whether it lies low enough
+// to be on the front and back (below the bonnet: end_body_height), and its horizontal range from the LiDAR.
 struct BoxPoint {
   Eigen::Vector2d local = Eigen::Vector2d::Zero();
   double height = 0.0;
   bool lower_body = false;
+  bool side_body = false;
   bool end_body = false;
   double range = 0.0;
 };

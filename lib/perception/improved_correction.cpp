@@ -50,6 +50,7 @@ struct View {
   const LidarGeometry& lidar;
   const CorrectionConfig& config;
   double lower_height = 0.0;  // above the road: the lower body
+  double side_height = 0.0;   // ... the sides where the lower body makes no face (BoxPoint::side_body)
   double end_height = 0.0;    // ... and the footprint's ends (BoxPoint::end_body)
   double vehicle_height = 0.0;
   double noise_sigma = 0.0;
@@ -231,6 +232,7 @@ View view_of(std::span<const Eigen::Vector3d> finite, const RectangleFit& fit, c
             lidar,
             config,
             lower_body_height(size, config),
+            side_body_height(size, config),
             end_body_height(size, config),
             height_known ? size.height : 1e9,
             std::sqrt(point_noise_variance(range, config.covariance) +
@@ -239,7 +241,8 @@ View view_of(std::span<const Eigen::Vector3d> finite, const RectangleFit& fit, c
   for (const Eigen::Vector3d& p : finite) {
     const double height = p.z() - lidar.ground_z;
     view.body.push_back({Eigen::Vector2d::Zero(), height, height <= view.lower_height,
-                         height <= view.end_height, (p.head<2>() - lidar.xy()).norm()});
+                         height <= view.side_height, height <= view.end_height,
+                         (p.head<2>() - lidar.xy()).norm()});
   }
   view.envelopes = &envelopes;
   return view;

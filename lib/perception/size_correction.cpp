@@ -44,6 +44,10 @@ double lower_body_height(const VehicleSize& size, const CorrectionConfig& config
   return config.lower_body_fraction * size.height;
 }
 
+double side_body_height(const VehicleSize& size, const CorrectionConfig& config) {
+  return std::max(lower_body_height(size, config), config.full_plan_height_m);
+}
+
 double end_body_height(const VehicleSize& size, const CorrectionConfig& config) {
   const double lower = lower_body_height(size, config);
   return std::isfinite(lower) ? std::min(lower, config.max_end_body_height_m) : lower;

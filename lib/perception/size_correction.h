@@ -203,8 +203,16 @@ struct CorrectionConfig {
 // Up to which height above the road a point lies on the lower body (the footprint's outline):
 // lower_body_fraction of the announced height; every point when the height is not a finite positive
 // number. (Up to max(that, full_plan_height_m) measured better for a small car, 0.9 m doors at 1.48 m,
-// but with more fixes beyond 3 sigma at 6-8 m mounts: `rsu-pilot matrix`, issue 12.)
+// but with more fixes beyond 3 sigma at 6-8 m mounts: `rsu-pilot matrix`, issue 12; the sides alone do
+// not, side_body_height.)
 double lower_body_height(const VehicleSize& size, const CorrectionConfig& config);
+// Up to which height a point can be on the footprint's sides: the lower body, and up to full_plan_height_m
+// on a vehicle whose lower body ends below it (a small car's doors reach 0.9 m, above 55 % of its 1.48 m).
+// Whatever a laser meets there lies at most a cabin's inset inside the side (the belt line's ledge, a
+// window), which a face seen only there allows for (box_axis.h, mid_height_inset_width_m); at the front
+// and back it may be a bonnet's or boot lid's top, a bonnet's length behind the end (end_body_height).
+// Every point when the height is unknown.
+double side_body_height(const VehicleSize& size, const CorrectionConfig& config);
 // Up to which height a point can be on the footprint's front or back: the lower body, at most
 // max_end_body_height_m (every point, as for the lower body, when the height is unknown).
 double end_body_height(const VehicleSize& size, const CorrectionConfig& config);
