@@ -169,6 +169,10 @@ struct DaemonConfig {
   // a capture replay checks on the loop, so that its output does not depend on the host's timing).
   // Taking effect at a restart.
   bool mount_check_thread = true;
+  // perception.prepare_thread: the fits and fixes prepared ahead of a vehicle's release
+  // (core/prepared_fixes.h) on a thread of their own (live input, as the mount check). Taking effect at a
+  // restart.
+  bool prepare_thread = true;
   AdvertisementConfig advertisement;
   DdsConfig dds;
   LoggingConfig logging;

@@ -11,11 +11,11 @@
 
 #include "daemon/dds_edge.h"
 #include "daemon/metrics_text.h"
-#include "daemon/mount_check_thread.h"
 #include "daemon/peer_bus.h"
 #include "daemon/systemd_notify.h"
 #include "daemon/udp_socket.h"
 #include "daemon/v2i_receiver.h"
+#include "daemon/worker_thread.h"
 #include "edge/address_text.h"
 #include "edge/host_clock.h"
 #include "io/background_state.h"
@@ -91,13 +91,26 @@ void RsuDaemon::start() {
   start_dds();
   start_input();
   if (config_.mount_check_thread && !replaying_) {
-    // 4 rotations: 0.2-0.4 s of a LiDAR's, a lag well within the second the fixes must stop in.
-    mount_checks_ = std::make_unique<MountCheckThread>(
-        io_,
-        [this](const core::MountChecks& checks) {
+    // 4 rotations: 0.2-0.4 s of a LiDAR's, a lag well within the second the fixes must stop in; never
+    // the batch that builds the reference.
+    mount_checks_ = std::make_unique<WorkerThread<core::MountRotations, core::MountChecks>>(
+        io_, "rsud-mount", core::check_mount_rotations,
+        [this](core::MountChecks&& checks) {
           core_.record_mount_checks(checks);  // its notices logged with the next LiDAR result
         },
-        4);
+        WorkerThread<core::MountRotations, core::MountChecks>::Bound{
+            4, [](const core::MountRotations& r) { return r.rotations.size(); },
+            [](const core::MountRotations& r) { return r.source.has_value(); }});
+  }
+  if (config_.prepare_thread && config_.core.prepare_fixes && !replaying_) {
+    // 8 steps' worth: a few packets. An older preparation is of no use: its vehicles are released by now.
+    preparation_ = std::make_unique<WorkerThread<core::Preparation, core::Prepared>>(
+        io_, "rsud-prepare", core::prepare,
+        [this](core::Prepared&& prepared) {
+          core_.record_prepared(std::move(prepared));
+          submit_preparation();  // the vehicles its fits would release
+        },
+        WorkerThread<core::Preparation, core::Prepared>::Bound{8});
   }
 
   signals_.async_wait([this](const boost::system::error_code& ec, int signal_number) {
@@ -459,14 +472,27 @@ void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
   }
   send_corrections(result.corrections);
   send_withheld_notices(result.withheld_notices);
-  // What the step prepares for the next releases, once its corrections are on the wire.
-  core_.prepare_pending();
+  // What the step prepares for the next releases, once its corrections are on the wire: on its own
+  // thread (live input), or here (a capture replay: its counters must not depend on the host's timing).
+  if (preparation_)
+    submit_preparation();
+  else
+    core_.prepare_pending();
   // The mount check of the rotations just completed, once their corrections are on the wire: on its own
   // thread (live input), or here (a capture replay, whose output must not depend on the host's timing).
-  if (mount_checks_)
-    mount_checks_->submit(core_.take_mount_rotations());
-  else
+  if (mount_checks_) {
+    core::MountRotations rotations = core_.take_mount_rotations();
+    if (rotations.reference || rotations.source)
+      mount_checks_->submit(std::move(rotations));
+  } else {
     core_.check_mount_pending();
+  }
+}
+
+void RsuDaemon::submit_preparation() {
+  core::Preparation preparation = core_.take_preparation();
+  if (!preparation.empty())
+    preparation_->submit(std::move(preparation));
 }
 
 bool RsuDaemon::send_to_vehicle(const v2i::UdpEndpoint& destination, std::span<const std::uint8_t> bytes,
@@ -774,6 +800,8 @@ CounterList RsuDaemon::stats() {
   }
   // Rotations the mount check thread dropped unchecked: it lagged 4 rotations behind (starved of CPU).
   out.add("mount", "rotations_dropped_busy", mount_checks_ ? mount_checks_->dropped() : 0);
+  // Preparations the preparation thread dropped unrun (8 waiting): their releases computed their fixes.
+  out.add("lidar", "preparations_dropped_busy", preparation_ ? preparation_->dropped() : 0);
   report_kernel_drops(out, "lidar", lidar_socket_);
   if (lidar_socket_.is_open())
     out.add_level("lidar", "receive_buffer_bytes", lidar_receive_buffer_bytes_);
@@ -881,8 +909,8 @@ void RsuDaemon::reload() {
         next.v2i_listen_address != config_.v2i_listen_address || next.v2i_port != config_.v2i_port ||
         next.v2i_verifier_thread != config_.v2i_verifier_thread ||
         next.mount_check_thread != config_.mount_check_thread ||
-        next.input.index() != config_.input.index() || next.dds.enabled != config_.dds.enabled ||
-        next.dds.peers.enabled != config_.dds.peers.enabled ||
+        next.prepare_thread != config_.prepare_thread || next.input.index() != config_.input.index() ||
+        next.dds.enabled != config_.dds.enabled || next.dds.peers.enabled != config_.dds.peers.enabled ||
         next.dds.peers.topic != config_.dds.peers.topic ||
         (std::holds_alternative<UdpInput>(next.input) &&
          (std::get<UdpInput>(next.input).port != std::get<UdpInput>(config_.input).port ||
@@ -896,6 +924,7 @@ void RsuDaemon::reload() {
     next.v2i_port = config_.v2i_port;
     next.v2i_verifier_thread = config_.v2i_verifier_thread;
     next.mount_check_thread = config_.mount_check_thread;
+    next.prepare_thread = config_.prepare_thread;
     config_ = std::move(next);
     if (v2i_receiver_)
       v2i_receiver_->set_trust(config_.core.security.mode == v2i::SecurityMode::kSigned,

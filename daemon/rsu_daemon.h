@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One io_context on one
-// thread, which alone touches RsuCore; the mount check thread (mount_check_thread.h: it registers each
-// rotation against the mount's immutable reference); and with v2i.verifier_thread the V2I receiver
-// thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has: sockets
-// (V2I announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog,
+// thread, which alone touches RsuCore; two worker threads (worker_thread.h): the mount check (it registers
+// each rotation against the mount's immutable reference) and the preparation of fits and fixes ahead of
+// their release (core::prepare); and with v2i.verifier_thread the V2I receiver
+// thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has:
+// sockets (V2I announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog,
 // advertisement, log summaries, PCD replay pacing) and signals (SIGHUP reload, SIGTERM / SIGINT drain).
 // Everything it decides is RsuCore's; this file only moves bytes, reads the clock and logs.
 #pragma once
@@ -33,8 +34,9 @@
 namespace rsu::daemon {
 
 class DdsEdge;
-class MountCheckThread;
 class PeerBus;
+template <class Job, class Result>
+class WorkerThread;
 class V2iReceiver;
 
 class RsuDaemon {
@@ -65,6 +67,8 @@ class RsuDaemon {
                        const v2i::SignatureCheck* checked);
   void on_peer_announcement(std::span<const std::uint8_t> datagram, const core::PeerProvenance& from);
   void handle_lidar_result(const core::LidarStepResult& result);
+  // RsuCore's pending preparation (fits and fixes ahead of their release) to its thread.
+  void submit_preparation();
   void send_corrections(const std::vector<core::OutgoingCorrection>& corrections);
   void send_withheld_notices(const std::vector<core::OutgoingNotice>& notices);
   // One datagram to a vehicle; a failure is reported as `what` (rate-limited) and returns false.
@@ -145,8 +149,10 @@ class RsuDaemon {
 
   std::optional<lidar::SensorModel> sensor_model_;  // the Velodyne tables in use (none for other sensors)
   std::unique_ptr<V2iReceiver> v2i_receiver_;       // when v2i.verifier_thread (after the socket it reads)
-  std::unique_ptr<MountCheckThread> mount_checks_;  // live input: the mount check off the loop
-  std::unique_ptr<DdsEdge> dds_;                    // when dds.enabled (after bad_input_: it reports there)
+  // Live input: the mount check, and the preparation of fits and fixes, off the loop (worker_thread.h).
+  std::unique_ptr<WorkerThread<core::MountRotations, core::MountChecks>> mount_checks_;
+  std::unique_ptr<WorkerThread<core::Preparation, core::Prepared>> preparation_;
+  std::unique_ptr<DdsEdge> dds_;    // when dds.enabled (after bad_input_: it reports there)
   std::unique_ptr<PeerBus> peers_;  // when dds.peers.enabled (after dds_: it uses its participant)
   std::uint32_t peers_seen_ = 0;    // other RSUs on the peer bus at the last housekeeping
 

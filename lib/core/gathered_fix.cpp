@@ -53,7 +53,12 @@ GatheredVehicleFixer::GatheredVehicleFixer(const RsuCoreConfig& config, const Li
       hypothesis_(config.hypothesis),
       association_(config.association),
       lidar_(lidar_geometry(config, mount)),
+      lidar_xy_(mount.xy()),
       coverage_radius_m_(config.coverage_radius_m) {}
+
+perception::Detection GatheredVehicleFixer::detect(std::span<const lidar::LidarPoint> points) const {
+  return perception::detect(points, lidar_xy_, fix_config_.fit, {&lidar_, fix_config_.thin_above_points});
+}
 
 perception::VehicleFix GatheredVehicleFixer::fix_announced(std::span<const Eigen::Vector3d> points,
                                                            const v2i::VehicleAnnouncement& a,

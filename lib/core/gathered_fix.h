@@ -15,6 +15,7 @@
 #include "core/lidar_stats.h"
 #include "core/rsu_core_config.h"
 #include "core/vehicle_gatherer.h"
+#include "lidar/point.h"
 #include "perception/detection.h"
 #include "perception/vehicle_fix.h"
 #include "v2i/messages.h"
@@ -56,8 +57,8 @@ class GatheredVehicleFixer {
   // occluders: the other objects' points that may hide part of it (sweep_occluders.h).
   GatheredFix fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby = false,
                   std::vector<Eigen::Vector2d> occluders = {}) const;
-  // How a cluster's rectangle is fitted for association (perception::detect): thinned as its fix is.
-  perception::FitThinning fit_thinning() const { return {&lidar_, fix_config_.thin_above_points}; }
+  // A cluster's rectangle for association (perception::detect), fitted as its fix is (thinned alike).
+  perception::Detection detect(std::span<const lidar::LidarPoint> points) const;
 
  private:
   // The vehicle's fix from its points swept at `sweep_time`, with its announced size and its announced
@@ -73,6 +74,7 @@ class GatheredVehicleFixer {
   tracking::HypothesisConfig hypothesis_;
   tracking::AssociationConfig association_;
   perception::LidarGeometry lidar_;
+  Eigen::Vector2d lidar_xy_;
   double coverage_radius_m_;
 };
 

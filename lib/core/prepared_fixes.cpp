@@ -69,6 +69,21 @@ bool same_announcement(const v2i::VehicleAnnouncement& a, const v2i::VehicleAnno
 
 }  // namespace
 
+Prepared prepare(Preparation preparation) {
+  Prepared out;
+  out.fixer = std::move(preparation.fixer);
+  out.step_time = preparation.step_time;
+  for (FixInputs& in : preparation.vehicles) {
+    GatheredFix fix = out.fixer->fix(in.held, in.announcement, in.lost_nearby, in.occluders);
+    out.fixes.emplace_back(std::move(in), std::move(fix));
+  }
+  for (std::vector<lidar::LidarPoint>& points : preparation.clusters) {
+    perception::Detection d = out.fixer->detect(points);
+    out.fits.emplace_back(std::move(points), std::move(d));
+  }
+  return out;
+}
+
 void PreparedFixes::add_fit(std::vector<lidar::LidarPoint>&& points, perception::Detection detection) {
   if (fits_.size() == kKept)
     fits_.erase(fits_.begin());
@@ -76,32 +91,29 @@ void PreparedFixes::add_fit(std::vector<lidar::LidarPoint>&& points, perception:
 }
 
 perception::Detection PreparedFixes::fit(std::span<const lidar::LidarPoint> points,
-                                         const Eigen::Vector2d& lidar_xy,
-                                         const perception::LShapeFitConfig& config,
-                                         const perception::FitThinning& thinning) {
+                                         const GatheredVehicleFixer& fixer) {
   const auto it = std::find_if(fits_.begin(), fits_.end(), [&](const auto& fit) {
     return std::equal(fit.first.begin(), fit.first.end(), points.begin(), points.end(), same_point);
   });
   if (it == fits_.end())
-    return perception::detect(points, lidar_xy, config, thinning);
+    return fixer.detect(points);
   perception::Detection d = std::move(it->second);
   fits_.erase(it);
   return d;
 }
 
-void PreparedFixes::add(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby,
-                        const std::vector<Eigen::Vector2d>& occluders, const GatheredFix& fix) {
+void PreparedFixes::add(FixInputs&& inputs, GatheredFix&& fix) {
   if (fixes_.size() == kKept)
     fixes_.erase(fixes_.begin());
-  fixes_.push_back({held, a, lost_nearby, occluders, fix});
+  fixes_.push_back({std::move(inputs), std::move(fix)});
 }
 
 GatheredFix PreparedFixes::fix(const GatheredVehicleFixer& fixer, const HeldVehicle& held,
                                const v2i::VehicleAnnouncement& a, bool lost_nearby,
                                const std::vector<Eigen::Vector2d>& occluders, LidarStats& stats) {
   const auto it = std::find_if(fixes_.begin(), fixes_.end(), [&](const Entry& e) {
-    return e.lost_nearby == lost_nearby && same_held(e.held, held) && same_announcement(e.announcement, a) &&
-           same_bits(e.occluders, occluders);
+    return e.inputs.lost_nearby == lost_nearby && same_held(e.inputs.held, held) &&
+           same_announcement(e.inputs.announcement, a) && same_bits(e.inputs.occluders, occluders);
   });
   if (it == fixes_.end())
     return fixer.fix(held, a, lost_nearby, occluders);
@@ -111,32 +123,52 @@ GatheredFix PreparedFixes::fix(const GatheredVehicleFixer& fixer, const HeldVehi
   return fix;
 }
 
-// RsuCore's step that prepares them (file comment of prepared_fixes.h): each cluster every laser has swept
-// past, fitted, and fixed as its release would do it now (association and gathering on a copy of the
-// gatherer; counters untouched but fixes_prepared); and each vehicle the gatherer holds (one beyond
+// RsuCore's half of the preparation (file comment of prepared_fixes.h). What to prepare: each cluster
+// every laser has swept past, to fit; each vehicle the gatherer holds (one beyond
 // GatheringConfig::hold_beyond_m until the sweep has passed its footprint) whenever it gains a part, so
-// that its release finds the fix ready unless it gains another.
-void RsuCore::prepare_fixes(TimeNs now) {
+// that its release finds the fix ready unless it gains another; and the vehicles the fits recorded since
+// made (record_prepared).
+Preparation RsuCore::take_preparation() {
+  Preparation p;
+  p.fixer = fixer_;
+  p.vehicles = std::move(chained_);
+  chained_.clear();
+  if (!prepare_due_)
+    return p;
+  const TimeNs now = *prepare_due_;
+  prepare_due_.reset();
+  p.step_time = now;
   std::vector<std::tuple<std::uint64_t, std::size_t, std::size_t>> held_now;
   for (const HeldVehicle& held : gatherer_.held()) {
     held_now.emplace_back(held.vehicle_id, held.parts, held.points.size());
     if (std::find(prepared_held_.begin(), prepared_held_.end(), held_now.back()) == prepared_held_.end())
-      prepare_fix(held, now);
+      add_fix_inputs(held, now, p.vehicles);
   }
   prepared_held_ = std::move(held_now);
-  std::vector<perception::SweptCluster> swept = clusterer_.swept_open();
-  if (swept.empty())
-    return;
+  for (perception::SweptCluster& cluster : clusterer_.swept_open())
+    p.clusters.push_back(std::move(cluster.points));
+  return p;
+}
+
+// What was prepared, kept for the releases; each fitted cluster is also associated and gathered as its
+// release would do it now (on a copy of the gatherer; counters untouched), and the vehicles it would
+// release fixed next (chained_, handed out by take_preparation).
+void RsuCore::record_prepared(Prepared&& prepared) {
+  const TimeNs now = prepared.step_time;
+  if (prepared.fixer != fixer_)
+    return;  // a reload replaced the fixer since: these may differ from what it computes
+  for (auto& [inputs, fix] : prepared.fixes) {
+    prepared_.add(std::move(inputs), std::move(fix));
+    ++lidar_stats_.fixes_prepared;
+  }
   std::vector<perception::Detection> detections;
   std::vector<Eigen::Vector3d> first_points;
-  for (perception::SweptCluster& cluster : swept) {
-    perception::Detection d =
-        perception::detect(cluster.points, mount_.xy(), config_.perception.fix.fit, fixer_.fit_thinning());
+  for (auto& [points, d] : prepared.fits) {
     if (d.fit.ok() && (d.fit.center - mount_.xy()).norm() <= config_.coverage_radius_m && !d.points.empty()) {
       first_points.push_back(d.points.front());
       detections.push_back(d);
     }
-    prepared_.add_fit(std::move(cluster.points), std::move(d));
+    prepared_.add_fit(std::move(points), std::move(d));
   }
   if (detections.empty())
     return;
@@ -154,21 +186,16 @@ void RsuCore::prepare_fixes(TimeNs now) {
           return std::find(held.points.begin(), held.points.end(), p) != held.points.end();
         });
     if (prepared_here)
-      prepare_fix(held, now);
+      add_fix_inputs(held, now, chained_);
   }
 }
 
-void RsuCore::prepare_fix(const HeldVehicle& held, TimeNs now) {
+void RsuCore::add_fix_inputs(const HeldVehicle& held, TimeNs now, std::vector<FixInputs>& out) {
   const v2i::RegisteredVehicle* vehicle = announcements_.registry().find(held.vehicle_id, now);
   if (vehicle == nullptr || held.points.empty())
     return;
-  const bool lost_nearby = lost_near(held);
-  const std::vector<Eigen::Vector2d> occluders = occluders_of(held);
-  prepared_.add(held, vehicle->announcement, lost_nearby, occluders,
-                fixer_.fix(held, vehicle->announcement, lost_nearby, occluders));
-  ++lidar_stats_.fixes_prepared;
+  out.push_back({held, vehicle->announcement, lost_near(held), occluders_of(held)});
 }
-
 // A cluster released ahead of a nearer one still open in its line of sight: what of that one the sweep
 // has passed may hide part of it (perception::SweepClusterer::overtaken_open_points).
 std::vector<Eigen::Vector2d> RsuCore::occluders_of(const HeldVehicle& held) {

@@ -8,9 +8,14 @@
 // results here with their exact inputs. The release takes them only when its inputs are the same bit for
 // bit (points, announcement, occluders, ...), else computes them: the corrections are the same either
 // way, only ready sooner (RsuCoreConfig::prepare_fixes turns it off, the baseline).
+//
+// The preparation itself is pure (prepare(), below): RsuCore hands out what to prepare
+// (RsuCore::take_preparation) and takes the results back (RsuCore::record_prepared), so that rsud runs it
+// on a thread of its own. A result that comes back too late is merely unused.
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <span>
 #include <utility>
@@ -18,6 +23,7 @@
 
 #include <Eigen/Core>
 
+#include "common/time.h"
 #include "core/gathered_fix.h"
 #include "core/lidar_stats.h"
 #include "core/vehicle_gatherer.h"
@@ -27,17 +33,47 @@
 
 namespace rsu::core {
 
+// GatheredVehicleFixer::fix's inputs: what a vehicle's prepared fix is keyed by.
+struct FixInputs {
+  HeldVehicle held;
+  v2i::VehicleAnnouncement announcement;
+  bool lost_nearby = false;
+  std::vector<Eigen::Vector2d> occluders;
+};
+
+// What to prepare: the clusters every laser has swept past (to fit) and the held vehicles (to fix), with
+// the fixer they are prepared by. The fixer is immutable and shared: a reload makes a new one, and what an
+// old one prepared is dropped (RsuCore::record_prepared).
+struct Preparation {
+  std::shared_ptr<const GatheredVehicleFixer> fixer;
+  TimeNs step_time = 0;  // the step that left the clusters: their vehicles are predicted to its time
+  std::vector<std::vector<lidar::LidarPoint>> clusters;
+  std::vector<FixInputs> vehicles;
+
+  bool empty() const { return clusters.empty() && vehicles.empty(); }
+};
+
+// Their fits and fixes, each with its inputs.
+struct Prepared {
+  std::shared_ptr<const GatheredVehicleFixer> fixer;
+  TimeNs step_time = 0;
+  std::vector<std::pair<std::vector<lidar::LidarPoint>, perception::Detection>> fits;
+  std::vector<std::pair<FixInputs, GatheredFix>> fixes;
+};
+
+// Fits and fixes what `preparation` holds. Pure, and touching nothing of the core: rsud runs it on a
+// thread of its own.
+Prepared prepare(Preparation preparation);
+
 class PreparedFixes {
  public:
   // A cluster's fit, by its points.
   void add_fit(std::vector<lidar::LidarPoint>&& points, perception::Detection detection);
-  // A released cluster's fit: the one prepared for exactly these points (then forgotten), else computed.
-  perception::Detection fit(std::span<const lidar::LidarPoint> points, const Eigen::Vector2d& lidar_xy,
-                            const perception::LShapeFitConfig& config,
-                            const perception::FitThinning& thinning);
+  // A released cluster's fit: the one prepared for exactly these points (then forgotten), else computed
+  // by `fixer`.
+  perception::Detection fit(std::span<const lidar::LidarPoint> points, const GatheredVehicleFixer& fixer);
   // A vehicle's fix, by GatheredVehicleFixer::fix's inputs.
-  void add(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby,
-           const std::vector<Eigen::Vector2d>& occluders, const GatheredFix& fix);
+  void add(FixInputs&& inputs, GatheredFix&& fix);
   // A released vehicle's fix: the one prepared for exactly these inputs (then forgotten; counted as
   // fixes_prepared_used), else computed by `fixer`.
   GatheredFix fix(const GatheredVehicleFixer& fixer, const HeldVehicle& held,
@@ -47,10 +83,7 @@ class PreparedFixes {
  private:
   static constexpr std::size_t kKept = 8;  // the newest of each; one is taken within a few packets
   struct Entry {
-    HeldVehicle held;
-    v2i::VehicleAnnouncement announcement;
-    bool lost_nearby = false;
-    std::vector<Eigen::Vector2d> occluders;
+    FixInputs inputs;
     GatheredFix fix;
   };
   std::vector<std::pair<std::vector<lidar::LidarPoint>, perception::Detection>> fits_;

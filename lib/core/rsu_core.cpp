@@ -77,7 +77,7 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       announcements_(config),
       gatherer_(config.gathering, config.association, mount_.xy()),
       occluders_(mount_.xy(), sweep_.rotation_period_ns()),
-      fixer_(config, mount_),
+      fixer_(std::make_shared<const GatheredVehicleFixer>(config, mount_)),
       tracks_(config.footprint_track),
       corrections_(config),
       refusals_(config.refusal_notices),
@@ -127,11 +127,9 @@ LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Rele
 }
 
 void RsuCore::prepare_pending() {
-  if (!prepare_due_)
-    return;
-  const TimeNs now = *prepare_due_;
-  prepare_due_.reset();
-  prepare_fixes(now);
+  // Twice at most: the fitted clusters' vehicles are fixed in the second (record_prepared chains them).
+  for (Preparation p = take_preparation(); !p.empty(); p = take_preparation())
+    record_prepared(prepare(std::move(p)));
 }
 
 std::vector<perception::Detection> RsuCore::detect(std::vector<perception::SweptCluster>&& clusters) {
@@ -139,7 +137,7 @@ std::vector<perception::Detection> RsuCore::detect(std::vector<perception::Swept
   for (const perception::SweptCluster& cluster : clusters) {
     if (cluster.points.empty())
       continue;
-    auto d = prepared_.fit(cluster.points, mount_.xy(), config_.perception.fix.fit, fixer_.fit_thinning());
+    auto d = prepared_.fit(cluster.points, *fixer_);
     d.ahead_of_open = cluster.ahead_of_open;
     ++lidar_stats_.clusters_fitted;
     if (!d.fit.ok()) {
@@ -180,7 +178,7 @@ void RsuCore::correct(const HeldVehicle& held, TimeNs now, LidarStepResult& resu
   // may be what was lost).
   const bool lost = lost_near(held);
   GatheredFix fix =
-      prepared_.fix(fixer_, held, vehicle->announcement, lost, occluders_of(held), lidar_stats_);
+      prepared_.fix(*fixer_, held, vehicle->announcement, lost, occluders_of(held), lidar_stats_);
   // Combined with what earlier rotations bounded (footprint_track.h); a stopped mount breaks every chain.
   if (mount_serving())
     tracks_.combine(fix, vehicle->announcement, held.assigned_size > 0, sweep_.rotation_period_ns(),

@@ -189,8 +189,15 @@ class RsuCore {
   // The fits and fixes prepared ahead of a release (prepared_fixes.h) for what the last step left swept
   // but not released. A step leaves them pending, so that the corrections it returns do not wait for
   // another vehicle's preparation (issue 16: a dense sensor's near car takes 2-4 ms); a caller that sends
-  // them first calls this after (rsud does). A step first prepares what is still pending.
+  // them first calls this after. A step first prepares what is still pending.
   void prepare_pending();
+  // The same in two halves, for a caller that prepares on a thread of its own (rsud: the preparation
+  // held its loop, and the packets behind it, for 2-4 ms): what to prepare (the last step's clusters and
+  // vehicles, and the vehicles that the fits recorded since would release), and core::prepare's results
+  // back. Results of a fixer that a reload has replaced are dropped. Until the caller takes it, a step
+  // first prepares what is pending itself.
+  Preparation take_preparation();
+  void record_prepared(Prepared&& prepared);
   // The same check in two halves, for a caller that registers the rotations on a thread of its own (rsud:
   // a dense LiDAR's check held its loop for 2-3 ms a rotation, and the packets behind it): the pending
   // rotations with the reference they are checked against (MountReference is immutable) or, the first
@@ -211,10 +218,8 @@ class RsuCore {
   // The vehicle's notice that `fix` is not sent, and why, when it is owed one and the limits allow it.
   void tell_withheld(const GatheredFix& fix, const v2i::VehicleAnnouncement& a, bool lost_nearby, TimeNs now,
                      LidarStepResult& result);
-  // Fits and fixes the clusters every laser has swept past but not closed yet (prepared_fixes.h).
-  void prepare_fixes(TimeNs now);
-  // Fixes `held` now and keeps the fix for its release (prepared_fixes.h).
-  void prepare_fix(const HeldVehicle& held, TimeNs now);
+  // The inputs of `held`'s fix, appended to `out` when its vehicle is registered (prepared_fixes.h).
+  void add_fix_inputs(const HeldVehicle& held, TimeNs now, std::vector<FixInputs>& out);
   // Whether LiDAR packets were lost while the sweep crossed `held` (or just before its first points).
   bool lost_near(const HeldVehicle& held) const;
   // occluders_.of(held), with the points of the open clusters this batch's releases went ahead of
@@ -250,9 +255,10 @@ class RsuCore {
   AnnouncementIntake announcements_;
   VehicleGatherer gatherer_;
   SweepOccluders occluders_;  // the sweep's other objects, which may hide part of a vehicle
-  GatheredVehicleFixer fixer_;
-  PreparedFixes prepared_;  // fits and fixes prepared ahead of the release (prepare_fixes)
-  FootprintTracks tracks_;  // each vehicle's footprint bounded over rotations
+  std::shared_ptr<const GatheredVehicleFixer> fixer_;  // shared with the preparation (prepared_fixes.h)
+  PreparedFixes prepared_;          // fits and fixes prepared ahead of the release (take_preparation)
+  std::vector<FixInputs> chained_;  // vehicles the recorded fits would release, to fix next
+  FootprintTracks tracks_;          // each vehicle's footprint bounded over rotations
   // The held vehicles fixed ahead, as (vehicle id, parts gathered, points).
   std::vector<std::tuple<std::uint64_t, std::size_t, std::size_t>> prepared_held_;
   CorrectionBuilder corrections_;

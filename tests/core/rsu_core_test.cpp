@@ -582,6 +582,76 @@ TEST(RsuCore, FixesPreparedAheadAreTheFixesOfTheRelease) {
   EXPECT_EQ(computed.lidar_stats().fixes_prepared, 0U);
 }
 
+// The same preparation in two halves, prepared on another thread and recorded a packet late (rsud runs
+// core::prepare on a thread of its own): the corrections, and the packets they leave with, are still those
+// without it, and the prepared fixes are used. What a fixer that a reload replaced prepared is dropped.
+TEST(RsuCore, FixesPreparedOnAnotherThreadAreTheFixesOfTheRelease) {
+  const Pose3 m = testing::roadside_mount();
+  const auto placed = [&](double forward, double left, double yaw) {
+    const Eigen::Vector2d rel = Eigen::Rotation2Dd(m.yaw) * Eigen::Vector2d(forward, left);
+    return Pose2{m.x + rel.x(), m.y + rel.y(), m.yaw + yaw};
+  };
+  const Pose2 near_car = placed(-1.5, 5.2, 0.1);
+  const Pose2 far_car = placed(12.0, -7.0, 0.6);
+  RsuCoreConfig config = test_config();
+  config.sensor_model = "vlp32c";
+  RsuCore split(config);
+  config.prepare_fixes = false;
+  RsuCore computed(config);
+  SimStream stream(testing::street_scene(), {static_vehicle(1, near_car), static_vehicle(2, far_car)},
+                   lidar::make_vlp32c(), m, sim::NoiseModel{}, kEmptyRotations);
+  const TimeNs t0 = kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs;
+  const TimeNs t1 = (kEmptyRotations + 4) * stream.rotation_ns();
+  const TimeNs t2 = t1 + 2 * stream.rotation_ns();
+  for (RsuCore* core : {&split, &computed}) {
+    announce_between(*core, 1, {near_car.x + 0.3, near_car.y - 0.2, near_car.yaw}, "192.0.2.1", t0, t2);
+    announce_between(*core, 2, {far_car.x - 0.2, far_car.y + 0.3, far_car.yaw}, "192.0.2.2", t0, t2);
+  }
+  std::future<Prepared> in_flight;
+  std::size_t handed_out = 0;
+  stream.run_until(split, &computed, t1, [&](const LidarStepResult&, TimeNs) {
+    if (in_flight.valid())
+      split.record_prepared(in_flight.get());  // what the previous packet's step handed out
+    Preparation p = split.take_preparation();
+    if (p.empty())
+      return;
+    handed_out += p.clusters.size() + p.vehicles.size();
+    in_flight =
+        std::async(std::launch::async, [p = std::move(p)]() mutable { return prepare(std::move(p)); });
+  });
+  const auto& with = stream.corrections();
+  const auto& without = stream.twin_corrections();
+  ASSERT_EQ(with.size(), without.size());
+  EXPECT_GE(with.size(), 6U);
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    EXPECT_EQ(with[i].correction.bytes, without[i].correction.bytes) << "correction " << i;
+    EXPECT_EQ(with[i].emitted_at, without[i].emitted_at) << "correction " << i;
+  }
+  EXPECT_GT(handed_out, with.size());
+  EXPECT_GE(split.lidar_stats().fixes_prepared_used, with.size() / 2);
+  EXPECT_LE(split.lidar_stats().fixes_prepared_used, split.lidar_stats().fixes_prepared);
+
+  // Handed out, then a reload: the new fixer may compute otherwise, so nothing of the old is kept.
+  const std::uint64_t prepared_before = split.lidar_stats().fixes_prepared;
+  Preparation late;
+  stream.run_until(split, t2, [&](const LidarStepResult&, TimeNs) {
+    if (!late.vehicles.empty())
+      return;
+    Preparation p = split.take_preparation();
+    if (!p.empty() && p.vehicles.empty()) {
+      split.record_prepared(prepare(std::move(p)));
+      p = split.take_preparation();  // the vehicles its fits would release
+    }
+    if (!p.vehicles.empty())
+      late = std::move(p);
+  });
+  ASSERT_FALSE(late.vehicles.empty());
+  split.reload(split.config(), t2);
+  split.record_prepared(prepare(std::move(late)));
+  EXPECT_EQ(split.lidar_stats().fixes_prepared, 0U);  // a reload restarts the counters; none recorded
+  EXPECT_GT(prepared_before, 0U);
+}
+
 // The fault street (tests/integration/scenarios/fault_street.yaml): a VLP-16 2 m up, a lamp post 6.7 m
 // away, an SUV 16 m away behind it. The post's shadow cuts the car's rear corner off as a fragment of
 // ~13 points, which the sweep releases first; the shadow's edge is not the car's end. Fixed from it as if

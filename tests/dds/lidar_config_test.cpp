@@ -134,6 +134,18 @@ TEST(LidarConfig, FootprintTrackIsOnUnlessTurnedOff) {
             std::string::npos);
 }
 
+// perception.prepare_thread (issue 16, latency): the fits and fixes prepared on a thread of their own
+// unless turned off; the mount check's thread is a key of its own.
+TEST(LidarConfig, PrepareThreadIsOnUnlessTurnedOff) {
+  EXPECT_TRUE(parse("  input: {udp: {}}\n").prepare_thread);
+  const DaemonConfig off = parse("  input: {udp: {}}\nperception: {prepare_thread: false}\n");
+  EXPECT_FALSE(off.prepare_thread);
+  EXPECT_TRUE(off.mount_check_thread);
+  EXPECT_NE(
+      refusal("  input: {udp: {}}\nperception: {prepare_thread: 2}\n").find("perception.prepare_thread"),
+      std::string::npos);
+}
+
 // perception.joint_release_range_gap_m (issue 16, latency): the clusterer's default unless given; a
 // negative or non-numeric gap is refused with the field named.
 TEST(LidarConfig, JointReleaseRangeGapIsReadAndChecked) {

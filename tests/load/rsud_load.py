@@ -137,6 +137,16 @@ def percentile(values, q):
     return s[min(len(s) - 1, max(0, int(round(q * (len(s) - 1)))))] if s else float("nan")
 
 
+def perception_overrides(args):
+    """The perception section's keys the options set (none: rsud's own defaults)."""
+    keys = []
+    if args.joint_release_gap is not None:
+        keys.append("joint_release_range_gap_m: %g" % args.joint_release_gap)
+    if args.prepare_thread == "off":
+        keys.append("prepare_thread: false")
+    return "perception: {%s}\n" % ", ".join(keys) if keys else ""
+
+
 def run(args):
     tools = {"rsud": os.path.join(args.build, "daemon", "rsud"),
              "rsu_sim": os.path.join(args.build, "tools", "rsu-sim"),
@@ -155,9 +165,8 @@ def run(args):
         h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=args.verifier_thread,
                        learning_frames=3 if args.ouster else None,
                        extra={"on": "", "off": "mount_integrity: {enabled: false}\n",
-                              "on-loop": "mount_integrity: {check_thread: false}\n"}[args.mount_integrity] + (
-                           "" if args.joint_release_gap is None else
-                           "perception: {joint_release_range_gap_m: %g}\n" % args.joint_release_gap))
+                              "on-loop": "mount_integrity: {check_thread: false}\n"}[args.mount_integrity] +
+                       perception_overrides(args))
         if args.ouster:
             # rsud learns the background from the scene without its vehicles, streamed for the 3 s before
             # scenario time 0 (the Velodyne runs load rsu-sim simulate's frames instead); the stream
@@ -335,6 +344,9 @@ def main():
     ap.add_argument("--joint-release-gap", type=float, default=None, metavar="M",
                     help="rsud's perception.joint_release_range_gap_m (default: its own); 1000 waits for every "
                          "unfinished cluster in a vehicle's line of sight (the rule before issue 16's change)")
+    ap.add_argument("--prepare-thread", choices=("on", "off"), default="on",
+                    help="off: rsud prepares the fits and fixes ahead of a vehicle's release on its event loop "
+                         "(perception.prepare_thread: false), the baseline for their own thread")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.smoke:
