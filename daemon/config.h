@@ -170,9 +170,10 @@ struct DaemonConfig {
   // Taking effect at a restart.
   bool mount_check_thread = true;
   // perception.prepare_thread: the fits and fixes prepared ahead of a vehicle's release
-  // (core/prepared_fixes.h) on a thread of their own (live input, as the mount check). Taking effect at a
-  // restart.
-  bool prepare_thread = true;
+  // (core/prepared_fixes.h) on a thread of their own (live input, as the mount check). Off by default: on
+  // 2 cores, with an OS1-128, its results came back too late for 60 % of the releases, which then computed
+  // the fix on the loop, and the p99 latency was no lower (README, Benchmarks). Taking effect at a restart.
+  bool prepare_thread = false;
   AdvertisementConfig advertisement;
   DdsConfig dds;
   LoggingConfig logging;

@@ -472,8 +472,9 @@ void RsuDaemon::handle_lidar_result(const core::LidarStepResult& result) {
   }
   send_corrections(result.corrections);
   send_withheld_notices(result.withheld_notices);
-  // What the step prepares for the next releases, once its corrections are on the wire: on its own
-  // thread (live input), or here (a capture replay: its counters must not depend on the host's timing).
+  // What the step prepares for the next releases, once its corrections are on the wire: here, or on its
+  // own thread (perception.prepare_thread; never in a capture replay, whose counters must not depend on
+  // the host's timing).
   if (preparation_)
     submit_preparation();
   else

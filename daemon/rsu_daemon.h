@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One io_context on one
-// thread, which alone touches RsuCore; two worker threads (worker_thread.h): the mount check (it registers
-// each rotation against the mount's immutable reference) and the preparation of fits and fixes ahead of
-// their release (core::prepare); and with v2i.verifier_thread the V2I receiver
-// thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has:
-// sockets (V2I announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog,
-// advertisement, log summaries, PCD replay pacing) and signals (SIGHUP reload, SIGTERM / SIGINT drain).
-// Everything it decides is RsuCore's; this file only moves bytes, reads the clock and logs.
+// thread, which alone touches RsuCore; worker threads (worker_thread.h): the mount check (it registers
+// each rotation against the mount's immutable reference) and with perception.prepare_thread the
+// preparation of fits and fixes ahead of their release (core::prepare); and with v2i.verifier_thread the V2I
+// receiver thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The
+// io_context has: sockets (V2I announcements in / corrections out, Velodyne packets in), timers (registry
+// expiry, watchdog, advertisement, log summaries, PCD replay pacing) and signals (SIGHUP reload, SIGTERM /
+// SIGINT drain). Everything it decides is RsuCore's; this file only moves bytes, reads the clock and logs.
 #pragma once
 
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange under C++20

@@ -333,8 +333,9 @@ void BM_EndToEndLatency(benchmark::State& state) {
         wait_ms.push_back(static_cast<double>(p.arrival - last_vehicle_arrival) * 1e-6);
       }
       // What the step prepares for the next releases (fits and fixes), once its corrections are sent: as
-      // rsud, on a thread of its own (another core; modelled as one that always keeps up: each result is
-      // back before the next packet), or on this core, where the next packet waits for it.
+      // rsud by default, on this core, where the next packet waits for it; or on a thread of its own
+      // (perception.prepare_thread), modelled as one that always keeps up (each result back before the
+      // next packet: a bound, which rsud's thread did not reach on 2 cores).
       if (prepare_elsewhere) {
         for (Preparation w = core.take_preparation(); !w.empty(); w = core.take_preparation())
           core.record_prepared(prepare(std::move(w)));
@@ -405,8 +406,8 @@ void BM_EndToEndLatency(benchmark::State& state) {
 // 1 = hold: stays there; 2 = approach past 5 m: 8 m in, from 10 m to 3.6 m), mount check (MountCheck:
 // 2 = on a thread of its own, as rsud does; 1 = on the loop after the corrections are sent; 0 = before the
 // next batch), fixes prepared while the sweep closes the cluster (RsuCoreConfig::prepare_fixes: 1 = on the
-// loop after the send; 2 = on another thread, as rsud, modelled as one whose results are always back before
-// the next packet, so a bound; 0 = not, the baseline).
+// loop after the send, as rsud by default; 2 = on another thread, modelled as one whose results are always
+// back before the next packet, so a bound; 0 = not, the baseline).
 BENCHMARK(BM_EndToEndLatency)
     ->ArgsProduct({{0, 1}, {10, 20, 30, 40}, {0, 1}, {0, 1, 2}, {1}})
     ->ArgsProduct({{0, 1}, {10, 20, 30, 40}, {0, 1}, {2}, {0}})

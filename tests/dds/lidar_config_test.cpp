@@ -134,13 +134,13 @@ TEST(LidarConfig, FootprintTrackIsOnUnlessTurnedOff) {
             std::string::npos);
 }
 
-// perception.prepare_thread (issue 16, latency): the fits and fixes prepared on a thread of their own
-// unless turned off; the mount check's thread is a key of its own.
-TEST(LidarConfig, PrepareThreadIsOnUnlessTurnedOff) {
-  EXPECT_TRUE(parse("  input: {udp: {}}\n").prepare_thread);
-  const DaemonConfig off = parse("  input: {udp: {}}\nperception: {prepare_thread: false}\n");
-  EXPECT_FALSE(off.prepare_thread);
-  EXPECT_TRUE(off.mount_check_thread);
+// perception.prepare_thread (issue 16, latency): the fits and fixes prepared on the event loop unless
+// turned on; the mount check's thread is a key of its own.
+TEST(LidarConfig, PrepareThreadIsOffUnlessTurnedOn) {
+  EXPECT_FALSE(parse("  input: {udp: {}}\n").prepare_thread);
+  const DaemonConfig on = parse("  input: {udp: {}}\nperception: {prepare_thread: true}\n");
+  EXPECT_TRUE(on.prepare_thread);
+  EXPECT_TRUE(on.mount_check_thread);
   EXPECT_NE(
       refusal("  input: {udp: {}}\nperception: {prepare_thread: 2}\n").find("perception.prepare_thread"),
       std::string::npos);

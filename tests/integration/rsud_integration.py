@@ -161,6 +161,9 @@ logging:
 """ % (rsu_id, self.lidar_port, ", ".join(self.bg), self.v2i_port,
        # The security case checks signatures on rsud's receiver thread (under TSan too); the rest on its loop.
        "true" if self.args.case == "security" else "false", self.path("stats"))
+        if self.args.case == "security":
+            # ... and prepares the fits and fixes on rsud's preparation thread (under TSan too).
+            text += "perception:\n  prepare_thread: true\n"
         if self.insecure:
             text += "security:\n  mode: insecure\n"
         else:
@@ -449,6 +452,8 @@ def case_security(h):
     # Every signature was checked on the receiver thread (v2i.verifier_thread), none again on the loop.
     assert s.get("auth.signatures_verified", 0) == 0 and s["auth.signatures_checked_ahead"] >= s["auth.accepted"], s
     assert "bad input (auth:unsigned)" in h.log(), h.log()[-3000:]
+    # Fits and fixes were prepared on rsud's preparation thread (perception.prepare_thread) and recorded.
+    assert s.get("lidar.fixes_prepared", 0) > 0 and s.get("lidar.preparations_dropped_busy", 0) == 0, s
 
     # SIGHUP with the car's key revoked: its announcements are refused, it expires, no corrections;
     # the key restored, service resumes.

@@ -142,8 +142,8 @@ def perception_overrides(args):
     keys = []
     if args.joint_release_gap is not None:
         keys.append("joint_release_range_gap_m: %g" % args.joint_release_gap)
-    if args.prepare_thread == "off":
-        keys.append("prepare_thread: false")
+    if args.prepare_thread == "on":
+        keys.append("prepare_thread: true")
     return "perception: {%s}\n" % ", ".join(keys) if keys else ""
 
 
@@ -344,9 +344,9 @@ def main():
     ap.add_argument("--joint-release-gap", type=float, default=None, metavar="M",
                     help="rsud's perception.joint_release_range_gap_m (default: its own); 1000 waits for every "
                          "unfinished cluster in a vehicle's line of sight (the rule before issue 16's change)")
-    ap.add_argument("--prepare-thread", choices=("on", "off"), default="on",
-                    help="off: rsud prepares the fits and fixes ahead of a vehicle's release on its event loop "
-                         "(perception.prepare_thread: false), the baseline for their own thread")
+    ap.add_argument("--prepare-thread", choices=("on", "off"), default="off",
+                    help="on: rsud prepares the fits and fixes ahead of a vehicle's release on a thread of their "
+                         "own (perception.prepare_thread: true); off (its default): on its event loop")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.smoke:
