@@ -18,8 +18,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 struct Extremes {
   double lo = kInf, hi = -kInf;              // over every point
   double lower_lo = kInf, lower_hi = -kInf;  // over the lower-body points
-  double plan_lo = kInf, plan_hi = -kInf;    // ... and up to the full plan's height (BoxPoint::side_body)
-  std::size_t lo_point = 0, hi_point = 0;    // which points are the extremes
+  double plan_lo = kInf, plan_hi = -kInf;  // at the sides, up to the full plan's height (BoxPoint::side_body)
+  std::size_t lo_point = 0, hi_point = 0;  // which points are the extremes
 };
 
 // Whether p can be on the footprint's outline at the sides of axis a: the lower body (or, with full_plan,
@@ -51,7 +51,7 @@ std::array<Extremes, 2> extremes(const AxisContext& ctx) {
         e.lower_lo = std::min(e.lower_lo, t);
         e.lower_hi = std::max(e.lower_hi, t);
       }
-      if (on_footprint_outline(ctx, points[i], a, true)) {
+      if (a != ctx.length_axis && points[i].side_body) {  // face_anchor: not at the front and back
         e.plan_lo = std::min(e.plan_lo, t);
         e.plan_hi = std::max(e.plan_hi, t);
       }
