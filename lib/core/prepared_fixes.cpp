@@ -43,14 +43,17 @@ bool same_point(const lidar::LidarPoint& a, const lidar::LidarPoint& b) {
          bits(a.azimuth_rad) == bits(b.azimuth_rad) && a.time_ns == b.time_ns;
 }
 
+// What GatheredVehicleFixer::fix reads of a held vehicle.
 bool same_held(const HeldVehicle& a, const HeldVehicle& b) {
   return a.vehicle_id == b.vehicle_id && same_bits(a.points, b.points) && a.first_time == b.first_time &&
          a.weighted_offset == b.weighted_offset && a.parts == b.parts &&
          a.assigned_begin == b.assigned_begin && a.assigned_size == b.assigned_size &&
-         a.assigned_time == b.assigned_time && same_bits(a.assigned_distance_sq, b.assigned_distance_sq) &&
-         a.assigned_own == b.assigned_own && a.gathered_own == b.gathered_own &&
-         a.after_assigned_release == b.after_assigned_release && a.far == b.far;
-  // Not release_at: when it is released, not what; the fix does not read it.
+         a.assigned_time == b.assigned_time && a.assigned_own == b.assigned_own &&
+         a.gathered_own == b.gathered_own && a.after_assigned_release == b.after_assigned_release &&
+         a.far == b.far;
+  // Not release_at, ahead_of_open or assigned_distance_sq: when and why it is released, and how near its
+  // prediction the assigned detection lay (which moves with the other detections of the release's batch:
+  // the prediction is to their median time), not what it is fixed from.
 }
 
 bool same_announcement(const v2i::VehicleAnnouncement& a, const v2i::VehicleAnnouncement& b) {
