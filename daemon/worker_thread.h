@@ -2,9 +2,10 @@
 // A thread of rsud's that takes pure work off the event loop (issue 16: correction latency; what the
 // loop computes holds the LiDAR's packets behind it). The loop submits jobs that RsuCore handed out; the
 // thread runs `work` on each, in order, and posts each result back to the io_context, where `done` runs
-// on the loop's thread: RsuCore's state is the loop's alone. rsud runs two: the mount check
-// (core::check_mount_rotations on RsuCore::take_mount_rotations) and the preparation of fits and fixes
-// ahead of their release (core::prepare on RsuCore::take_preparation).
+// on the loop's thread: RsuCore's state is the loop's alone. rsud runs the mount check on one
+// (core::check_mount_rotations on RsuCore::take_mount_rotations) and, with perception.prepare_thread, the
+// preparation of fits and fixes ahead of their release on another (core::prepare on
+// RsuCore::take_preparation).
 //
 // Bounded: at most `max_waiting` units of work wait (Bound::weight: a job's units); beyond that the
 // oldest jobs are dropped and their units counted (a thread starved for seconds must not grow memory,
