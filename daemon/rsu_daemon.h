@@ -2,8 +2,8 @@
 // rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One io_context on one
 // thread, which alone touches RsuCore; the mount check thread (mount_check_thread.h: it registers each
 // rotation against the mount's immutable reference); and with v2i.verifier_thread the V2I receiver
-// thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has: sockets
-// (V2I announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog,
+// thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has:
+// sockets (V2I announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog,
 // advertisement, log summaries, PCD replay pacing) and signals (SIGHUP reload, SIGTERM / SIGINT drain).
 // Everything it decides is RsuCore's; this file only moves bytes, reads the clock and logs.
 #pragma once
@@ -61,8 +61,9 @@ class RsuDaemon {
   void receive_lidar(udp::socket& socket, std::array<std::uint8_t, 65536>& buffer, udp::endpoint& sender);
   // One datagram of the LiDAR, live or replayed, arrived at `arrival` (the run's clock).
   void on_lidar_payload(std::span<const std::uint8_t> payload, TimeNs arrival, const std::string& from);
+  // `received`: the kernel's stamp of its arrival (udp_socket.h), if any.
   void on_v2i_datagram(std::span<const std::uint8_t> datagram, const udp::endpoint& sender,
-                       const v2i::SignatureCheck* checked);
+                       const v2i::SignatureCheck* checked, std::optional<TimeNs> received);
   void on_peer_announcement(std::span<const std::uint8_t> datagram, const core::PeerProvenance& from);
   void handle_lidar_result(const core::LidarStepResult& result);
   void send_corrections(const std::vector<core::OutgoingCorrection>& corrections);
