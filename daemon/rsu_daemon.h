@@ -2,8 +2,8 @@
 // rsud's run time: a thin Boost.Asio shell around core::RsuCore (lib/core). One io_context on one
 // thread, which alone touches RsuCore; the mount check thread (mount_check_thread.h: it registers each
 // rotation against the mount's immutable reference); and with v2i.verifier_thread the V2I receiver
-// thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has:
-// sockets (V2I announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog,
+// thread (v2i_receiver.h: it reads the announcement socket and checks signatures ahead). The io_context has: sockets
+// (V2I announcements in / corrections out, Velodyne packets in), timers (registry expiry, watchdog,
 // advertisement, log summaries, PCD replay pacing) and signals (SIGHUP reload, SIGTERM / SIGINT drain).
 // Everything it decides is RsuCore's; this file only moves bytes, reads the clock and logs.
 #pragma once
