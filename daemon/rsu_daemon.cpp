@@ -543,10 +543,14 @@ void RsuDaemon::send_withheld_notices(const std::vector<core::OutgoingNotice>& n
 // ---- V2I ------------------------------------------------------------------------------------------
 
 void RsuDaemon::start_v2i_reception() {
+  // Each datagram's arrival, stamped by the kernel: its time windows are judged from it, not from when
+  // a loop that fell behind got to it (the receiver thread reads it from the control data).
   if (!config_.v2i_verifier_thread) {
+    last_arrival(v2i_socket_.native_handle());  // turns the stamps on (none yet)
     receive_v2i();
     return;
   }
+  request_arrival_stamps(v2i_socket_.native_handle(), "V2I");
   // 10 s of 1000 vehicles at 10 Hz may wait for the loop; beyond that it has stalled, not fallen behind.
   constexpr std::size_t kMaxWaiting = 100000;
   v2i_receiver_ = std::make_unique<V2iReceiver>(
@@ -572,7 +576,7 @@ void RsuDaemon::on_v2i_arrival() {
   for (const ReceivedDatagram& d : batch) {
     if (stopping_)
       return;
-    on_v2i_datagram(d.bytes, d.sender, d.signature ? &*d.signature : nullptr);
+    on_v2i_datagram(d.bytes, d.sender, d.signature ? &*d.signature : nullptr, d.received);
   }
   if (batch.size() == kPerTurn)
     asio::post(io_, [this] { on_v2i_arrival(); });
@@ -584,7 +588,8 @@ void RsuDaemon::receive_v2i() {
         if (ec == asio::error::operation_aborted || stopping_)
           return;
         if (!ec) {
-          on_v2i_datagram(std::span<const std::uint8_t>(v2i_buffer_.data(), bytes), v2i_sender_, nullptr);
+          on_v2i_datagram(std::span<const std::uint8_t>(v2i_buffer_.data(), bytes), v2i_sender_, nullptr,
+                          last_arrival(v2i_socket_.native_handle()));
         } else {
           // e.g. an ICMP error for an earlier correction: not fatal.
           spdlog::debug("V2I socket: {}", ec.message());
@@ -594,14 +599,17 @@ void RsuDaemon::receive_v2i() {
 }
 
 void RsuDaemon::on_v2i_datagram(std::span<const std::uint8_t> datagram, const udp::endpoint& sender,
-                                const v2i::SignatureCheck* checked) {
+                                const v2i::SignatureCheck* checked, std::optional<TimeNs> received) {
   asio::ip::address address = sender.address();
   if (address.is_v6() && address.to_v6().is_v4_mapped()) {
     address = asio::ip::make_address_v4(asio::ip::v4_mapped, address.to_v6());
   }
   const core::SourceEndpoint source{address.to_string(), sender.port()};
   const TimeNs now = clock_now();
-  const core::DatagramOutcome outcome = core_.on_datagram(datagram, source, now, checked);
+  // The kernel's arrival stamp is on the host's clock: replaying a capture, rsud runs on the capture's.
+  if (replaying_)
+    received.reset();
+  const core::DatagramOutcome outcome = core_.on_datagram(datagram, source, now, checked, received);
   if (!outcome.refusal_notice.empty()) {
     // Back to where the datagram came from (never to its reply_to: docs/v2i.md).
     boost::system::error_code ec;

@@ -63,8 +63,9 @@ class RsuDaemon {
   void receive_lidar(udp::socket& socket, std::array<std::uint8_t, 65536>& buffer, udp::endpoint& sender);
   // One datagram of the LiDAR, live or replayed, arrived at `arrival` (the run's clock).
   void on_lidar_payload(std::span<const std::uint8_t> payload, TimeNs arrival, const std::string& from);
+  // `received`: the kernel's stamp of its arrival (udp_socket.h), if any.
   void on_v2i_datagram(std::span<const std::uint8_t> datagram, const udp::endpoint& sender,
-                       const v2i::SignatureCheck* checked);
+                       const v2i::SignatureCheck* checked, std::optional<TimeNs> received);
   void on_peer_announcement(std::span<const std::uint8_t> datagram, const core::PeerProvenance& from);
   void handle_lidar_result(const core::LidarStepResult& result);
   // RsuCore's pending preparation (fits and fixes ahead of their release) to its thread.

@@ -3,10 +3,13 @@
 // The daemon's UDP sockets: binding with a clear error, the receive buffer asked of the kernel and read
 // back, and the kernel's own count of datagrams it dropped for a socket (its buffer was full), so that
 // what was sent and what rsud received can be told apart in its statistics.
+#include <sys/socket.h>
 #include <boost/asio/ip/udp.hpp>
 
 #include <cstdint>
 #include <optional>
+
+#include "common/time.h"
 
 namespace rsu::daemon {
 
@@ -22,5 +25,15 @@ std::size_t request_receive_buffer(boost::asio::ip::udp::socket& socket, std::si
 // Datagrams the kernel dropped for this socket since it was opened (SO_MEMINFO's drop count), or nothing
 // where the kernel cannot say (before Linux 4.12).
 std::optional<std::uint64_t> kernel_drops(int socket_fd);
+
+// A datagram's arrival on the host's clock (CLOCK_REALTIME, as edge::host_now_ns), stamped by the
+// kernel: what its time windows are judged from, however long it then waits in the socket for rsud.
+// Either in each message's control data (request_arrival_stamps: SO_TIMESTAMPNS, read by recvmsg /
+// recvmmsg with arrival_in), or, on a socket without SO_TIMESTAMPNS, for the datagram read last
+// (last_arrival: SIOCGSTAMPNS; its first call turns the stamps on and finds none).
+// request_arrival_stamps logs a warning naming `what` where the kernel refuses.
+void request_arrival_stamps(int socket_fd, const char* what);
+std::optional<TimeNs> arrival_in(const msghdr& message);
+std::optional<TimeNs> last_arrival(int socket_fd);
 
 }  // namespace rsu::daemon

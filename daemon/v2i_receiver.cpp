@@ -8,6 +8,7 @@
 #include <unistd.h>
 #include <boost/asio/post.hpp>
 
+#include "daemon/udp_socket.h"
 #include "edge/host_clock.h"
 
 #include <algorithm>
@@ -110,6 +111,8 @@ void V2iReceiver::run() {
   std::array<sockaddr_storage, kBatch> senders{};
   std::array<iovec, kBatch> iov{};
   std::array<mmsghdr, kBatch> headers{};
+  // Room for each datagram's arrival stamp (SO_TIMESTAMPNS, asked for on the socket by rsud).
+  std::array<std::array<char, CMSG_SPACE(sizeof(timespec))>, kBatch> controls{};
   std::vector<ReceivedDatagram> batch;
   batch.reserve(kBatch);
   std::array<pollfd, 2> fds{pollfd{socket_fd_, POLLIN, 0}, pollfd{wake_fd_, POLLIN, 0}};
@@ -131,6 +134,8 @@ void V2iReceiver::run() {
         headers[i].msg_hdr.msg_namelen = sizeof(sockaddr_storage);
         headers[i].msg_hdr.msg_iov = &iov[i];
         headers[i].msg_hdr.msg_iovlen = 1;
+        headers[i].msg_hdr.msg_control = controls[i].data();
+        headers[i].msg_hdr.msg_controllen = controls[i].size();
       }
       const int n = ::recvmmsg(socket_fd_, headers.data(), kBatch, MSG_DONTWAIT, nullptr);
       if (n <= 0) {
@@ -158,6 +163,7 @@ void V2iReceiver::run() {
           continue;  // not an IP sender: cannot happen on a UDP socket
         std::memcpy(d.sender.data(), &senders[static_cast<std::size_t>(i)], length);
         d.sender.resize(length);
+        d.received = arrival_in(headers[static_cast<std::size_t>(i)].msg_hdr);
         if (verify && window)
           d.signature =
               v2i::check_signature_ahead(d.bytes, *trust, {now, window->max_age, window->max_future});

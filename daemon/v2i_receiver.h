@@ -32,6 +32,7 @@ struct ReceivedDatagram {
   std::vector<std::uint8_t> bytes;
   boost::asio::ip::udp::endpoint sender;
   std::optional<v2i::SignatureCheck> signature;  // none: nothing to check ahead (insecure mode, unsigned...)
+  std::optional<TimeNs> received;                // the kernel's stamp of its arrival (SO_TIMESTAMPNS), if any
 };
 
 class V2iReceiver {

@@ -41,7 +41,8 @@ ReplyToCheck AnnouncementIntake::check_reply_to(v2i::VehicleAnnouncement& a,
 std::optional<v2i::VehicleAnnouncement> AnnouncementIntake::screen(std::span<const std::uint8_t> bytes,
                                                                    const SourceEndpoint& sender, TimeNs now,
                                                                    const v2i::SignatureCheck* checked,
-                                                                   DatagramOutcome& out) {
+                                                                   DatagramOutcome& out,
+                                                                   std::optional<TimeNs> received) {
   v2i::AuthenticatedMessage authenticated = authenticator_.authenticate(bytes, now, checked);
   out.auth = authenticated.verdict;
   if (authenticated.verdict == v2i::AuthVerdict::kMalformed) {
@@ -61,7 +62,7 @@ std::optional<v2i::VehicleAnnouncement> AnnouncementIntake::screen(std::span<con
   }
   out.vehicle_id = announcement->vehicle_id;
   out.announcement_sequence = announcement->sequence;
-  out.validation = validator_.check(*announcement, now);
+  out.validation = validator_.check(*announcement, now, received);
   if (out.validation != v2i::AnnouncementReason::kValid) {
     out.stage = DatagramStage::kValidation;
     return std::nullopt;
@@ -86,11 +87,12 @@ DatagramOutcome AnnouncementIntake::register_announcement(const v2i::VehicleAnno
 
 DatagramOutcome AnnouncementIntake::on_datagram(std::span<const std::uint8_t> bytes,
                                                 const SourceEndpoint& source, TimeNs now,
-                                                const v2i::SignatureCheck* checked) {
+                                                const v2i::SignatureCheck* checked,
+                                                std::optional<TimeNs> received) {
   DatagramOutcome out;
   if (flood_limiter_.admit(source.address, now) != v2i::RateDecision::kAllowed) {
     out.stage = DatagramStage::kFloodLimited;
-  } else if (const auto announcement = screen(bytes, source, now, checked, out)) {
+  } else if (const auto announcement = screen(bytes, source, now, checked, out, received)) {
     out = register_announcement(*announcement, source.address, now, out);
   }
   datagram_stages_.add(out.stage);

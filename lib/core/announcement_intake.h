@@ -46,7 +46,8 @@ class AnnouncementIntake {
 
   // RsuCore::on_datagram and RsuCore::on_peer_announcement (rsu_core.h).
   DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now,
-                              const v2i::SignatureCheck* checked = nullptr);
+                              const v2i::SignatureCheck* checked = nullptr,
+                              std::optional<TimeNs> received = std::nullopt);
   DatagramOutcome on_peer_announcement(std::span<const std::uint8_t> datagram, const PeerProvenance& from,
                                        TimeNs now);
 
@@ -73,7 +74,8 @@ class AnnouncementIntake {
   // announcement, or empty with `out` saying which stage refused it.
   std::optional<v2i::VehicleAnnouncement> screen(std::span<const std::uint8_t> bytes,
                                                  const SourceEndpoint& sender, TimeNs now,
-                                                 const v2i::SignatureCheck* checked, DatagramOutcome& out);
+                                                 const v2i::SignatureCheck* checked, DatagramOutcome& out,
+                                                 std::optional<TimeNs> received = std::nullopt);
   // reply_to against the sender under the policy (RsuCoreConfig::reply_to); kReplaced rewrites it.
   ReplyToCheck check_reply_to(v2i::VehicleAnnouncement& announcement, const SourceEndpoint& sender) const;
   DatagramOutcome register_announcement(const v2i::VehicleAnnouncement& a, const std::string& source,

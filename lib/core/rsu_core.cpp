@@ -85,8 +85,9 @@ RsuCore::RsuCore(const RsuCoreConfig& config)
       monitor_assembler_(assembler_config(packets_.decoder().geometry())) {}
 
 DatagramOutcome RsuCore::on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source,
-                                     TimeNs now, const v2i::SignatureCheck* checked) {
-  DatagramOutcome out = announcements_.on_datagram(bytes, source, now, checked);
+                                     TimeNs now, const v2i::SignatureCheck* checked,
+                                     std::optional<TimeNs> received) {
+  DatagramOutcome out = announcements_.on_datagram(bytes, source, now, checked, received);
   if (const auto notice = refusals_.consider(out, config_.rsu_id, now))
     out.refusal_notice = corrections_.notice(*notice, now);
   return out;

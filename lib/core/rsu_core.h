@@ -98,8 +98,11 @@ class RsuCore {
   // A refused announcement that passed authentication may get a refusal notice for its source
   // (DatagramOutcome::refusal_notice; core/refusal_notices.h). `checked`: its signature checked ahead
   // (v2i::check_signature_ahead, on the daemon's receiver thread), taken instead of verifying it here.
+  // `received`: when it came off the wire (the kernel's timestamp), if known: how far ahead of our clock
+  // it was generated is judged then, not after it waited behind other work (v2i::validate_announcement).
   DatagramOutcome on_datagram(std::span<const std::uint8_t> bytes, const SourceEndpoint& source, TimeNs now,
-                              const v2i::SignatureCheck* checked = nullptr);
+                              const v2i::SignatureCheck* checked = nullptr,
+                              std::optional<TimeNs> received = std::nullopt);
   // An announcement another RSU accepted from a vehicle and shared on the data bus, received at `now`.
   // It takes the datagram path (authentication: the vehicle's own signature over its original bytes,
   // fresh, not replayed; decode, validation, reply_to against the vehicle as that RSU saw it, registry),

@@ -2,6 +2,7 @@
 #include "v2i/announcement_validation.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -113,7 +114,7 @@ bool is_unicast_ip_literal(const std::string& address) {
 }
 
 AnnouncementReason validate_announcement(const VehicleAnnouncement& a, TimeNs now,
-                                         const AnnouncementLimits& limits) {
+                                         const AnnouncementLimits& limits, std::optional<TimeNs> received) {
   if (a.protocol_version != kProtocolVersion) {
     return AnnouncementReason::kUnsupportedVersion;
   }
@@ -155,11 +156,12 @@ AnnouncementReason validate_announcement(const VehicleAnnouncement& a, TimeNs no
   if (a.yaw_rate_rps && std::abs(*a.yaw_rate_rps) > limits.max_abs_yaw_rate_rps) {
     return AnnouncementReason::kYawRateOutOfRange;
   }
-  const TimeNs age = saturating_age(a.generation_time, now);
-  if (age > limits.max_age) {
+  if (saturating_age(a.generation_time, now) > limits.max_age) {
     return AnnouncementReason::kTooOld;
   }
-  if (age < -limits.max_future) {
+  // Received later than judged cannot be: a clock stepped back between the two is judged at `now`.
+  const TimeNs arrival = received ? std::min(*received, now) : now;
+  if (saturating_age(a.generation_time, arrival) < -limits.max_future) {
     return AnnouncementReason::kFromFuture;
   }
   if (!is_unicast_ip_literal(a.reply_to.address)) {

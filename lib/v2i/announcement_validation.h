@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "common/angles.h"
 #include "common/enum_counter.h"
@@ -72,9 +73,13 @@ enum class AnnouncementReason : std::uint8_t {
 
 const char* to_string(AnnouncementReason reason);
 
-// Checks one announcement received at `now` (common clock).
+// Checks one announcement judged at `now` (common clock) that came off the wire at `received` (none:
+// `now`). Its age (max_age) is judged at `now`, what it is worth when used; how far ahead of our clock
+// it was generated (max_future: the sender's clock) at `received`, so that a receiver that falls behind
+// does not let an announcement from a clock too far ahead pass once it has waited long enough.
 AnnouncementReason validate_announcement(const VehicleAnnouncement& announcement, TimeNs now,
-                                         const AnnouncementLimits& limits = {});
+                                         const AnnouncementLimits& limits = {},
+                                         std::optional<TimeNs> received = std::nullopt);
 
 // True when `address` is a numeric IPv4 or IPv6 literal of a unicast host (not unspecified,
 // multicast or broadcast), so corrections cannot be aimed at a whole network.
@@ -85,8 +90,9 @@ class AnnouncementValidator {
  public:
   explicit AnnouncementValidator(const AnnouncementLimits& limits = {}) : limits_(limits) {}
 
-  AnnouncementReason check(const VehicleAnnouncement& announcement, TimeNs now) {
-    const AnnouncementReason reason = validate_announcement(announcement, now, limits_);
+  AnnouncementReason check(const VehicleAnnouncement& announcement, TimeNs now,
+                           std::optional<TimeNs> received = std::nullopt) {
+    const AnnouncementReason reason = validate_announcement(announcement, now, limits_, received);
     counts_.add(reason);
     return reason;
   }

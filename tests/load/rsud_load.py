@@ -65,6 +65,12 @@ def thread_cpu_s(pid):
     return out
 
 
+def run_queue_wait_ns(pid):
+    """How long rsud's event loop thread (its main thread: it decodes, clusters and fixes) has waited on a
+    run queue for a CPU while runnable, since it started (second field of /proc/PID/task/PID/schedstat)."""
+    return int(read_text("/proc/%d/task/%d/schedstat" % (pid, pid)).split()[1])
+
+
 def udp_drops(port):
     """Datagrams the kernel dropped for the UDP socket bound to `port` (its receive buffer was full),
     from the last column of /proc/net/udp."""
@@ -190,12 +196,14 @@ def run(args):
         stream = h.stream(0.0, args.seconds, options=["--truth-out", h.path("stream.truth")])
         fleet = h.fleet(args.seconds + 0.5, extra=args.vehicles - len(IN_VIEW))
         samples, cpu0, threads0, t0 = [], cpu_s(rsud.pid), thread_cpu_s(rsud.pid), time.time()
+        waits = [(time.time(), run_queue_wait_ns(rsud.pid))]
         deadline = t0 + args.seconds + 30
         while fleet.poll() is None and time.time() < deadline:
             mb = rss_mb(rsud.pid)
             if mb is not None:
                 samples.append((time.time() - t0, mb))
             time.sleep(0.25)
+            waits.append((time.time(), run_queue_wait_ns(rsud.pid)))
         elapsed = time.time() - t0
         cpu_share = (cpu_s(rsud.pid) - cpu0) / elapsed
         threads1 = thread_cpu_s(rsud.pid)
@@ -205,7 +213,7 @@ def run(args):
         print(read_text(h.path("stream.log")).strip())
         drops = udp_drops(h.v2i_port)
         h.stop_rsud()
-        return report(h, args, samples, cpu_share, thread_shares, drops)
+        return report(h, args, samples, cpu_share, thread_shares, drops, waits)
     finally:
         if caller_nice is not None:
             set_autogroup_nice(os.getpid(), caller_nice)
@@ -222,7 +230,7 @@ def set_autogroup_nice(pid, nice):
         f.write("%d" % nice)
 
 
-def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
+def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
     s = h.stats()
     summary = h.fleet_summary()
     cs = h.corrections()
@@ -299,6 +307,13 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops):
     busiest = sorted(thread_shares.items(), key=lambda kv: -kv[1])[:3]
     print("rsud CPU: %.0f %% of one core (threads: %s)" % (
         100.0 * cpu_share, ", ".join("%s %.0f %%" % (n, 100.0 * c) for n, c in busiest)))
+    # What the machine left rsud (the share and the p99 below are wall-clock figures: under other programs'
+    # load they measure the machine too; README Known shortfalls).
+    # (The kernel adds a wait when the thread gets a CPU, so a sample may hold more than its length.)
+    most_ms = max(((w1 - w0) * 1e-6 for (_, w0), (_, w1) in zip(waits, waits[1:])), default=0.0)
+    print("rsud's event loop waited for a CPU %.0f ms in all (%.0f %% of the run), at most %.0f ms in a 0.25 s "
+          "sample" % ((waits[-1][1] - waits[0][1]) * 1e-6,
+                      100.0 * (waits[-1][1] - waits[0][1]) * 1e-9 / max(1e-9, waits[-1][0] - waits[0][0]), most_ms))
     if args.check:
         assert not rejected, "announcements rejected: %s" % rejected
         assert sent_by_rsud == len(cs), "corrections lost in transport: %d sent, %d received" % (sent_by_rsud, len(cs))

@@ -126,6 +126,30 @@ TEST(AnnouncementValidation, LimitsAreInclusiveAtTheirEdges) {
   EXPECT_EQ(validate_announcement(a, kNow), AnnouncementReason::kTooOld);
 }
 
+// fault_rsud_clock_offset under load: rsud read a vehicle's announcements 600 ms ahead of its clock
+// after they had waited 0.4-1.4 s in the socket behind a stalled loop, and took them for 200 ms ahead
+// or less. How far ahead is judged at their arrival; how old, when they are used.
+TEST(AnnouncementValidation, FutureJudgedAtArrivalAgeWhenUsed) {
+  const TimeNs received = kNow;
+  const TimeNs read_late = kNow + 500 * kNsPerMs;  // waited 0.5 s for the receiver
+  VehicleAnnouncement ahead = testing::make_announcement(7, 1, received + 600 * kNsPerMs);
+  EXPECT_EQ(validate_announcement(ahead, read_late), AnnouncementReason::kValid);  // judged when read
+  EXPECT_EQ(validate_announcement(ahead, read_late, {}, received), AnnouncementReason::kFromFuture);
+  ahead.generation_time = received + 200 * kNsPerMs;  // the limit itself: accepted
+  EXPECT_EQ(validate_announcement(ahead, read_late, {}, received), AnnouncementReason::kValid);
+  // 800 ms behind, read 0.5 s late: 1.3 s old when used, too old though it came in at 0.8 s.
+  const VehicleAnnouncement behind = testing::make_announcement(7, 1, received - 800 * kNsPerMs);
+  EXPECT_EQ(validate_announcement(behind, read_late, {}, received), AnnouncementReason::kTooOld);
+  EXPECT_EQ(validate_announcement(behind, received, {}, received), AnnouncementReason::kValid);
+  // An arrival after the judging time (the clock stepped back between the two): judged at `now`.
+  const VehicleAnnouncement early = testing::make_announcement(7, 1, kNow + 300 * kNsPerMs);
+  EXPECT_EQ(validate_announcement(early, kNow, {}, kNow + kNsPerSecond), AnnouncementReason::kFromFuture);
+  AnnouncementValidator validator;
+  ahead.generation_time = received + 600 * kNsPerMs;
+  EXPECT_EQ(validator.check(ahead, read_late, received), AnnouncementReason::kFromFuture);
+  EXPECT_EQ(validator.counts().count(AnnouncementReason::kFromFuture), 1U);
+}
+
 TEST(AnnouncementValidation, ValidatorCountsByReason) {
   AnnouncementValidator validator;
   VehicleAnnouncement good = testing::make_announcement(7, 1, kNow);
