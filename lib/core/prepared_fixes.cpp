@@ -129,8 +129,8 @@ GatheredFix PreparedFixes::fix(const GatheredVehicleFixer& fixer, const HeldVehi
 // RsuCore's half of the preparation (file comment of prepared_fixes.h). What to prepare: each cluster
 // every laser has swept past, to fit; each vehicle the gatherer holds (one beyond
 // GatheringConfig::hold_beyond_m until the sweep has passed its footprint) whenever it gains a part, so
-// that its release finds the fix ready unless it gains another; and the vehicles the fits recorded since
-// made (record_prepared).
+// that its release finds the fix ready unless it gains another; and the vehicles that the fits recorded
+// since would release (record_prepared).
 Preparation RsuCore::take_preparation() {
   Preparation p;
   p.fixer = fixer_;
@@ -199,6 +199,7 @@ void RsuCore::add_fix_inputs(const HeldVehicle& held, TimeNs now, std::vector<Fi
     return;
   out.push_back({held, vehicle->announcement, lost_near(held), occluders_of(held)});
 }
+
 // A cluster released ahead of a nearer one still open in its line of sight: what of that one the sweep
 // has passed may hide part of it (perception::SweepClusterer::overtaken_open_points).
 std::vector<Eigen::Vector2d> RsuCore::occluders_of(const HeldVehicle& held) {
