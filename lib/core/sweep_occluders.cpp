@@ -77,6 +77,21 @@ void SweepOccluders::add(std::span<const perception::Detection> detections) {
   std::erase_if(kept_, [&](const Kept& k) { return k.sweep_time < newest - rotation_period_; });
 }
 
+void SweepOccluders::set_unfinished(std::span<const std::vector<lidar::LidarPoint>> clusters) {
+  unfinished_.clear();
+  for (const std::vector<lidar::LidarPoint>& points : clusters) {
+    if (points.empty())
+      continue;
+    Kept k;
+    k.xy.reserve(points.size());
+    for (const lidar::LidarPoint& p : points)
+      k.xy.emplace_back(p.x, p.y);
+    const lidar::LidarPoint& first = points.front();  // as perception::Detection holds it
+    k.first = {static_cast<double>(first.x), static_cast<double>(first.y), static_cast<double>(first.z)};
+    unfinished_.push_back(std::move(k));
+  }
+}
+
 void SweepOccluders::take_static(SweepOccluders&& from) {
   static_by_azimuth_ = std::move(from.static_by_azimuth_);
   static_cells_ = std::move(from.static_cells_);
@@ -123,14 +138,19 @@ std::vector<Eigen::Vector2d> SweepOccluders::of(const HeldVehicle& held) const {
         out.push_back(xy);
     }
   };
+  const auto own = [&](const Kept& k) {
+    return std::find(held.points.begin(), held.points.end(), k.first) != held.points.end();
+  };
   const TimeNs when = held.sweep_time();
   for (const Kept& k : kept_) {
-    if (std::abs(k.sweep_time - when) > rotation_period_ / 2 ||
-        std::find(held.points.begin(), held.points.end(), k.first) != held.points.end())
+    if (std::abs(k.sweep_time - when) > rotation_period_ / 2 || own(k))
       continue;  // another rotation's, or one of its own detections
     take_nearer_within_span(k.xy);
   }
-  take_nearer_within_span(unfinished_);
+  for (const Kept& k : unfinished_) {
+    if (!own(k))  // its own cluster, not released yet (a fix prepared ahead of its release)
+      take_nearer_within_span(k.xy);
+  }
   const int first = azimuth_bucket(ref_azimuth + lo - kAzimuthMarginRad);
   const int buckets = static_cast<int>(std::ceil((hi - lo + 2.0 * kAzimuthMarginRad) / kBucketRad)) + 1;
   for (int i = 0; i < std::min(buckets, kAzimuthBuckets); ++i)

@@ -40,8 +40,10 @@ class SweepOccluders {
   // The static points of `from` (a reload that keeps the background), instead of these.
   void take_static(SweepOccluders&& from);
   // The points swept so far of clusters still open that a released one went ahead of
-  // (perception::SweepClusterer::overtaken_open_points), in place of the previous batch's.
-  void set_unfinished(std::vector<Eigen::Vector2d>&& points) { unfinished_ = std::move(points); }
+  // (perception::SweepClusterer::overtaken_open_points: map frame, one cluster each), in place of the
+  // previous batch's. One of them is a vehicle's own when its fix is prepared before its release
+  // (prepared_fixes.h): its first point tells it, as for a detection.
+  void set_unfinished(std::span<const std::vector<lidar::LidarPoint>> clusters);
   // The other objects' points (xy, map frame) that may hide part of `held`.
   std::vector<Eigen::Vector2d> of(const HeldVehicle& held) const;
 
@@ -58,7 +60,7 @@ class SweepOccluders {
   Eigen::Vector2d lidar_xy_;
   TimeNs rotation_period_;
   std::vector<Kept> kept_;
-  std::vector<Eigen::Vector2d> unfinished_;
+  std::vector<Kept> unfinished_;
   // The static points by azimuth about the LiDAR (one bucket a degree) and the grid cells they fill.
   std::vector<std::vector<Eigen::Vector2d>> static_by_azimuth_;
   std::unordered_set<std::uint64_t> static_cells_;

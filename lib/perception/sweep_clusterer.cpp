@@ -185,8 +185,8 @@ std::vector<SweptCluster> SweepClusterer::release_all() {
   return release(true);
 }
 
-std::vector<Eigen::Vector2d> SweepClusterer::overtaken_open_points() {
-  std::vector<Eigen::Vector2d> out;
+std::vector<std::vector<lidar::LidarPoint>> SweepClusterer::overtaken_open_points() {
+  std::vector<std::vector<lidar::LidarPoint>> out;
   if (overtaken_.empty())
     return out;
   std::vector<std::uint64_t> still_open;
@@ -195,8 +195,9 @@ std::vector<Eigen::Vector2d> SweepClusterer::overtaken_open_points() {
     if (std::find(overtaken_.begin(), overtaken_.end(), seq) == overtaken_.end())
       continue;
     still_open.push_back(seq);
+    std::vector<lidar::LidarPoint>& points = out.emplace_back();
     for (const PendingPoint& m : clusters_.copy(c))
-      out.emplace_back(m.point.x, m.point.y);
+      points.push_back(m.point);
   }
   overtaken_ = std::move(still_open);
   return out;

@@ -141,11 +141,11 @@ class SweepClusterer {
   // that, exactly, after its last packet). The points as release_closed would give them now; each
   // cluster once (by its first point); none that release would drop (size, cut at the start).
   std::vector<SweptCluster> swept_open();
-  // The points (xy, map frame) swept so far of the open clusters that a released one went ahead of
-  // while nearer the LiDAR than its far end (the joint release gap, file comment): they may hide part of
-  // it, and every one of them at its azimuths is already there (the sweep has passed them), so the fix
-  // reasons about its shadow as if they had been released with it.
-  std::vector<Eigen::Vector2d> overtaken_open_points();
+  // The points swept so far of the open clusters that a released one went ahead of while nearer the
+  // LiDAR than its far end (the joint release gap, file comment), one cluster each, in arrival order:
+  // they may hide part of it, and every one of them at its azimuths is already there (the sweep has
+  // passed them), so the fix reasons about its shadow as if they had been released with it.
+  std::vector<std::vector<lidar::LidarPoint>> overtaken_open_points();
 
   // Drops every pending point (counted as points_dropped_restart) and starts the stream afresh, as a
   // gap does: the caller skipped part of the stream (RsuCore sheds packets it is too late for), so

@@ -63,6 +63,35 @@ TEST(SweepOccluders, OtherObjectsNearerInTheVehiclesDirection) {
   EXPECT_EQ(occluders.detections_kept(), 1U);
 }
 
+// The clusters still open that a released one went ahead of hide it too; but when a vehicle's fix is
+// prepared before its own cluster is released (prepared_fixes.h), that cluster is among them, and it is
+// the vehicle, not what hides it (issue 16: every such prepared fix differed from its release's, which had
+// no such occluder, and was computed twice).
+TEST(SweepOccluders, OpenClustersButTheVehiclesOwn) {
+  SweepOccluders occluders(Eigen::Vector2d::Zero(), 100'000'000);
+  const auto cluster_at = [](double x, double y0, double y1) {
+    std::vector<lidar::LidarPoint> points;
+    for (const Eigen::Vector3d& p : detection_at(x, y0, y1, 0).points)
+      points.push_back({.x = static_cast<float>(p.x()), .y = static_cast<float>(p.y()), .z = 0.8f});
+    return points;
+  };
+  const std::vector<lidar::LidarPoint> own = cluster_at(20.0, -1.0, 2.0);
+  const std::vector<lidar::LidarPoint> in_front = cluster_at(10.0, 0.5, 1.0);
+  const std::vector<std::vector<lidar::LidarPoint>> open = {own, in_front};
+  occluders.set_unfinished(open);
+  HeldVehicle held;
+  for (const lidar::LidarPoint& p : own)  // as perception::Detection holds them
+    held.points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
+  const std::vector<Eigen::Vector2d> got = occluders.of(held);
+  ASSERT_EQ(got.size(), in_front.size());
+  for (const Eigen::Vector2d& xy : got)
+    EXPECT_NEAR(xy.x(), 10.0, 1e-6);
+  // Another vehicle behind both is hidden by both.
+  HeldVehicle behind;
+  behind.points = detection_at(30.0, 0.0, 1.5, 0).points;
+  EXPECT_GT(occluders.of(behind).size(), in_front.size());
+}
+
 // The static scene's objects (a background rotation's returns above the road) hide vehicles too, kept
 // once per 0.1 m cell; the road's returns do not.
 TEST(SweepOccluders, StaticObjectsAboveTheRoad) {
