@@ -265,6 +265,9 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
               count("auth.signatures_verified"), count("auth.signatures_checked_ahead"),
               count("auth.refused_before_signature"),
               count("v2i.receiver_queue_full"), count("v2i.receiver_waiting_max")))
+    print("rsud counted: fixes prepared ahead of their release %s, of them used by it %s (issue 16: a release "
+          "whose fix was not prepared computes it; one prepared and not used was computed twice)" % (
+              count("lidar.fixes_prepared"), count("lidar.fixes_prepared_used")))
     sent_by_rsud = int(s.get("corrections_sent", 0))
     print("corrections: rsud sent %d, vehicles received %d (lost in transport %d), to vehicles not in view %d, "
           "naming another vehicle %d" % (sent_by_rsud, len(cs), sent_by_rsud - len(cs),
