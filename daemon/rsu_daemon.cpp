@@ -240,8 +240,16 @@ void RsuDaemon::receive_lidar(udp::socket& socket, std::array<std::uint8_t, 6553
         if (ec == asio::error::operation_aborted || stopping_)
           return;
         if (!ec) {
-          on_lidar_payload(std::span<const std::uint8_t>(buffer.data(), bytes), clock_now(),
+          const TimeNs read = clock_now();
+          // The kernel's stamp of its arrival (SIOCGSTAMPNS: none for the first packet, which turns them
+          // on): how long it waited in the socket for the loop (metrics: lidar_socket_wait_seconds).
+          if (const std::optional<TimeNs> arrival = last_arrival(socket.native_handle())) {
+            stepped_packet_ = PacketTimes{*arrival, read};
+            lidar_socket_wait_seconds_.observe(to_seconds(read - *arrival));
+          }
+          on_lidar_payload(std::span<const std::uint8_t>(buffer.data(), bytes), read,
                            sender.address().to_string());
+          stepped_packet_.reset();
         } else {
           spdlog::debug("LiDAR socket: {}", ec.message());
         }
@@ -520,7 +528,13 @@ void RsuDaemon::send_corrections(const std::vector<core::OutgoingCorrection>& co
       continue;
     }
     ++corrections_sent_;
-    correction_latency_seconds_.observe(to_seconds(clock_now() - c.correction.sweep_time));
+    const TimeNs sent = clock_now();
+    correction_latency_seconds_.observe(to_seconds(sent - c.correction.sweep_time));
+    if (stepped_packet_) {  // released by a live packet's step: the latency's three parts
+      correction_sweep_wait_seconds_.observe(to_seconds(stepped_packet_->arrival - c.correction.sweep_time));
+      correction_socket_wait_seconds_.observe(to_seconds(stepped_packet_->read - stepped_packet_->arrival));
+      correction_step_seconds_.observe(to_seconds(sent - stepped_packet_->read));
+    }
     spdlog::debug(
         "correction #{} to vehicle {} at {}:{}: ({:.3f}, {:.3f}) m, yaw {:.4f} rad, {} points, {} faces",
         c.correction.sequence, c.correction.vehicle_id, c.destination.address, c.destination.port,
@@ -869,6 +883,22 @@ void RsuDaemon::write_metrics() {
       {"correction_latency_seconds",
        "From the time the LiDAR swept the vehicle to the correction's send, on the run's clock",
        &correction_latency_seconds_},
+      {"correction_sweep_wait_seconds",
+       "Of a correction released by a live LiDAR packet's step: from the time the LiDAR swept the vehicle "
+       "to that packet's arrival (the kernel's stamp): the sweep's release rule, the sensor and the wire",
+       &correction_sweep_wait_seconds_},
+      {"correction_socket_wait_seconds",
+       "Of a correction released by a live LiDAR packet's step: that packet's wait in rsud's socket, from "
+       "its arrival to rsud's read (behind earlier packets' work)",
+       &correction_socket_wait_seconds_},
+      {"correction_step_seconds",
+       "Of a correction released by a live LiDAR packet's step: from rsud's read of that packet to the "
+       "correction's send",
+       &correction_step_seconds_},
+      {"lidar_socket_wait_seconds",
+       "Per live LiDAR packet: its wait in rsud's socket, from its arrival (the kernel's stamp) to rsud's "
+       "read",
+       &lidar_socket_wait_seconds_},
       {"sensor_clock_offset_seconds",
        "The LiDAR's clock behind the host's (host - sensor, transit included), as estimated at each data "
        "packet",

@@ -169,6 +169,20 @@ def case_metrics(h):
     assert fleet_mean - 0.02 <= rsud_mean <= fleet_mean + 1e-4, \
         "rsud's mean latency %.4f s, the fleet's %.4f s" % (rsud_mean, fleet_mean)
     within_100ms = buckets[0.1] / count
+    within_5ms = buckets[0.005] / count
+
+    # Its three parts, for each correction a live packet's step released (every one here but those drained
+    # at the stop): they add up to the latency, each part from the same clock readings.
+    parts = {p: histogram(families, "rsud_correction_%s_seconds" % p) for p in ("sweep_wait", "socket_wait", "step")}
+    part_count = parts["step"][2]
+    assert all(c == part_count for _, _, c in parts.values()), parts
+    assert 0.9 * count <= part_count <= count, (part_count, count)
+    assert parts["socket_wait"][1] >= 0 and parts["step"][1] > 0 and parts["sweep_wait"][1] > 0, parts
+    if part_count == count:
+        part_sum = sum(t for _, t, _ in parts.values())
+        assert math.isclose(part_sum, total, rel_tol=1e-6, abs_tol=1e-6), (part_sum, total)
+    # Each packet's wait in the socket (the first has no stamp: it turns them on).
+    waits, wait_sum, wait_count = histogram(families, "rsud_lidar_socket_wait_seconds")
 
     # Sensor clock offset: one observation per data packet, all near zero (the shared clock).
     offsets, offset_sum, offset_count = histogram(families, "rsud_sensor_clock_offset_seconds")
@@ -177,12 +191,16 @@ def case_metrics(h):
     assert offsets[0.1] - offsets[-0.01] == offset_count, "offsets beyond [-10 ms, 100 ms]: %s" % offsets
     steps, steps_sum, steps_count = histogram(families, "rsud_lidar_step_seconds")
     assert steps_count >= accepted, (steps_count, accepted)
+    assert accepted - 1 <= wait_count <= steps_count and wait_sum >= 0, (wait_count, accepted, wait_sum)
     print("ok: %d families (%d counters, %d gauges, %d histograms), every stats value equal; %d corrections, "
-          "mean latency %.1f ms (the fleet measured %.1f ms), %.0f %% within 100 ms; %d packets, mean sensor "
-          "offset %.3f ms; mean LiDAR step %.1f us over %d steps" % (
+          "mean latency %.1f ms (the fleet measured %.1f ms), %.0f %% within 100 ms, %.0f %% within 5 ms; "
+          "its parts (%d corrections): sweep wait %.2f ms, socket wait %.3f ms, step %.3f ms; %d packets, "
+          "mean sensor offset %.3f ms, mean socket wait %.1f us; mean LiDAR step %.1f us over %d steps" % (
               len(families), types["counter"], types["gauge"], types["histogram"], sent, rsud_mean * 1e3,
-              fleet_mean * 1e3, within_100ms * 100, offset_count, offset_sum / offset_count * 1e3,
-              steps_sum / steps_count * 1e6, steps_count))
+              fleet_mean * 1e3, within_100ms * 100, within_5ms * 100, part_count,
+              parts["sweep_wait"][1] / part_count * 1e3, parts["socket_wait"][1] / part_count * 1e3,
+              parts["step"][1] / part_count * 1e3, offset_count, offset_sum / offset_count * 1e3,
+              wait_sum / max(wait_count, 1) * 1e6, steps_sum / steps_count * 1e6, steps_count))
 
 
 def main():

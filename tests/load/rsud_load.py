@@ -32,6 +32,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "integration"))
 from live_rsu import ROTATION_S, LiveRsu, finish  # noqa: E402
 from rsu_processes import ChildExited, read_text  # noqa: E402
+from rsud_metrics import histogram, parse_exposition  # noqa: E402
 
 SCENARIO = os.path.join(HERE, "load_street.yaml")
 IN_VIEW = [1, 2, 3, 4]
@@ -172,7 +173,8 @@ def run(args):
                        learning_frames=3 if args.ouster else None,
                        extra={"on": "", "off": "mount_integrity: {enabled: false}\n",
                               "on-loop": "mount_integrity: {check_thread: false}\n"}[args.mount_integrity] +
-                       perception_overrides(args))
+                       perception_overrides(args) +
+                       "metrics: {textfile: %s, interval_s: 5}\n" % h.path("rsud.prom"))
         if args.ouster:
             # rsud learns the background from the scene without its vehicles, streamed for the 3 s before
             # scenario time 0 (the Velodyne runs load rsu-sim simulate's frames instead); the stream
@@ -230,6 +232,29 @@ def set_autogroup_nice(pid, nice):
         f.write("%d" % nice)
 
 
+def bucket_quantile(buckets, count, q):
+    """The smallest bucket bound under which at least q of the observations fell (Prometheus' le)."""
+    return min((le for le, n in buckets.items() if n >= q * count), default=float("nan"))
+
+
+def report_rsud_latency(prom):
+    """rsud's own measure of its corrections' latency, and its three parts, from its metrics file (the
+    one written at its stop): means, and p99 as the bucket bound it falls under."""
+    if not os.path.exists(prom):
+        print("rsud's latency metrics: no metrics file")
+        return
+    families = parse_exposition(read_text(prom))
+    parts = []
+    for name, what in (("correction_latency", "sweep -> send"), ("correction_sweep_wait", "sweep wait"),
+                       ("correction_socket_wait", "socket wait"), ("correction_step", "step and send"),
+                       ("lidar_socket_wait", "every packet's socket wait")):
+        buckets, total, count = histogram(families, "rsud_%s_seconds" % name)
+        if count:
+            parts.append("%s mean %.2f ms, p99 <= %g ms" % (what, total / count * 1e3,
+                                                            bucket_quantile(buckets, count, 0.99) * 1e3))
+    print("rsud measured (metrics; the parts of each correction a live packet released): " + "; ".join(parts))
+
+
 def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
     s = h.stats()
     summary = h.fleet_summary()
@@ -268,6 +293,7 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
     print("rsud counted: fixes prepared ahead of their release %s, of them used by it %s (issue 16: a release "
           "whose fix was not prepared computes it; one prepared and not used was computed twice)" % (
               count("lidar.fixes_prepared"), count("lidar.fixes_prepared_used")))
+    report_rsud_latency(h.path("rsud.prom"))
     sent_by_rsud = int(s.get("corrections_sent", 0))
     print("corrections: rsud sent %d, vehicles received %d (lost in transport %d), to vehicles not in view %d, "
           "naming another vehicle %d" % (sent_by_rsud, len(cs), sent_by_rsud - len(cs),
