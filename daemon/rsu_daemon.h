@@ -201,13 +201,13 @@ class RsuDaemon {
   std::uint64_t lidar_packets_rejected_ = 0;
   std::uint64_t refusal_sends_failed_ = 0;
   std::uint64_t withheld_notice_sends_failed_ = 0;
+  // The metrics' histograms (seconds). Bounds: a packet takes microseconds, a batch that fits vehicles
+  // milliseconds; a correction leaves well within a rotation (0.1 s) of its sweep; a sensor on the
+  // host's clock is behind by its transit (sub-millisecond), one that is not by anything.
   static std::vector<double> latency_bounds() {
     return {1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 3e-3, 4e-3, 5e-3, 7.5e-3,
             0.01, 0.02,   0.03, 0.05, 0.1,  0.2,  0.5,  1.0};
   }
-  // The metrics' histograms (seconds). Bounds: a packet takes microseconds, a batch that fits vehicles
-  // milliseconds; a correction leaves well within a rotation (0.1 s) of its sweep; a sensor on the
-  // host's clock is behind by its transit (sub-millisecond), one that is not by anything.
   Histogram lidar_step_seconds_{
       {1e-5, 2.5e-5, 5e-5, 1e-4, 2.5e-4, 5e-4, 1e-3, 2.5e-3, 5e-3, 0.01, 0.025, 0.05, 0.1, 0.25, 1.0}};
   // Its buckets are fine around the 5 ms that correction latency is judged by (issue 16), and so are its
@@ -218,14 +218,14 @@ class RsuDaemon {
   Histogram correction_socket_wait_seconds_{latency_bounds()};
   Histogram correction_step_seconds_{latency_bounds()};
   Histogram lidar_socket_wait_seconds_{latency_bounds()};
+  Histogram sensor_clock_offset_seconds_{{-1.0, -0.1, -0.01, -0.005, -0.002, -0.001, -5e-4, -1e-4, 0.0, 1e-4,
+                                          5e-4, 1e-3, 2e-3, 5e-3, 0.01, 0.1, 1.0}};
   // The live LiDAR packet being stepped: its arrival, stamped by the kernel, and when rsud read it.
   struct PacketTimes {
     TimeNs arrival = 0;
     TimeNs read = 0;
   };
   std::optional<PacketTimes> stepped_packet_;
-  Histogram sensor_clock_offset_seconds_{{-1.0, -0.1, -0.01, -0.005, -0.002, -0.001, -5e-4, -1e-4, 0.0, 1e-4,
-                                          5e-4, 1e-3, 2e-3, 5e-3, 0.01, 0.1, 1.0}};
   std::uint64_t v2i_kernel_drops_ = 0;  // as last warned about
   std::uint64_t lidar_kernel_drops_ = 0;
   // The receive buffers the kernel granted (request_receive_buffer; 0: not read back).
