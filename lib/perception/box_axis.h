@@ -15,7 +15,8 @@
 //    anywhere beyond it (a laser's trace leaves a roof through whichever edge it meets): containment only.
 //  - unobserved: the LiDAR could not have seen beyond it (its lowest laser passes above the car there, or
 //    the car hides it): only containment bounds the side.
-// With a face the axis is anchored on it; with two ends spanning the known size, at their middle; else c
+// With a face the axis is anchored on it; with two ends spanning the known size, at their middle (stating
+// the span's shortfall as a uniform spread: a rounded corner may cut one end and not the other); else c
 // is the middle of the interval the sides and containment leave, and its variance that of a uniform
 // error over it: the fix says how little the points decide instead of guessing an end.
 #pragma once

@@ -18,7 +18,8 @@ double axis_variance(const AxisEvidence& axis, double noise_var, double spacing,
     case AxisAnchor::interval:
       return axis.interval_m * axis.interval_m / 12.0 + noise_var + shape_var;
     case AxisAnchor::midpoint:
-      return spacing * spacing / 24.0 + noise_var / 2.0 + shape_var;
+      return spacing * spacing / 24.0 + axis.interval_m * axis.interval_m / 12.0 + noise_var / 2.0 +
+             shape_var;
     case AxisAnchor::one_end:
       return spacing * spacing / 3.0 + noise_var + shape_var;
   }

@@ -78,7 +78,9 @@ struct AxisEvidence {
   // face: the standard error of the face's position when estimated from its points (face_envelope.h);
   // negative: from the point noise and face_points.
   double envelope_sigma_m = -1.0;
-  double interval_m = 0.0;  // interval: the width of the interval the centre lies in (box_axis.h)
+  // interval: the width of the interval the centre lies in (box_axis.h); midpoint: how far the two ends'
+  // span falls short of (or beyond) the known size, over which the centre may lie (one end cut, not both)
+  double interval_m = 0.0;
 };
 
 struct FaceEvidence {

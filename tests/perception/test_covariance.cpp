@@ -68,6 +68,13 @@ TEST(FixCovariance, ModelIsMonotoneInPointsRangeAndFaces) {
   one_end.width_axis = {AxisAnchor::one_end, 0};
   EXPECT_GT(variance_along(fix_covariance(one_end), v), variance_along(one_face, v));
 
+  // The middle of two ends whose span falls short of the known size: the centre may lie anywhere the
+  // shortfall leaves (one end cut by a rounded corner, the other not): its uniform spread is added.
+  FixEvidence short_span = front;
+  short_span.width_axis.interval_m = 0.28;
+  EXPECT_NEAR(variance_along(fix_covariance(short_span), v) - variance_along(one_face, v), 0.28 * 0.28 / 12.0,
+              1e-9);
+
   // An uncertain length/width assignment adds the other hypothesis' spread.
   FixEvidence doubtful = two_faces(15.0, 60);
   doubtful.assignment_confidence = 0.6;
