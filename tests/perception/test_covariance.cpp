@@ -75,6 +75,26 @@ TEST(FixCovariance, ModelIsMonotoneInPointsRangeAndFaces) {
   EXPECT_NEAR(variance_along(fix_covariance(short_span), v) - variance_along(one_face, v), 0.28 * 0.28 / 12.0,
               1e-9);
 
+  // The yaw's effect on the centre covers both the lever's (a small turn about the evidence) and the
+  // probes' (the box placed again far out): probes that moved the box along its length leave the lever's
+  // turn across it, and vice versa; where they agree nothing is added.
+  FixEvidence probed = two_faces(15.0, 60);
+  probed.lever = 1.8 * u;  // a small turn moves the centre across (along v) by 1.8 m/rad
+  probed.yaw_probe_rad = {0.25, -0.25};
+  probed.yaw_probe_shift = {0.25 * 3.0 * u, -0.25 * 3.0 * u};  // the probes moved it along by 3 m/rad
+  const Eigen::Matrix3d probed_cov = fix_covariance(probed);
+  const double var_yaw = probed_cov(2, 2);
+  FixEvidence about_centre = two_faces(15.0, 60);  // a turn moves the centre nowhere
+  about_centre.lever = Eigen::Vector2d::Zero();
+  const Eigen::Matrix3d unturned = fix_covariance(about_centre);
+  EXPECT_GE(variance_along(probed_cov, v) - variance_along(unturned, v), var_yaw * 1.8 * 1.8 * 0.99);
+  EXPECT_GE(variance_along(probed_cov, u) - variance_along(unturned, u), var_yaw * 3.0 * 3.0 * 0.99);
+  FixEvidence agreeing = probed;
+  agreeing.yaw_probe_shift = {0.25 * 1.8 * v, -0.25 * 1.8 * v};
+  EXPECT_NEAR(variance_along(fix_covariance(agreeing), v), variance_along(unturned, v) + var_yaw * 1.8 * 1.8,
+              1e-5);
+  EXPECT_TRUE(positive_semidefinite(probed_cov));
+
   // An uncertain length/width assignment adds the other hypothesis' spread.
   FixEvidence doubtful = two_faces(15.0, 60);
   doubtful.assignment_confidence = 0.6;
