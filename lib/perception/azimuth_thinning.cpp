@@ -11,35 +11,6 @@ namespace {
 
 constexpr std::size_t kNoLaser = std::numeric_limits<std::size_t>::max();
 
-// The laser nearest a point's elevation, as LidarGeometry::laser_of decides it, by the tangents of the
-// midpoints between the lasers sorted by elevation (laser_of scans all 128 lasers of a dense sensor for
-// each point), searched from the previous point's laser: points arrive firing by firing, so the next
-// one is mostly a neighbour's (a binary search's unpredictable branches cost more). The result is the
-// laser's rank by elevation: a grouping, not an index into elevations_rad.
-class LaserRanks {
- public:
-  explicit LaserRanks(const LidarGeometry& lidar) {
-    std::vector<double> e = lidar.elevations_rad;
-    std::sort(e.begin(), e.end());
-    for (std::size_t i = 1; i < e.size(); ++i)
-      boundaries_.push_back(std::tan(0.5 * (e[i - 1] + e[i])));
-  }
-  std::size_t count() const { return boundaries_.size() + 1; }
-  // rise / run: the point's height above the LiDAR over its horizontal range (the elevation's tangent);
-  // the rank r with boundaries_[r - 1] <= rise / run < boundaries_[r], searched from `hint`.
-  std::size_t operator()(double rise_over_run, std::size_t hint) const {
-    std::size_t r = std::min(hint, boundaries_.size());
-    while (r > 0 && rise_over_run < boundaries_[r - 1])
-      --r;
-    while (r < boundaries_.size() && rise_over_run >= boundaries_[r])
-      ++r;
-    return r;
-  }
-
- private:
-  std::vector<double> boundaries_;
-};
-
 // Each point's laser and azimuth column (kNoLaser: not finite, dropped).
 struct Columns {
   std::vector<std::size_t> laser;
@@ -47,7 +18,8 @@ struct Columns {
 };
 
 Columns columns_of(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar) {
-  const LaserRanks ranks(lidar);
+  // The laser's rank by elevation (LaserLookup): a grouping, not an index into elevations_rad.
+  const LaserLookup ranks(lidar.elevations_rad);
   Columns out{std::vector<std::size_t>(points.size(), kNoLaser), std::vector<std::int64_t>(points.size(), 0)};
   // Azimuths are measured from the first point's direction, so that a cluster across the +-pi line (the
   // LiDAR's -x axis) does not wrap; each laser's columns from its own first point.
@@ -67,7 +39,7 @@ Columns columns_of(std::span<const Eigen::Vector3d> points, const LidarGeometry&
     const double azimuth =
         static_cast<double>(std::atan2(static_cast<float>(reference.x() * d.y() - reference.y() * d.x()),
                                        static_cast<float>(reference.x() * d.x() + reference.y() * d.y())));
-    laser = ranks((p.z() - lidar.position.z()) / run, laser);
+    laser = ranks.rank((p.z() - lidar.position.z()) / run, laser);
     if (std::isnan(first[laser]))
       first[laser] = azimuth;
     out.laser[i] = laser;

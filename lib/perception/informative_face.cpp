@@ -113,6 +113,24 @@ double upper_body_direction_sigma(std::span<const double> lower_along, std::span
 // A face's points above the bonnet: their heights, horizontal ranges from the LiDAR, lasers and places
 // along the face.
 struct UpperPoints {
+  explicit UpperPoints(const LidarGeometry& seen_by) : lidar(seen_by), lookup(seen_by.elevations_rad) {}
+  // Point p, at s along the face.
+  void add(const Eigen::Vector3d& p, double s) {
+    const double run = (p.head<2>() - lidar.xy()).norm();
+    heights.push_back(p.z());
+    ranges.push_back(run);
+    along.push_back(s);
+    if (lookup.count() == 0 || !(run > 0.0)) {
+      lasers.push_back(lidar.laser_of(p));
+      return;
+    }
+    hint = lookup.rank((p.z() - lidar.position.z()) / run, hint);  // points come laser by laser
+    lasers.push_back(lookup.laser(hint));
+  }
+
+  const LidarGeometry& lidar;
+  LaserLookup lookup;
+  std::size_t hint = 0;
   std::vector<double> heights, ranges, along;
   std::vector<int> lasers;
 };
@@ -183,7 +201,7 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   const Eigen::Vector2d t = (b - a) / len;
   const double d = config.fit.edge_support_m;
   std::vector<double> across;
-  UpperPoints upper;
+  UpperPoints upper(lidar);
   // Where along the face its informative points lie (below the bonnet; above it those that count), for
   // the extent they span.
   std::vector<double> along;
@@ -202,10 +220,7 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
       lower_across.push_back(n);
     } else {
       upper_across.push_back(n);
-      upper.heights.push_back(p.z());
-      upper.ranges.push_back((p.head<2>() - lidar.xy()).norm());
-      upper.lasers.push_back(lidar.laser_of(p));
-      upper.along.push_back(s);
+      upper.add(p, s);
     }
   }
   const UpperInformation informative_above = informative_upper(upper, lidar, config, noise_sigma);

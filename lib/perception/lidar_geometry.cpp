@@ -49,4 +49,23 @@ int LidarGeometry::laser_of(const Eigen::Vector3d& p) const {
   return nearest;
 }
 
+LaserLookup::LaserLookup(const std::vector<double>& elevations_rad) {
+  std::vector<int> order(elevations_rad.size());
+  for (std::size_t i = 0; i < order.size(); ++i)
+    order[i] = static_cast<int>(i);
+  // Stable: of equal elevations the first index stays first, and the rank between them maps to it.
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return elevations_rad[static_cast<std::size_t>(a)] < elevations_rad[static_cast<std::size_t>(b)];
+  });
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const double e = elevations_rad[static_cast<std::size_t>(order[i])];
+    if (i > 0) {
+      const double below = elevations_rad[static_cast<std::size_t>(order[i - 1])];
+      boundaries_.push_back(std::tan(0.5 * (below + e)));
+    }
+    lasers_.push_back(i > 0 && elevations_rad[static_cast<std::size_t>(order[i - 1])] == e ? lasers_.back()
+                                                                                           : order[i]);
+  }
+}
+
 }  // namespace rsu::perception

@@ -6,6 +6,8 @@
 // known size from a known position").
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,6 +45,34 @@ struct LidarGeometry {
   // Which laser (index into elevations_rad) returned a point at `p` (map frame): the one whose elevation
   // is nearest the point's as seen from the LiDAR; -1 when the elevations are unknown.
   int laser_of(const Eigen::Vector3d& p) const;
+};
+
+// laser_of for many points: the lasers sorted by elevation and the tangents of the midpoints between
+// neighbours (a point's elevation is nearest a laser's exactly when its tangent lies between that laser's
+// two midpoints), searched from the previous point's laser; points arrive firing by firing, so the next one
+// is mostly a neighbour's. laser_of scans every laser with an atan2 per point: a dense sensor's 128 for
+// each of a near car's thousands of points (issue 16).
+class LaserLookup {
+ public:
+  explicit LaserLookup(const std::vector<double>& elevations_rad);
+  // How many ranks there are (the lasers; 0 when the elevations are unknown).
+  std::size_t count() const { return lasers_.size(); }
+  // The rank by elevation of the laser nearest the elevation whose tangent is rise_over_run (the point's
+  // height above the LiDAR over its horizontal range), searched from `hint` (a rank).
+  std::size_t rank(double rise_over_run, std::size_t hint = 0) const {
+    std::size_t r = std::min(hint, boundaries_.size());
+    while (r > 0 && rise_over_run < boundaries_[r - 1])
+      --r;
+    while (r < boundaries_.size() && rise_over_run >= boundaries_[r])
+      ++r;
+    return r;
+  }
+  // That laser's index in elevations_rad (of lasers sharing one elevation, the first, as laser_of).
+  int laser(std::size_t rank) const { return lasers_[rank]; }
+
+ private:
+  std::vector<double> boundaries_;
+  std::vector<int> lasers_;
 };
 
 }  // namespace rsu::perception

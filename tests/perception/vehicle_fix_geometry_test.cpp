@@ -779,6 +779,40 @@ TEST(VehicleFixGeometry, GrazingSideCutShortByTheSegmentation) {
 
 // --- thinning a dense cluster along azimuth (azimuth_thinning.h) ---------------------------------------
 
+// LaserLookup, searched from any hint, names the laser laser_of names (every laser scanned), over the
+// sensors' own elevation tables (a VLP-16's are interleaved, not sorted) and a table with a repeated
+// elevation (the first of the two, as laser_of), for points at every elevation in and beyond the field
+// of view; unknown elevations give no rank.
+TEST(LaserLookup, NamesTheLaserLaserOfNames) {
+  std::vector<std::vector<double>> tables;
+  for (const auto& model : {lidar::make_vlp16(), lidar::make_vlp32c(), lidar::make_generic(128)}) {
+    tables.emplace_back();
+    for (const double e : model.elevation_deg)
+      tables.back().push_back(deg_to_rad(e));
+  }
+  tables.push_back({deg_to_rad(-5.0), deg_to_rad(3.0), deg_to_rad(-5.0), deg_to_rad(10.0)});
+  for (const std::vector<double>& table : tables) {
+    LidarGeometry lidar;
+    lidar.position = {0.5, -1.0, 6.0};
+    lidar.elevations_rad = table;
+    const LaserLookup lookup(table);
+    ASSERT_EQ(lookup.count(), table.size());
+    std::size_t hint = 0;
+    for (int i = 0; i <= 4000; ++i) {
+      const double elevation = deg_to_rad(-40.0 + 0.02 * i);  // -40 .. +40 deg
+      const double run = 3.0 + 0.01 * (i % 700);
+      const Eigen::Vector3d p(lidar.position.x() + run * std::cos(0.3 * i),
+                              lidar.position.y() + run * std::sin(0.3 * i),
+                              lidar.position.z() + run * std::tan(elevation));
+      const double rise_over_run = (p.z() - lidar.position.z()) / (p.head<2>() - lidar.xy()).norm();
+      hint = lookup.rank(rise_over_run, hint);
+      ASSERT_EQ(lookup.laser(hint), lidar.laser_of(p)) << "elevation " << rad_to_deg(elevation) << " deg";
+      ASSERT_EQ(lookup.laser(lookup.rank(rise_over_run, table.size() - 1 - hint)), lidar.laser_of(p));
+    }
+  }
+  EXPECT_EQ(LaserLookup({}).count(), 0U);
+}
+
 // The near car of a dense sensor (issue 16: 5,600-17,600 points in rsud) and its lasers' traces, told apart
 // by the reference rule (LidarGeometry::laser_of, every laser scanned) and the points' absolute azimuth.
 struct Traces {
