@@ -250,14 +250,14 @@ View view_of(std::span<const Eigen::Vector3d> finite, const RectangleFit& fit, c
 
 // The yaw evidence: the (at most two) seen faces, each counting only its points on vertical surfaces of
 // the body; the range is the fit's.
-FixEvidence yaw_evidence(const View& view, const RectangleFit& fit) {
+FixEvidence yaw_evidence(const View& view, const RectangleFit& fit, const VehicleSize& size) {
   FixEvidence evidence;
   evidence.range_m = (fit.center - view.lidar.xy()).norm();
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
     if (fit.edges[i].seen)
-      evidence.seen_faces[f++] =
-          informative_face(view.points, view.lidar, view.config, view.end_height, view.noise_sigma, fit, i);
+      evidence.seen_faces[f++] = informative_face(view.points, view.lidar, view.config, view.end_height,
+                                                  view.noise_sigma, fit, i, size);
   }
   return evidence;
 }
@@ -407,7 +407,7 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   const View view = view_of(finite, refined, size, lidar, config, envelopes);
   // Yaw: what the seen faces tell, the length/width assignment, the vehicle's own heading where they
   // tell little.
-  const FixEvidence evidence = yaw_evidence(view, refined);
+  const FixEvidence evidence = yaw_evidence(view, refined, size);
   const double face_information = face_yaw_information(evidence, config.covariance);
   const ChosenYaw yaw = choose_yaw(view, refined, size, face_information, outline, prior);
   if (yaw.refusal != CorrectionStatus::ok)

@@ -139,7 +139,8 @@ struct UpperPoints {
 struct UpperInformation {
   std::size_t points = 0;
   std::vector<double> along;
-  // The depression of the laser whose trace alone they are (0: several lasers, or rising, or unknown).
+  // The depression of the laser whose trace they are (0: several lasers', or rising, or unknown), give or
+  // take a few points of others (CorrectionConfig::single_trace_share).
   double single_trace_depression = 0.0;
 };
 
@@ -158,6 +159,8 @@ UpperInformation informative_upper(const UpperPoints& upper, const LidarGeometry
   std::sort(lasers.begin(), lasers.end());
   lasers.erase(std::unique(lasers.begin(), lasers.end()), lasers.end());
   std::vector<int> spreading;  // lasers whose trace is not an arc
+  std::size_t most = 0;        // points of the laser holding most of them
+  int holding_most = -1;
   for (const int laser : lasers) {
     std::vector<double> ranges, along;
     for (std::size_t i = 0; i < upper.lasers.size(); ++i) {
@@ -168,14 +171,18 @@ UpperInformation informative_upper(const UpperPoints& upper, const LidarGeometry
     }
     if (spreads_in_range(std::move(ranges), arc_tolerance)) {
       spreading.push_back(laser);
+      if (along.size() > most) {
+        most = along.size();
+        holding_most = laser;
+      }
       out.along.insert(out.along.end(), along.begin(), along.end());
     }
   }
   if (out.along.size() >= 3) {
     out.points = out.along.size();
-    if (spreading.size() == 1 && spreading.front() >= 0)
-      out.single_trace_depression =
-          std::abs(lidar.elevations_rad[static_cast<std::size_t>(spreading.front())]);
+    if (holding_most >= 0 &&
+        static_cast<double>(most) >= config.single_trace_share * static_cast<double>(out.along.size()))
+      out.single_trace_depression = std::abs(lidar.elevations_rad[static_cast<std::size_t>(holding_most)]);
     return out;
   }
   out.along.clear();
@@ -189,11 +196,37 @@ UpperInformation informative_upper(const UpperPoints& upper, const LidarGeometry
   return out;
 }
 
+// The departure a rounded corner at one end of a face of `length` (its points at `along`) gives its
+// least-squares direction (fix_covariance.h: the tilt over the face). Where the face meets a corner of radius
+// r, the corner's returns within the face's support band d lie about d / 2 off its line over its last r: on a
+// face of n points evenly over l they turn the line by about (n r / l) ((l - r) / 2) (d / 2) / (n l^2 / 12) =
+// 3 r d (l - r) / l^3 rad, a departure of 1.5 r d (l - r) / l^2 over it (within 10-50 % above the turn a
+// least-squares fit takes for radii 0.2-0.35 m: InformativeFace.RoundedCornerTurnIsCovered). Where the face's
+// points span its whole side or end (the announced length or width within full_face_tolerance_m) the two
+// corners turn it in opposite senses and cancel but for how many returns each corner's band happens to hold:
+// the share sqrt(l / (n r)) of it. Without it, a sparse end of a small car beyond 30 m (20-40 returns,
+// 1.0-1.7 m of them on one face) was 6-13 deg off while stating 2-3 deg: 0.33-0.65 % of the fixes in the
+// worst 5 m band of 11 of the pilot matrices' 120 cells, none in 9 of them now (README, the pilot matrix).
+double rounded_corner_departure(std::span<const double> along, double length, const VehicleSize& size,
+                                const CorrectionConfig& config) {
+  const double r = config.corner_radius_m;
+  if (along.size() < 2 || !(length > r) || length >= config.corner_face_max_m)
+    return 0.0;
+  const auto [first, last] = std::minmax_element(along.begin(), along.end());
+  const double extent = *last - *first;
+  const double tolerance = config.full_face_tolerance_m;
+  const bool whole =
+      extent <= size.width + tolerance ? extent >= size.width - tolerance : extent >= size.length - tolerance;
+  const double n = static_cast<double>(along.size());
+  const double share = whole ? std::min(1.0, std::sqrt(length / (n * r))) : 1.0;
+  return share * 1.5 * r * config.fit.edge_support_m * (length - r) / (length * length);
+}
+
 }  // namespace
 
 FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
                               const CorrectionConfig& config, double end_height, double noise_sigma,
-                              const RectangleFit& fit, std::size_t edge) {
+                              const RectangleFit& fit, std::size_t edge, const VehicleSize& size) {
   FaceEvidence face = face_evidence(fit, edge, lidar.xy());
   const Eigen::Vector2d a = fit.corners[edge % 4];
   const Eigen::Vector2d b = fit.corners[(edge + 1) % 4];
@@ -256,6 +289,7 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   // a windscreen's slope). Seen from 6-8 m up such traces (one VLP-16 or VLP-32C laser over an SUV's rear
   // window at 16-24 m) were 20-23 deg off while stating 4-6 deg; a departure of tan(e) over half the face
   // states about e.
+  face.departure_m = std::max(face.departure_m, rounded_corner_departure(along, face.length_m, size, config));
   if (lower == 0 && informative_above.single_trace_depression > 0.0)
     face.departure_m =
         std::max(face.departure_m, 0.5 * face.length_m * std::tan(informative_above.single_trace_depression));

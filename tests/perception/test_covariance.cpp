@@ -4,14 +4,18 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <random>
+#include <vector>
 
 #include <Eigen/Core>
 
 #include "common/angles.h"
 #include "common/symmetric_eigen.h"
 #include "perception/fix_covariance.h"
+#include "perception/informative_face.h"
 #include "perception/l_shape_fitting.h"
+#include "perception/lidar_geometry.h"
 #include "perception/size_correction.h"
 #include "synthetic_scene.h"
 
@@ -149,6 +153,92 @@ TEST(FixCovariance, FaceEvidenceMeasuresTheIncidence) {
   const FaceEvidence side = face_evidence(fit, 3, lidar);
   EXPECT_DOUBLE_EQ(side.length_m, 2.0);
   EXPECT_NEAR(side.incidence_sin, 2.0 / std::hypot(2.0, 9.0), 1e-12);
+}
+
+// A face of length l along x from the origin, seen head-on from 8 m by a LiDAR 2 m up, its points 2 cm apart
+// at 0.5 m (the lower body); `near_corner` / `far_corner`: that end is a quarter circle of radius r curving
+// into the box (a rounded corner), of which the points within the face's support band are kept.
+struct CornerFace {
+  std::vector<Eigen::Vector3d> points;
+  RectangleFit fit;
+  LidarGeometry lidar;
+};
+
+CornerFace corner_face(double l, double r, bool near_corner, bool far_corner, double band) {
+  CornerFace f;
+  const auto add = [&](double x, double y) {
+    if (y <= band)
+      f.points.emplace_back(x, y, 0.5);
+  };
+  const double step = 0.02;
+  const double straight_from = near_corner ? r : 0.0;
+  const double straight_to = far_corner ? l - r : l;
+  for (double x = straight_from; x <= straight_to + 1e-9; x += step)
+    add(x, 0.0);
+  const int arc_points = static_cast<int>(std::numbers::pi / 2.0 * r / step);
+  for (int i = 1; i <= arc_points; ++i) {
+    const double t = std::numbers::pi / 2.0 * i / arc_points;
+    if (far_corner)
+      add(l - r + r * std::sin(t), r - r * std::cos(t));
+    if (near_corner)
+      add(r - r * std::sin(t), r - r * std::cos(t));
+  }
+  f.fit.status = FitStatus::ok;
+  f.fit.length0 = l;
+  f.fit.length1 = 1.8;
+  f.fit.corners = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(l, 0.0), Eigen::Vector2d(l, 1.8),
+                   Eigen::Vector2d(0.0, 1.8)};
+  f.fit.edges[0].support_points = f.points.size();
+  f.fit.edges[0].seen = true;
+  f.lidar.position = Eigen::Vector3d(0.5 * l, -8.0, 2.0);
+  return f;
+}
+
+// The yaw sigma one seen face states (no prior).
+double face_sigma(const CornerFace& f, const VehicleSize& size) {
+  const CorrectionConfig config;
+  FixEvidence e;
+  e.range_m = 8.0;
+  e.seen_faces[0] = informative_face(f.points, f.lidar, config, 0.78, 0.02, f.fit, 0, size);
+  return 1.0 / std::sqrt(face_yaw_information(e, config.covariance));
+}
+
+// A rounded corner at one end of a face turns its least-squares line (the test fits it); the face's stated
+// direction sigma covers that turn for corner radii 0.2-0.35 m on an end shorter than the vehicle's width
+// (its other end unseen; longer faces are refit on their middle, face_refinement.h).
+TEST(InformativeFace, RoundedCornerTurnIsCovered) {
+  const CorrectionConfig config;
+  const VehicleSize size{4.6, 1.8, 1.42};
+  for (const double l : {1.0, 1.2, 1.4}) {
+    for (const double r : {0.2, 0.3, 0.35}) {
+      const CornerFace f = corner_face(l, r, false, true, config.fit.edge_support_m);
+      double mx = 0.0, my = 0.0;
+      for (const auto& p : f.points) {
+        mx += p.x();
+        my += p.y();
+      }
+      mx /= static_cast<double>(f.points.size());
+      my /= static_cast<double>(f.points.size());
+      double sxx = 0.0, sxy = 0.0;
+      for (const auto& p : f.points) {
+        sxx += (p.x() - mx) * (p.x() - mx);
+        sxy += (p.x() - mx) * (p.y() - my);
+      }
+      const double turn = std::abs(std::atan(sxy / sxx));
+      EXPECT_GT(turn, deg_to_rad(0.1)) << l << " " << r;  // the corner turns it
+      EXPECT_GE(face_sigma(f, size), turn) << l << " " << r;
+    }
+  }
+}
+
+// An end seen whole (both rounded corners, the vehicle's width within full_face_tolerance_m): the corners
+// turn it in opposite senses, and it states a surer direction than the same end with one corner unseen.
+TEST(InformativeFace, WholeEndWithBothCornersIsSurerThanPartOfIt) {
+  const CorrectionConfig config;
+  const VehicleSize size{4.6, 1.8, 1.42};
+  const CornerFace whole = corner_face(1.8, 0.3, true, true, config.fit.edge_support_m);
+  const VehicleSize wider{4.6, 2.5, 1.42};  // the same points, an end 0.7 m wider than they span
+  EXPECT_LT(face_sigma(whole, size), face_sigma(whole, wider));
 }
 
 CorrectedPose correct_scan(const TrueBox& box, const Eigen::Vector2d& lidar, double step_deg,
