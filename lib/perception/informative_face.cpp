@@ -158,8 +158,8 @@ UpperInformation informative_upper(const UpperPoints& upper, const LidarGeometry
   std::vector<int> lasers = upper.lasers;
   std::sort(lasers.begin(), lasers.end());
   lasers.erase(std::unique(lasers.begin(), lasers.end()), lasers.end());
-  std::vector<int> spreading;  // lasers whose trace is not an arc
-  std::size_t most = 0;        // points of the laser holding most of them
+  // Of the lasers whose trace is not an arc, the one holding most of the points, and how many.
+  std::size_t most = 0;
   int holding_most = -1;
   for (const int laser : lasers) {
     std::vector<double> ranges, along;
@@ -170,7 +170,6 @@ UpperInformation informative_upper(const UpperPoints& upper, const LidarGeometry
       }
     }
     if (spreads_in_range(std::move(ranges), arc_tolerance)) {
-      spreading.push_back(laser);
       if (along.size() > most) {
         most = along.size();
         holding_most = laser;
@@ -282,6 +281,7 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   }
   if (face.length_m < config.short_face_m)
     face.departure_m = std::max(face.departure_m, config.short_face_tilt_m);
+  face.departure_m = std::max(face.departure_m, rounded_corner_departure(along, face.length_m, size, config));
   // One laser's trace above the bonnet is not shown to lie on a vertical surface: across a sloped window
   // or the roof's rounded edge (height changing along the body at a rate m) the trace runs across the
   // gradient m u + tan(e) r of body and cone (u the body's axis, r the line of sight, e the laser's
@@ -289,7 +289,6 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   // a windscreen's slope). Seen from 6-8 m up such traces (one VLP-16 or VLP-32C laser over an SUV's rear
   // window at 16-24 m) were 20-23 deg off while stating 4-6 deg; a departure of tan(e) over half the face
   // states about e.
-  face.departure_m = std::max(face.departure_m, rounded_corner_departure(along, face.length_m, size, config));
   if (lower == 0 && informative_above.single_trace_depression > 0.0)
     face.departure_m =
         std::max(face.departure_m, 0.5 * face.length_m * std::tan(informative_above.single_trace_depression));

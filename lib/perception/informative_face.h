@@ -23,7 +23,8 @@ struct VehicleSize;
 
 // Edge `edge` (0..3) of `fit` seen from `lidar`; points: the vehicle's (map frame, finite); end_height:
 // up to which height above the road a point can be on the footprint's front or back (the bonnet);
-// noise_sigma: the points' noise across a face.
+// noise_sigma: the points' noise across a face; size: the vehicle's announced (a face spanning a whole side
+// or end holds both its rounded corners).
 FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
                               const CorrectionConfig& config, double end_height, double noise_sigma,
                               const RectangleFit& fit, std::size_t edge, const VehicleSize& size);
