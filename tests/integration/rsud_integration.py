@@ -425,7 +425,11 @@ def case_security(h):
     attacker.sendto(announcement(1, 999, reply=("127.0.0.1", vehicle_port)), ("127.0.0.1", h.v2i_port))
     h.send("--to", to_rsud, "--kind", "announcement", "--id", "1", "--unsigned", "1", "--reply-port", str(vehicle_port))
     h.send("--to", to_rsud, "--kind", "announcement", "--id", "1", "--key", h.path("keys/mallory.key"))
-    h.send("--to", to_rsud, "--kind", "announcement", "--id", "2", "--key", h.path("keys/car.key"))
+    # The car's key for another vehicle, under a sequence number far ahead of the car's own: the helper's
+    # default (1) lay inside the car's replay window while it had sent 64 announcements or fewer, and was
+    # refused as a duplicate before its subject was checked (the ASan pass, once).
+    h.send("--to", to_rsud, "--kind", "announcement", "--id", "2", "--key", h.path("keys/car.key"), "--seq",
+           "3000000")
     h.send("--to", to_rsud, "--kind", "announcement", "--id", "1", "--key", h.path("keys/car.key"), "--seq",
            "4000000", "--age-ms", "-5000")
     time.sleep(1.2)  # stats written, corrections flowing
