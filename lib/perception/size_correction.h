@@ -189,6 +189,12 @@ struct CorrectionConfig {
   // roof and bonnet, 85 of the near face's 89 points (4 of another laser), none on the doors, which no laser
   // reached; the "side" was 11 deg off while stating 3.6 deg, the fix 0.38 m off at NEES 12.8 (HMI).
   double single_trace_share = 0.9;
+  // One laser's trace is one straight line in plan (a vertical surface) when its returns lie within this of
+  // one (median distance): judged whole for the lower body (vehicle_fix.cpp); a face that is a chord of such
+  // a trace (three quarters of the laser's returns within the face's span lie off its band, within
+  // crossing_depth_m across it) is tilted from it by the trace's slope (informative_face.cpp).
+  double trace_straightness_m = 0.1;
+  double crossing_depth_m = 1.0;
   // Sides of the box along an axis (box_axis.h): the lower body's extreme within end_tolerance_m of all
   // points' is an end, the body ends within end_allowance_m (+ the azimuth step) beyond it; a higher
   // extreme bounds nothing but containment; a side counts as observed if a laser would hit a body

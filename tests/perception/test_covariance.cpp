@@ -241,6 +241,57 @@ TEST(InformativeFace, WholeEndWithBothCornersIsSurerThanPartOfIt) {
   EXPECT_LT(face_sigma(whole, size), face_sigma(whole, wider));
 }
 
+// One laser's straight trace (a vertical surface in plan) through the middle of a fitted edge along x from
+// 0 to 4.5 m at `angle` to it, every 0.12 m, seen by a laser 9 deg down from 6 m up, 34 m away; `step`: the
+// trace's second half lies this far farther inside the box (a laser leaving the side onto a higher surface).
+double chord_sigma(double angle, double step) {
+  const CorrectionConfig config;
+  RectangleFit fit;
+  fit.status = FitStatus::ok;
+  fit.length0 = 4.5;
+  fit.length1 = 1.9;
+  fit.corners = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(4.5, 0.0), Eigen::Vector2d(4.5, 1.9),
+                 Eigen::Vector2d(0.0, 1.9)};
+  fit.edges[0].seen = true;
+  LidarGeometry lidar;
+  lidar.position = Eigen::Vector3d(2.25, -34.0, 6.0);
+  lidar.elevations_rad = {deg_to_rad(-11.0), deg_to_rad(-9.0), deg_to_rad(-7.0)};
+  std::vector<Eigen::Vector3d> points;
+  const Eigen::Vector2d direction(std::cos(angle), std::sin(angle));
+  for (double t = -2.2; t <= 2.2 + 1e-9; t += 0.12) {
+    Eigen::Vector2d xy = Eigen::Vector2d(2.25, 0.0) + t * direction;
+    if (t > 0.0)
+      xy.y() += step;
+    if (xy.x() < 0.0 || xy.x() > 4.5)
+      continue;
+    const double run = (xy - lidar.xy()).norm();
+    points.emplace_back(xy.x(), xy.y(), 6.0 + run * std::tan(deg_to_rad(-9.0)));
+  }
+  FixEvidence e;
+  e.range_m = 34.0;
+  e.seen_faces[0] = informative_face(points, lidar, config, 0.69, 0.03, fit, 0, {4.5, 1.9, 1.25});
+  return 1.0 / std::sqrt(face_yaw_information(e, config.covariance));
+}
+
+// A fitted edge that a laser's straight trace crosses holds only the trace's returns where it crosses its
+// support band: its direction is the trace's, and the stated sigma covers the angle between them. A trace
+// along the edge, or one leaving it onto a surface farther in (not one straight line), states no more. (On
+// this clean, evenly sampled chord the band's own spread already states 14 and 30 deg at 15 and 25 deg
+// without crossing_trace_departure; the coupe's sparse, noisy one did not: VehicleFixGeometry's
+// FaceThatIsAChordOfATrace.)
+TEST(InformativeFace, ChordOfAStraightTraceStatesTheTracesAngle) {
+  // At 8 deg half the trace lies in the band: a face of it, its spread about the edge its departure.
+  EXPECT_GE(3.0 * chord_sigma(deg_to_rad(8.0), 0.0), deg_to_rad(8.0));
+  for (const double angle_deg : {15.0, 25.0}) {
+    const double sigma = chord_sigma(deg_to_rad(angle_deg), 0.0);
+    EXPECT_GE(sigma, 0.9 * deg_to_rad(angle_deg)) << angle_deg;
+    EXPECT_LE(sigma, 2.0 * deg_to_rad(angle_deg)) << angle_deg;
+  }
+  const double along = chord_sigma(0.0, 0.0);
+  EXPECT_LT(along, deg_to_rad(1.0));
+  EXPECT_LT(chord_sigma(0.0, 0.5), deg_to_rad(2.0));
+}
+
 CorrectedPose correct_scan(const TrueBox& box, const Eigen::Vector2d& lidar, double step_deg,
                            std::uint64_t seed, const CorrectionConfig& config = {}) {
   std::mt19937_64 rng(seed);
