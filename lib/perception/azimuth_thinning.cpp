@@ -9,9 +9,7 @@
 namespace rsu::perception {
 namespace {
 
-constexpr std::size_t kNoLaser = std::numeric_limits<std::size_t>::max();
-
-// Each point's laser and azimuth column (kNoLaser: not finite, dropped).
+// Each point's laser and azimuth column (LaserLookup::kNone: not finite, dropped).
 struct Columns {
   std::vector<std::size_t> laser;
   std::vector<std::int64_t> column;
@@ -19,30 +17,26 @@ struct Columns {
 
 Columns columns_of(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar) {
   // The laser's rank by elevation (LaserLookup): a grouping, not an index into elevations_rad.
-  const LaserLookup ranks(lidar.elevations_rad);
-  Columns out{std::vector<std::size_t>(points.size(), kNoLaser), std::vector<std::int64_t>(points.size(), 0)};
+  const LaserLookup lookup(lidar.elevations_rad);
+  Columns out{lookup.ranks(points, lidar.position), std::vector<std::int64_t>(points.size(), 0)};
   // Azimuths are measured from the first point's direction, so that a cluster across the +-pi line (the
   // LiDAR's -x axis) does not wrap; each laser's columns from its own first point.
   Eigen::Vector2d reference = Eigen::Vector2d::Zero();
-  std::vector<double> first(ranks.count(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<double> first(lookup.count(), std::numeric_limits<double>::quiet_NaN());
   const double per_step = 1.0 / lidar.azimuth_step_rad;
-  std::size_t laser = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d& p = points[i];
-    const Eigen::Vector2d d = p.head<2>() - lidar.xy();
-    const double run = d.norm();
-    if (!p.allFinite() || !(run > 0.0))
+    const std::size_t laser = out.laser[i];
+    if (laser == LaserLookup::kNone)
       continue;
+    const Eigen::Vector2d d = points[i].head<2>() - lidar.xy();
     if (reference.isZero())
       reference = d;
     // In float: its rounding (about 1e-7 of the angle) is far below a step (3e-3 rad).
     const double azimuth =
         static_cast<double>(std::atan2(static_cast<float>(reference.x() * d.y() - reference.y() * d.x()),
                                        static_cast<float>(reference.x() * d.x() + reference.y() * d.y())));
-    laser = ranks.rank((p.z() - lidar.position.z()) / run, laser);
     if (std::isnan(first[laser]))
       first[laser] = azimuth;
-    out.laser[i] = laser;
     const double steps = (azimuth - first[laser]) * per_step;
     out.column[i] = static_cast<std::int64_t>(steps + (steps < 0.0 ? -0.5 : 0.5));  // the nearest
   }
@@ -57,7 +51,7 @@ class Occupancy {
         hi_(lasers, std::numeric_limits<std::int64_t>::min()),
         offset_(lasers, 0) {
     for (std::size_t i = 0; i < c.laser.size(); ++i) {
-      if (c.laser[i] == kNoLaser)
+      if (c.laser[i] == LaserLookup::kNone)
         continue;
       lo_[c.laser[i]] = std::min(lo_[c.laser[i]], c.column[i]);
       hi_[c.laser[i]] = std::max(hi_[c.laser[i]], c.column[i]);
@@ -75,7 +69,7 @@ class Occupancy {
   void fill(const Columns& c) {
     bits_.assign(size_, false);
     for (std::size_t i = 0; i < c.laser.size(); ++i) {
-      if (c.laser[i] != kNoLaser)
+      if (c.laser[i] != LaserLookup::kNone)
         bits_[index(c.laser[i], c.column[i])] = true;
     }
   }
@@ -117,7 +111,7 @@ AzimuthThinning thin_along_azimuth(std::span<const Eigen::Vector3d> points, cons
   for (std::size_t i = 0; i < points.size(); ++i) {
     const std::size_t l = c.laser[i];
     const std::int64_t col = c.column[i];
-    if (l == kNoLaser) {
+    if (l == LaserLookup::kNone) {
       // Finite but straight above or below the LiDAR: no azimuth to thin by.
       if (points[i].allFinite())
         out.points.push_back(points[i]);

@@ -150,25 +150,22 @@ double crossing_trace_departure(const std::vector<SpanTrace>& traces, double len
 // The lasers' returns within the span of the edge from a along t over len, away from its corners by the
 // support band d, at most config.crossing_depth_m across it and on the full plan (side_body_height: not a
 // roof's or bonnet's level arc), by laser (crossing_trace_departure).
-std::vector<SpanTrace> span_traces(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
-                                   const Eigen::Vector2d& a, const Eigen::Vector2d& t, double len, double d,
-                                   const VehicleSize& size, const CorrectionConfig& config) {
+std::vector<SpanTrace> span_traces(std::span<const Eigen::Vector3d> points,
+                                   std::span<const std::size_t> ranks, std::size_t lasers,
+                                   const LidarGeometry& lidar, const Eigen::Vector2d& a,
+                                   const Eigen::Vector2d& t, double len, double d, const VehicleSize& size,
+                                   const CorrectionConfig& config) {
   const double plan_height = side_body_height(size, config);
-  const LaserLookup ranks(lidar.elevations_rad);
-  std::vector<SpanTrace> traces(ranks.count());
-  if (traces.empty())  // the lasers' elevations unknown
-    return traces;
-  std::size_t hint = 0;
-  for (const Eigen::Vector3d& p : points) {
+  std::vector<SpanTrace> traces(lasers);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
     const Eigen::Vector2d r = p.head<2>() - a;
     const double s = r.dot(t);
     const double n = r.x() * t.y() - r.y() * t.x();
-    const double run = (p.head<2>() - lidar.xy()).norm();
-    if (s < d || s > len - d || std::abs(n) > config.crossing_depth_m || !(run > 0.0) ||
+    if (ranks[i] == LaserLookup::kNone || s < d || s > len - d || std::abs(n) > config.crossing_depth_m ||
         p.z() - lidar.ground_z > plan_height)
       continue;
-    hint = ranks.rank((p.z() - lidar.position.z()) / run, hint);
-    SpanTrace& trace = traces[hint];
+    SpanTrace& trace = traces[ranks[i]];
     trace.along.push_back(s);
     trace.across.push_back(n);
     trace.in_band += std::abs(n) <= d ? 1U : 0U;
@@ -179,24 +176,15 @@ std::vector<SpanTrace> span_traces(std::span<const Eigen::Vector3d> points, cons
 // A face's points above the bonnet: their heights, horizontal ranges from the LiDAR, lasers and places
 // along the face.
 struct UpperPoints {
-  explicit UpperPoints(const LidarGeometry& seen_by) : lidar(seen_by), lookup(seen_by.elevations_rad) {}
-  // Point p, at s along the face.
-  void add(const Eigen::Vector3d& p, double s) {
-    const double run = (p.head<2>() - lidar.xy()).norm();
+  // Point p, at s along the face, of the laser ranked `rank` by `lookup` (-1 for LaserLookup::kNone).
+  void add(const Eigen::Vector3d& p, double s, const Eigen::Vector2d& lidar_xy, const LaserLookup& lookup,
+           std::size_t rank) {
     heights.push_back(p.z());
-    ranges.push_back(run);
+    ranges.push_back((p.head<2>() - lidar_xy).norm());
     along.push_back(s);
-    if (lookup.count() == 0 || !(run > 0.0)) {
-      lasers.push_back(lidar.laser_of(p));
-      return;
-    }
-    hint = lookup.rank((p.z() - lidar.position.z()) / run, hint);  // points come laser by laser
-    lasers.push_back(lookup.laser(hint));
+    lasers.push_back(rank == LaserLookup::kNone ? -1 : lookup.laser(rank));
   }
 
-  const LidarGeometry& lidar;
-  LaserLookup lookup;
-  std::size_t hint = 0;
   std::vector<double> heights, ranges, along;
   std::vector<int> lasers;
 };
@@ -299,12 +287,15 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   const Eigen::Vector2d t = (b - a) / len;
   const double d = config.fit.edge_support_m;
   std::vector<double> across;
-  UpperPoints upper(lidar);
+  const LaserLookup lookup(lidar.elevations_rad);
+  const std::vector<std::size_t> ranks = lookup.ranks(points, lidar.position);
+  UpperPoints upper;
   // Where along the face its informative points lie (below the bonnet; above it those that count).
   std::vector<double> along;
   // Below the bonnet: where along the face and how far across it; above it, how far across.
   std::vector<double> lower_along, lower_across, upper_across;
-  for (const Eigen::Vector3d& p : points) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
     const Eigen::Vector2d r = p.head<2>() - a;
     const double s = r.dot(t);
     const double n = r.x() * t.y() - r.y() * t.x();
@@ -317,7 +308,7 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
       lower_across.push_back(n);
     } else {
       upper_across.push_back(n);
-      upper.add(p, s);
+      upper.add(p, s, lidar.xy(), lookup, ranks[i]);
     }
   }
   const UpperInformation informative_above = informative_upper(upper, lidar, config, noise_sigma);
@@ -346,8 +337,9 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   }
   if (face.length_m < config.short_face_m)
     face.departure_m = std::max(face.departure_m, config.short_face_tilt_m);
-  const double crossing = crossing_trace_departure(span_traces(points, lidar, a, t, len, d, size, config),
-                                                   face.length_m, config.trace_straightness_m);
+  const double crossing =
+      crossing_trace_departure(span_traces(points, ranks, lookup.count(), lidar, a, t, len, d, size, config),
+                               face.length_m, config.trace_straightness_m);
   face.departure_m =
       std::max({face.departure_m, rounded_corner_departure(along, face.length_m, size, config), crossing});
   // One laser's trace above the bonnet is not shown to lie on a vertical surface: across a sloped window

@@ -68,4 +68,21 @@ LaserLookup::LaserLookup(const std::vector<double>& elevations_rad) {
   }
 }
 
+std::vector<std::size_t> LaserLookup::ranks(std::span<const Eigen::Vector3d> points,
+                                            const Eigen::Vector3d& origin) const {
+  std::vector<std::size_t> out(points.size(), kNone);
+  if (lasers_.empty())
+    return out;
+  std::size_t hint = 0;  // points arrive firing by firing: the next is mostly a neighbour's laser
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
+    const double run = (p.head<2>() - origin.head<2>()).norm();
+    if (p.allFinite() && run > 0.0) {
+      hint = rank((p.z() - origin.z()) / run, hint);
+      out[i] = hint;
+    }
+  }
+  return out;
+}
+
 }  // namespace rsu::perception

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <limits>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -69,6 +71,12 @@ class LaserLookup {
   }
   // That laser's index in elevations_rad (of lasers sharing one elevation, the first, as laser_of).
   int laser(std::size_t rank) const { return lasers_[rank]; }
+  // rank for each of `points` seen from `origin` (map frame), searched from the previous point's; kNone
+  // where a point is not finite or lies straight above or below the origin, and everywhere when the
+  // elevations are unknown. The one way the fix tells the lasers' traces apart.
+  static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> ranks(std::span<const Eigen::Vector3d> points,
+                                 const Eigen::Vector3d& origin) const;
 
  private:
   std::vector<double> boundaries_;

@@ -55,20 +55,11 @@ std::vector<double> trace_heights(std::span<const Eigen::Vector3d> points, const
   const LaserLookup lookup(lidar.elevations_rad);
   if (lookup.count() == 0)
     return heights;
-  std::vector<std::size_t> rank(points.size(), lookup.count());  // count(): not finite
-  std::size_t hint = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d& p = points[i];
-    const double run = (p.head<2>() - lidar.xy()).norm();
-    if (p.allFinite() && run > 0.0) {
-      hint = lookup.rank((p.z() - lidar.position.z()) / run, hint);
-      rank[i] = hint;
-    }
-  }
+  const std::vector<std::size_t> rank = lookup.ranks(points, lidar.position);
   std::vector<std::vector<double>> by_laser(lookup.count());
   std::vector<std::vector<Eigen::Vector2d>> plan(lookup.count());
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (rank[i] < lookup.count()) {
+    if (rank[i] != LaserLookup::kNone) {
       by_laser[rank[i]].push_back(points[i].z());
       plan[rank[i]].push_back(points[i].head<2>());
     }
@@ -86,7 +77,7 @@ std::vector<double> trace_heights(std::span<const Eigen::Vector3d> points, const
     }
   }
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (rank[i] < lookup.count() && std::isfinite(level[rank[i]]))
+    if (rank[i] != LaserLookup::kNone && std::isfinite(level[rank[i]]))
       heights[i] = level[rank[i]];
   }
   return heights;

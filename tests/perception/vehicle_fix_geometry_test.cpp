@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <string>
@@ -830,6 +831,38 @@ TEST(LaserLookup, NamesTheLaserLaserOfNames) {
     }
   }
   EXPECT_EQ(LaserLookup({}).count(), 0U);
+}
+
+// ranks over a cloud names each point's laser as laser_of does, whatever order the points come in, and
+// kNone where there is no laser to name: a point not finite, one straight above the LiDAR, every point
+// when the elevations are unknown.
+TEST(LaserLookup, RanksNameEachPointsLaser) {
+  LidarGeometry lidar;
+  lidar.position = {2.0, 1.0, 4.5};
+  for (const double e : lidar::make_vlp32c().elevation_deg)
+    lidar.elevations_rad.push_back(deg_to_rad(e));
+  const LaserLookup lookup(lidar.elevations_rad);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 3000; ++i) {  // a jumble of elevations, ranges and azimuths
+    const double elevation = deg_to_rad(-30.0 + std::fmod(37.01 * i, 45.0));  // off the lasers' midpoints
+    const double run = 2.0 + std::fmod(7.3 * i, 40.0);
+    points.emplace_back(lidar.position.x() + run * std::cos(1.7 * i),
+                        lidar.position.y() + run * std::sin(1.7 * i),
+                        lidar.position.z() + run * std::tan(elevation));
+  }
+  const std::size_t nan = points.size();
+  points.emplace_back(std::numeric_limits<double>::quiet_NaN(), 3.0, 1.0);
+  points.emplace_back(lidar.position.x(), lidar.position.y(), 1.0);  // straight below the LiDAR
+  const std::vector<std::size_t> ranks = lookup.ranks(points, lidar.position);
+  ASSERT_EQ(ranks.size(), points.size());
+  for (std::size_t i = 0; i < nan; ++i) {
+    ASSERT_NE(ranks[i], LaserLookup::kNone);
+    ASSERT_EQ(lookup.laser(ranks[i]), lidar.laser_of(points[i])) << "point " << i;
+  }
+  EXPECT_EQ(ranks[nan], LaserLookup::kNone);
+  EXPECT_EQ(ranks[nan + 1], LaserLookup::kNone);
+  for (const std::size_t r : LaserLookup({}).ranks(points, lidar.position))
+    ASSERT_EQ(r, LaserLookup::kNone);
 }
 
 // The near car of a dense sensor (issue 16: 5,600-17,600 points in rsud) and its lasers' traces, told apart
