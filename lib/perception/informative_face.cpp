@@ -7,32 +7,11 @@
 #include <utility>
 #include <vector>
 
+#include "perception/face_traces.h"
 #include "perception/size_correction.h"
 
 namespace rsu::perception {
 namespace {
-
-double median(std::vector<double>& v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-// The length of an evenly spread face whose direction a line fit knows as well as it does from points at
-// `along` (a least-squares slope's variance is sigma^2 / sum (s - mean)^2; evenly over l that sum is n l^2
-// / 12): sqrt(12) times their RMS spread about their mean.
-double spread_length(std::span<const double> along) {
-  if (along.size() < 2)
-    return 0.0;
-  double mean = 0.0;
-  for (const double s : along)
-    mean += s;
-  mean /= static_cast<double>(along.size());
-  double sum_sq = 0.0;
-  for (const double s : along)
-    sum_sq += (s - mean) * (s - mean);
-  return std::sqrt(12.0 * sum_sq / static_cast<double>(along.size()));
-}
 
 // ... over the longest run of points without a gap wider than `max_gap`: points on either side of such a
 // gap need not lie on one surface (a bumper's corner 4 m from a side's few points, on the line a sparse
@@ -63,25 +42,6 @@ bool spreads_in_range(std::vector<double> ranges, double tolerance) {
   return at(0.9) - at(0.1) >= tolerance;
 }
 
-// The least-squares slope of n over s (0 for fewer than two distinct s).
-double slope(std::span<const double> s, std::span<const double> n) {
-  if (s.size() < 2)
-    return 0.0;
-  double ms = 0.0, mn = 0.0;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    ms += s[i];
-    mn += n[i];
-  }
-  ms /= static_cast<double>(s.size());
-  mn /= static_cast<double>(s.size());
-  double sss = 0.0, ssn = 0.0;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    sss += (s[i] - ms) * (s[i] - ms);
-    ssn += (s[i] - ms) * (n[i] - mn);
-  }
-  return sss > 0.0 ? ssn / sss : 0.0;
-}
-
 // How well a face seen mostly above the bonnet tells the footprint's direction (rad), or a negative value
 // where its points do not show it: the upper body departs from the footprint's direction more than the
 // lower body does (sloped glass, tumblehome; then upper_face_tilt_m stands). Where the face's points below
@@ -103,74 +63,11 @@ double upper_body_direction_sigma(std::span<const double> lower_along, std::span
       effective_face_length({lower_along.begin(), lower_along.end()}, config.short_face_m);
   if (lower_length < config.short_face_m)
     return -1.0;
-  const double upper = std::atan(slope(upper_along, upper_across));
-  const double lower = std::atan(slope(lower_along, lower_across));
+  const double upper = std::atan(least_squares_slope(upper_along, upper_across));
+  const double lower = std::atan(least_squares_slope(lower_along, lower_across));
   const double turn = std::max({std::abs(upper - lower), std::abs(upper), std::abs(lower)});
   const double lower_sigma = 2.0 * config.covariance.face_tilt_sigma_m / lower_length;
   return turn <= lower_sigma ? lower_sigma : -1.0;
-}
-
-// A laser's points inside a face's span (away from its corners), across it: s along, n across, and whether
-// they lie in its support band.
-struct SpanTrace {
-  std::vector<double> along, across;
-  std::size_t in_band = 0;
-};
-
-// The departure of a face that is a chord of a laser's trace, not a surface the trace runs along: at least
-// three quarters of a laser's points within the face's span lie off its support band, on one straight line
-// across it (within collinear_m; a vertical surface seen by one laser is a line in plan), and only where that
-// line crosses the band do they count for the face (with half or more off it, the HDL-32E's and 64-ring
-// sensor's coupes lost 0.7-3.7 points of cells under 0.10 m). Its direction is the trace's, tilted from the
-// face's by the slope k: a departure of |k| over half the face. A VLP-16 6 m up saw a coupe's side 34 m away
-// with one laser (40 returns, its lower body's outline a clump at one end and one return at the other); the
-// fitted "side" held 5 of them over 1.4 m where the trace crossed it at 15 deg, stating 4-5 deg, 12-15 deg
-// off (a third pilot matrix, kept out of the repository).
-double crossing_trace_departure(const std::vector<SpanTrace>& traces, double length, double collinear_m) {
-  double departure = 0.0;
-  for (const SpanTrace& trace : traces) {
-    const std::size_t off_band = trace.along.size() - trace.in_band;
-    if (trace.in_band == 0 || off_band <= 3 * trace.in_band || off_band < 3)
-      continue;
-    const double k = slope(trace.along, trace.across);
-    std::vector<double> offset;
-    offset.reserve(trace.along.size());
-    for (std::size_t i = 0; i < trace.along.size(); ++i)
-      offset.push_back(trace.across[i] - k * trace.along[i]);
-    std::vector<double> residual = offset;
-    const double centre = median(offset);
-    for (double& x : residual)
-      x = std::abs(x - centre);
-    if (median(residual) <= collinear_m)
-      departure = std::max(departure, 0.5 * std::abs(k) * length);
-  }
-  return departure;
-}
-
-// The lasers' returns within the span of the edge from a along t over len, away from its corners by the
-// support band d, at most config.crossing_depth_m across it and on the full plan (side_body_height: not a
-// roof's or bonnet's level arc), by laser (crossing_trace_departure).
-std::vector<SpanTrace> span_traces(std::span<const Eigen::Vector3d> points,
-                                   std::span<const std::size_t> ranks, std::size_t lasers,
-                                   const LidarGeometry& lidar, const Eigen::Vector2d& a,
-                                   const Eigen::Vector2d& t, double len, double d, const VehicleSize& size,
-                                   const CorrectionConfig& config) {
-  const double plan_height = side_body_height(size, config);
-  std::vector<SpanTrace> traces(lasers);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d& p = points[i];
-    const Eigen::Vector2d r = p.head<2>() - a;
-    const double s = r.dot(t);
-    const double n = r.x() * t.y() - r.y() * t.x();
-    if (ranks[i] == LaserLookup::kNone || s < d || s > len - d || std::abs(n) > config.crossing_depth_m ||
-        p.z() - lidar.ground_z > plan_height)
-      continue;
-    SpanTrace& trace = traces[ranks[i]];
-    trace.along.push_back(s);
-    trace.across.push_back(n);
-    trace.in_band += std::abs(n) <= d ? 1U : 0U;
-  }
-  return traces;
 }
 
 // A face's points above the bonnet: their heights, horizontal ranges from the LiDAR, lasers and places
@@ -188,6 +85,41 @@ struct UpperPoints {
   std::vector<double> heights, ranges, along;
   std::vector<int> lasers;
 };
+
+// A face's returns within its support band: how far across it each lies, and where along and across it
+// those below the bonnet (end_height) and above it lie. Above the bonnet, a laser's few returns in the band
+// where its trace crosses the face (`crossing`, face_traces.h) say nothing of its direction: a HDL-32E 4.5 m
+// up saw a coupe 40 m away with one laser along its side and across its windscreen's foot, and a face
+// through the crossings was 26 deg off stating 5 deg (a third pilot matrix, kept out of the repository).
+// Below it they are the footprint's outline.
+struct BandPoints {
+  std::vector<double> across;
+  std::vector<double> lower_along, lower_across, upper_across;
+  UpperPoints upper;
+};
+
+BandPoints band_points(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
+                       const LaserLookup& lookup, std::span<const std::size_t> ranks, const FaceLine& line,
+                       double end_height, const std::vector<bool>& crossing) {
+  BandPoints band;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
+    const Eigen::Vector2d r = p.head<2>() - line.a;
+    const double s = r.dot(line.t);
+    const double n = r.x() * line.t.y() - r.y() * line.t.x();
+    if (s < -line.band || s > line.length + line.band || std::abs(n) > line.band)
+      continue;
+    band.across.push_back(n);
+    if (p.z() - lidar.ground_z <= end_height) {
+      band.lower_along.push_back(s);
+      band.lower_across.push_back(n);
+    } else if (!crossing[i]) {
+      band.upper_across.push_back(n);
+      band.upper.add(p, s, lidar.xy(), lookup, ranks[i]);
+    }
+  }
+  return band;
+}
 
 // Which of them tell the face's direction, and where along it they lie.
 struct UpperInformation {
@@ -286,34 +218,20 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   const double len = (b - a).norm();
   const Eigen::Vector2d t = (b - a) / len;
   const double d = config.fit.edge_support_m;
-  std::vector<double> across;
   const LaserLookup lookup(lidar.elevations_rad);
   const std::vector<std::size_t> ranks = lookup.ranks(points, lidar.position);
-  UpperPoints upper;
-  // Where along the face its informative points lie (below the bonnet; above it those that count).
-  std::vector<double> along;
-  // Below the bonnet: where along the face and how far across it; above it, how far across.
-  std::vector<double> lower_along, lower_across, upper_across;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d& p = points[i];
-    const Eigen::Vector2d r = p.head<2>() - a;
-    const double s = r.dot(t);
-    const double n = r.x() * t.y() - r.y() * t.x();
-    if (s < -d || s > len + d || std::abs(n) > d)
-      continue;
-    across.push_back(n);
-    if (p.z() - lidar.ground_z <= end_height) {
-      along.push_back(s);
-      lower_along.push_back(s);
-      lower_across.push_back(n);
-    } else {
-      upper_across.push_back(n);
-      upper.add(p, s, lidar.xy(), lookup, ranks[i]);
-    }
-  }
+  const FaceLine line{a, t, len, d};
+  const std::vector<TracePoint> near = traces_near(points, ranks, line, config.crossing_depth_m);
+  const TraceRuns runs = trace_runs(near, lookup.count(), line);
+  BandPoints band = band_points(points, lidar, lookup, ranks, line, end_height,
+                                crossing_returns(near, runs, points.size(), config.fit.min_face_points));
+  const UpperPoints& upper = band.upper;
+  const std::vector<double>& lower_along = band.lower_along;
   const UpperInformation informative_above = informative_upper(upper, lidar, config, noise_sigma);
   const std::size_t lower = lower_along.size();
   const std::size_t informative = lower + informative_above.points;
+  // Where along the face its informative points lie (below the bonnet; above it those that count).
+  std::vector<double> along = lower_along;
   along.insert(along.end(), informative_above.along.begin(), informative_above.along.end());
   face.points = informative;
   // The face's direction is as well known as its informative points' spread along it makes it, not the
@@ -331,15 +249,21 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   // sensor 4 m up, no better than those 1.5 m: 1.6 deg off, it stated 0.5 deg without this).
   if (upper.heights.size() >= lower) {
     const double sigma =
-        upper_body_direction_sigma(lower_along, lower_across, upper.along, upper_across, config);
+        upper_body_direction_sigma(lower_along, band.lower_across, upper.along, band.upper_across, config);
+    // Where the lower body does not vouch for them, they depart by upper_face_tilt_m, or by as much as
+    // the lasers' runs along the face tilt from it: a HDL-32E 6 m up saw a coupe 9 m away with four lasers
+    // over its roof, glass and bonnet and 13 returns of its doors at one end; the face through them was 15
+    // deg off stating 2.7 deg, its runs 5-46 deg from it (a third pilot matrix).
     face.departure_m = sigma >= 0.0 ? std::min(config.upper_face_tilt_m, 0.5 * sigma * face.length_m)
-                                    : config.upper_face_tilt_m;
+                                    : std::max(config.upper_face_tilt_m,
+                                               run_tilt_departure(near, runs, face.length_m, noise_sigma,
+                                                                  config.fit.min_face_points));
   }
   if (face.length_m < config.short_face_m)
     face.departure_m = std::max(face.departure_m, config.short_face_tilt_m);
-  const double crossing =
-      crossing_trace_departure(span_traces(points, ranks, lookup.count(), lidar, a, t, len, d, size, config),
-                               face.length_m, config.trace_straightness_m);
+  const double crossing = crossing_trace_departure(
+      span_traces(near, lookup.count(), line, lidar.ground_z, side_body_height(size, config)), face.length_m,
+      config.trace_straightness_m);
   face.departure_m =
       std::max({face.departure_m, rounded_corner_departure(along, face.length_m, size, config), crossing});
   // One laser's trace above the bonnet is not shown to lie on a vertical surface: across a sloped window
@@ -352,12 +276,12 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   if (lower == 0 && informative_above.single_trace_depression > 0.0)
     face.departure_m =
         std::max(face.departure_m, 0.5 * face.length_m * std::tan(informative_above.single_trace_depression));
-  if (across.size() >= 3 && informative > 0) {
+  if (band.across.size() >= 3 && informative > 0) {
     // Robust spread (1.4826 MAD) of the face's points about their median line: the body's departure.
-    const double centre = median(across);
-    for (double& x : across)
+    const double centre = median_in_place(band.across);
+    for (double& x : band.across)
       x = std::abs(x - centre);
-    face.residual_spread_m = 1.4826 * median(across);
+    face.residual_spread_m = 1.4826 * median_in_place(band.across);
   }
   return face;
 }
