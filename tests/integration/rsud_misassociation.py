@@ -85,12 +85,14 @@ def main():
     ap.add_argument("--mount-integrity", choices=("on", "off"), default="on",
                     help="off: rsud does not check its mount (to compare with: what the check withholds)")
     args = ap.parse_args()
+    # The processes run inside --work: a relative path would be taken from there a second time.
+    args.work = os.path.abspath(args.work)
     scenario = SCENARIO
     if args.mount_z_m is not None:
         with open(SCENARIO) as f:
             street = yaml.safe_load(f)
         street["lidar"]["mount"]["z"] = args.mount_z_m
-        scenario = "%s_occlusion_street_%gm.yaml" % (os.path.abspath(args.work), args.mount_z_m)
+        scenario = "%s_occlusion_street_%gm.yaml" % (args.work, args.mount_z_m)
         with open(scenario, "w") as f:
             yaml.safe_dump(street, f)
     return run_case(lambda h: run(h, args.mount_integrity == "on"), args.work, {"rsud": args.rsud, "rsu_sim": args.rsu_sim, "fleet": args.fleet}, scenario)
