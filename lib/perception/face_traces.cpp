@@ -96,8 +96,8 @@ double crossing_trace_departure(const std::vector<SpanTrace>& traces, double len
 
 TraceRuns trace_runs(const std::vector<TracePoint>& near, std::size_t lasers, const FaceLine& edge) {
   TraceRuns runs{std::vector<std::size_t>(near.size(), LaserLookup::kNone), {}};
-  std::vector<std::size_t> open(lasers,
-                                LaserLookup::kNone);  // each laser's run, if its last return was in it
+  // Each laser's current run, while its last return was in the band.
+  std::vector<std::size_t> open(lasers, LaserLookup::kNone);
   for (std::size_t i = 0; i < near.size(); ++i) {
     std::size_t& current = open[near[i].laser];
     if (std::abs(near[i].across) > edge.band) {
