@@ -14,6 +14,7 @@
 #include "perception/face_envelope.h"
 #include "perception/face_refinement.h"
 #include "perception/informative_face.h"
+#include "perception/lidar_geometry.h"
 #include "perception/size_correction.h"
 
 namespace rsu::perception {
@@ -57,6 +58,7 @@ struct View {
   // The points as BoxPoints without their place in a frame (what does not depend on it), and the faces'
   // envelopes estimated so far: the box is placed in several frames (box_axis.h).
   std::vector<BoxPoint> body = {};
+  std::vector<std::size_t> ranks = {};  // the points' lasers (LaserLookup::ranks), for the faces' evidence
   FaceEnvelopeMemo* envelopes = nullptr;
 
   std::vector<BoxPoint> in_frame(const Frame& f) const {
@@ -244,6 +246,7 @@ View view_of(std::span<const Eigen::Vector3d> finite, const RectangleFit& fit, c
                          height <= view.side_height, height <= view.end_height,
                          (p.head<2>() - lidar.xy()).norm()});
   }
+  view.ranks = LaserLookup(lidar.elevations_rad).ranks(finite, lidar.position);
   view.envelopes = &envelopes;
   return view;
 }
@@ -256,8 +259,8 @@ FixEvidence yaw_evidence(const View& view, const RectangleFit& fit, const Vehicl
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
     if (fit.edges[i].seen)
-      evidence.seen_faces[f++] = informative_face(view.points, view.lidar, view.config, view.end_height,
-                                                  view.noise_sigma, fit, i, size);
+      evidence.seen_faces[f++] = informative_face(view.points, view.ranks, view.lidar, view.config,
+                                                  view.end_height, view.noise_sigma, fit, i, size);
   }
   return evidence;
 }

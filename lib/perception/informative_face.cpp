@@ -209,9 +209,10 @@ double rounded_corner_departure(std::span<const double> along, double length, co
 
 }  // namespace
 
-FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
-                              const CorrectionConfig& config, double end_height, double noise_sigma,
-                              const RectangleFit& fit, std::size_t edge, const VehicleSize& size) {
+FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, std::span<const std::size_t> ranks,
+                              const LidarGeometry& lidar, const CorrectionConfig& config, double end_height,
+                              double noise_sigma, const RectangleFit& fit, std::size_t edge,
+                              const VehicleSize& size) {
   FaceEvidence face = face_evidence(fit, edge, lidar.xy());
   const Eigen::Vector2d a = fit.corners[edge % 4];
   const Eigen::Vector2d b = fit.corners[(edge + 1) % 4];
@@ -219,7 +220,6 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const Lid
   const Eigen::Vector2d t = (b - a) / len;
   const double d = config.fit.edge_support_m;
   const LaserLookup lookup(lidar.elevations_rad);
-  const std::vector<std::size_t> ranks = lookup.ranks(points, lidar.position);
   const FaceLine line{a, t, len, d};
   const std::vector<TracePoint> near = traces_near(points, ranks, line, config.crossing_depth_m);
   const TraceRuns runs = trace_runs(near, lookup.count(), line);

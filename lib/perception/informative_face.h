@@ -21,12 +21,14 @@ namespace rsu::perception {
 struct CorrectionConfig;
 struct VehicleSize;
 
-// Edge `edge` (0..3) of `fit` seen from `lidar`; points: the vehicle's (map frame, finite); end_height:
+// Edge `edge` (0..3) of `fit` seen from `lidar`; points: the vehicle's (map frame, finite), ranks: their
+// lasers' (LaserLookup::ranks from lidar.position; the fix ranks them once for all its faces); end_height:
 // up to which height above the road a point can be on the footprint's front or back (the bonnet);
 // noise_sigma: the points' noise across a face; size: the vehicle's announced (a face spanning a whole side
 // or end holds both its rounded corners).
-FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
-                              const CorrectionConfig& config, double end_height, double noise_sigma,
-                              const RectangleFit& fit, std::size_t edge, const VehicleSize& size);
+FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, std::span<const std::size_t> ranks,
+                              const LidarGeometry& lidar, const CorrectionConfig& config, double end_height,
+                              double noise_sigma, const RectangleFit& fit, std::size_t edge,
+                              const VehicleSize& size);
 
 }  // namespace rsu::perception

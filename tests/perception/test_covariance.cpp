@@ -34,6 +34,11 @@ bool positive_semidefinite(const Eigen::Matrix3d& cov) {
   return eig.eigenvalues().minCoeff() >= -1e-15 && (cov - cov.transpose()).norm() < 1e-15;
 }
 
+// The points' laser ranks, as the fix gives them to informative_face.
+std::vector<std::size_t> ranks_of(const std::vector<Eigen::Vector3d>& points, const LidarGeometry& lidar) {
+  return LaserLookup(lidar.elevations_rad).ranks(points, lidar.position);
+}
+
 FixEvidence two_faces(double range, std::size_t points_per_face) {
   FixEvidence e;
   e.range_m = range;
@@ -199,7 +204,8 @@ double face_sigma(const CornerFace& f, const VehicleSize& size) {
   const CorrectionConfig config;
   FixEvidence e;
   e.range_m = 8.0;
-  e.seen_faces[0] = informative_face(f.points, f.lidar, config, 0.78, 0.02, f.fit, 0, size);
+  e.seen_faces[0] =
+      informative_face(f.points, ranks_of(f.points, f.lidar), f.lidar, config, 0.78, 0.02, f.fit, 0, size);
   return 1.0 / std::sqrt(face_yaw_information(e, config.covariance));
 }
 
@@ -275,7 +281,8 @@ double chord_sigma(double angle, double step) {
   }
   FixEvidence e;
   e.range_m = 34.0;
-  e.seen_faces[0] = informative_face(points, lidar, config, 0.69, 0.03, fit, 0, {4.5, 1.9, 1.25});
+  e.seen_faces[0] =
+      informative_face(points, ranks_of(points, lidar), lidar, config, 0.69, 0.03, fit, 0, {4.5, 1.9, 1.25});
   return 1.0 / std::sqrt(face_yaw_information(e, config.covariance));
 }
 
@@ -325,7 +332,8 @@ FaceEvidence mast_face(const std::vector<MastTrace>& trace, const std::vector<do
     points.emplace_back(m.xy.x(), m.xy.y(), kMast.z() + run * std::tan(elevations_rad[m.laser]));
     EXPECT_GT(points.back().z(), 0.69);  // above the bonnet
   }
-  return informative_face(points, lidar, config, 0.69, 0.03, fit, 0, {4.5, 1.9, 1.25});
+  return informative_face(points, ranks_of(points, lidar), lidar, config, 0.69, 0.03, fit, 0,
+                          {4.5, 1.9, 1.25});
 }
 
 double yaw_sigma_of(const FaceEvidence& face) {
