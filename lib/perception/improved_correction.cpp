@@ -258,9 +258,12 @@ FixEvidence yaw_evidence(const View& view, const RectangleFit& fit, const Vehicl
   evidence.range_m = (fit.center - view.lidar.xy()).norm();
   std::size_t f = 0;
   for (std::size_t i = 0; i < 4 && f < 2; ++i) {
-    if (fit.edges[i].seen)
-      evidence.seen_faces[f++] = informative_face(view.points, view.ranks, view.lidar, view.config,
-                                                  view.end_height, view.noise_sigma, fit, i, size);
+    if (!fit.edges[i].seen)
+      continue;
+    const double lower = face_lower_height(view.points, view.lidar, view.config, view.end_height,
+                                           view.lower_height, fit, i, size);
+    evidence.seen_faces[f++] = informative_face(view.points, view.ranks, view.lidar, view.config, lower,
+                                                view.noise_sigma, fit, i, size);
   }
   return evidence;
 }

@@ -286,4 +286,56 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, std::span
   return face;
 }
 
+double face_lower_height(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
+                         const CorrectionConfig& config, double end_height, double lower_height,
+                         const RectangleFit& fit, std::size_t edge, const VehicleSize& size) {
+  const Eigen::Vector2d a = fit.corners[edge % 4];
+  const Eigen::Vector2d b = fit.corners[(edge + 1) % 4];
+  const double len = (b - a).norm();
+  // Surely a side: longer than the width by half what the length exceeds it by (an end's fitted edge can
+  // run long over a bonnet's or mirror's returns: a van's 2.0 m front was fitted 2.39 m).
+  const double side_margin = std::max(config.full_face_tolerance_m, 0.5 * (size.length - size.width));
+  if (lower_height <= end_height || !(len > size.width + side_margin))
+    return end_height;
+  const Eigen::Vector2d t = (b - a) / len;
+  const double d = config.fit.edge_support_m;
+  struct Return {
+    double z, along, across;
+  };
+  std::vector<Return> below;  // the side's returns up to the lower body's height, by height
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector2d r = p.head<2>() - a;
+    const double s = r.dot(t);
+    const double n = r.x() * t.y() - r.y() * t.x();
+    if (s >= -d && s <= len + d && std::abs(n) <= d && p.z() - lidar.ground_z <= lower_height)
+      below.push_back({p.z(), s, n});
+  }
+  if (below.size() < 2 * config.fit.min_face_points)
+    return end_height;
+  std::sort(below.begin(), below.end(), [](const Return& x, const Return& y) { return x.z < y.z; });
+  const std::size_t half = below.size() / 2;
+  std::vector<double> low_along, low_across, high_along;
+  double low_along_sum = 0.0, low_across_sum = 0.0;
+  for (std::size_t i = 0; i < below.size(); ++i) {
+    if (i < half) {
+      low_along.push_back(below[i].along);
+      low_across.push_back(below[i].across);
+      low_along_sum += below[i].along;
+      low_across_sum += below[i].across;
+    } else {
+      high_along.push_back(below[i].along);
+    }
+  }
+  if (spread_length(low_along) < config.short_face_m || spread_length(high_along) < config.short_face_m)
+    return end_height;
+  // The upper half's mean offset from the lower half's line.
+  const double slope = least_squares_slope(low_along, low_across);
+  const double intercept = (low_across_sum - slope * low_along_sum) / static_cast<double>(half);
+  double step = 0.0;
+  for (std::size_t i = half; i < below.size(); ++i)
+    step += below[i].across - (intercept + slope * below[i].along);
+  step /= static_cast<double>(below.size() - half);
+  return std::abs(step) <= config.side_step_m ? lower_height : end_height;
+}
+
 }  // namespace rsu::perception

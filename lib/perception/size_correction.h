@@ -195,6 +195,10 @@ struct CorrectionConfig {
   // crossing_depth_m across it) is tilted from it by the trace's slope (informative_face.cpp).
   double trace_straightness_m = 0.1;
   double crossing_depth_m = 1.0;
+  // A side's returns above the bonnet count as the lower body, up to lower_body_fraction of the height,
+  // where the upper half of them lies within this of the lower half's line (informative_face.h): a van's
+  // glass is 5 cm in, a box body's flat.
+  double side_step_m = 0.03;
   // Sides of the box along an axis (box_axis.h): the lower body's extreme within end_tolerance_m of all
   // points' is an end, the body ends within end_allowance_m (+ the azimuth step) beyond it; a higher
   // extreme bounds nothing but containment; a side counts as observed if a laser would hit a body

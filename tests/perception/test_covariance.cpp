@@ -430,5 +430,50 @@ TEST(FixCovariance, EndToEndFewerPointsFartherAndOneFaceAreLessCertain) {
   EXPECT_GT(variance_along(front.covariance, box.v()), variance_along(front.covariance, box.u()));
 }
 
+// One laser's trace (16.7 deg down from 8 m up, seen from (-10, -15)) along a fitted edge on y = 0 from x =
+// 0.2 to x_end, every 0.1 m, its returns above `step_height` `step` farther inside the box (+y).
+std::vector<Eigen::Vector3d> side_trace(double x_end, double step_height, double step) {
+  std::vector<Eigen::Vector3d> points;
+  for (double x = 0.2; x <= x_end + 1e-9; x += 0.1) {
+    const double z = 8.0 - 0.3 * std::hypot(x + 10.0, 15.0);
+    points.emplace_back(x, z > step_height ? step : 0.0, z);
+  }
+  return points;
+}
+
+// A side's returns above the bonnet (1.0 m) count as the lower body up to its height (here 1.76 m) where
+// they lie on one vertical surface, and not where the upper half of them steps in (glass above a belt
+// line), nor on an edge that may be an end, nor on a vehicle whose lower body ends below the bonnet.
+TEST(FaceLowerHeight, ASideUpToTheLowerBodyWhereItsReturnsLieOnOneSurface) {
+  const CorrectionConfig config;
+  const VehicleSize size{7.0, 2.4, 3.2};
+  LidarGeometry lidar;
+  lidar.position = Eigen::Vector3d(-10.0, -15.0, 8.0);
+  const auto box_fit = [](double length) {
+    RectangleFit fit;
+    fit.status = FitStatus::ok;
+    fit.corners = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(length, 0.0), Eigen::Vector2d(length, 2.4),
+                   Eigen::Vector2d(0.0, 2.4)};
+    fit.edges[0].seen = true;
+    return fit;
+  };
+  const RectangleFit side = box_fit(7.0);
+  // The trace's heights: 2.56 m at x = 0.2, 1.24 m at 6.8; those up to 1.76 m span x = 4.3-6.8.
+  const std::vector<Eigen::Vector3d> flat = side_trace(6.8, 9.0, 0.0);
+  EXPECT_NEAR(flat.front().z(), 2.56, 0.01);
+  EXPECT_NEAR(flat.back().z(), 1.24, 0.01);
+  EXPECT_EQ(face_lower_height(flat, lidar, config, 1.0, 1.76, side, 0, size), 1.76);
+  // Glass 5 cm in above 1.5 m: a step; 2 cm (the simulator's box body's cab): none.
+  EXPECT_EQ(face_lower_height(side_trace(6.8, 1.5, 0.05), lidar, config, 1.0, 1.76, side, 0, size), 1.0);
+  EXPECT_EQ(face_lower_height(side_trace(6.8, 1.5, -0.05), lidar, config, 1.0, 1.76, side, 0, size), 1.0);
+  EXPECT_EQ(face_lower_height(side_trace(6.8, 1.5, 0.02), lidar, config, 1.0, 1.76, side, 0, size), 1.76);
+  // An edge no longer than the width + half the length's excess (2.4 + 2.3 m) may be an end.
+  const std::vector<Eigen::Vector3d> short_trace = side_trace(4.6, 9.0, 0.0);
+  EXPECT_EQ(face_lower_height(short_trace, lidar, config, 1.0, 1.76, box_fit(4.6), 0, size), 1.0);
+  // A lower body ending below the bonnet; too few returns up to it (a trace ending at x = 4.6: 1.79 m).
+  EXPECT_EQ(face_lower_height(flat, lidar, config, 1.0, 0.9, side, 0, size), 1.0);
+  EXPECT_EQ(face_lower_height(short_trace, lidar, config, 1.0, 1.76, side, 0, size), 1.0);
+}
+
 }  // namespace
 }  // namespace rsu::perception
