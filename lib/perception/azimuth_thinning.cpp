@@ -16,19 +16,26 @@ struct Columns {
 };
 
 Columns columns_of(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar) {
-  // The laser's rank by elevation (LaserLookup): a grouping, not an index into elevations_rad.
+  // The laser's rank by elevation (LaserLookup, as LaserLookup::ranks gives it, in the same pass): a
+  // grouping, not an index into elevations_rad.
   const LaserLookup lookup(lidar.elevations_rad);
-  Columns out{lookup.ranks(points, lidar.position), std::vector<std::int64_t>(points.size(), 0)};
+  Columns out{std::vector<std::size_t>(points.size(), LaserLookup::kNone),
+              std::vector<std::int64_t>(points.size(), 0)};
   // Azimuths are measured from the first point's direction, so that a cluster across the +-pi line (the
   // LiDAR's -x axis) does not wrap; each laser's columns from its own first point.
   Eigen::Vector2d reference = Eigen::Vector2d::Zero();
   std::vector<double> first(lookup.count(), std::numeric_limits<double>::quiet_NaN());
   const double per_step = 1.0 / lidar.azimuth_step_rad;
+  std::size_t hint = 0;  // points arrive firing by firing: the next is mostly a neighbour's laser
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const std::size_t laser = out.laser[i];
-    if (laser == LaserLookup::kNone)
+    const Eigen::Vector3d& p = points[i];
+    const Eigen::Vector2d d = p.head<2>() - lidar.xy();
+    const double run = d.norm();
+    if (!p.allFinite() || !(run > 0.0))
       continue;
-    const Eigen::Vector2d d = points[i].head<2>() - lidar.xy();
+    hint = lookup.rank((p.z() - lidar.position.z()) / run, hint);
+    const std::size_t laser = hint;
+    out.laser[i] = laser;
     if (reference.isZero())
       reference = d;
     // In float: its rounding (about 1e-7 of the angle) is far below a step (3e-3 rad).
@@ -43,49 +50,53 @@ Columns columns_of(std::span<const Eigen::Vector3d> points, const LidarGeometry&
   return out;
 }
 
-// Which columns of each laser's trace hold a point.
+// Which columns of each laser's trace hold a point: a byte per column from two before the trace's first
+// to two after its last, so that a trace's points and their neighbours two columns either side need no
+// bounds check.
 class Occupancy {
  public:
+  static constexpr std::int64_t kMargin = 2;
+
   Occupancy(const Columns& c, std::size_t lasers)
       : lo_(lasers, std::numeric_limits<std::int64_t>::max()),
         hi_(lasers, std::numeric_limits<std::int64_t>::min()),
-        offset_(lasers, 0) {
+        base_(lasers, 0) {
     for (std::size_t i = 0; i < c.laser.size(); ++i) {
       if (c.laser[i] == LaserLookup::kNone)
         continue;
       lo_[c.laser[i]] = std::min(lo_[c.laser[i]], c.column[i]);
       hi_[c.laser[i]] = std::max(hi_[c.laser[i]], c.column[i]);
     }
-    std::size_t size = 0;
     for (std::size_t l = 0; l < lasers; ++l) {
-      offset_[l] = size;
-      if (lo_[l] <= hi_[l])
-        size += static_cast<std::size_t>(hi_[l] - lo_[l] + 1);
+      if (lo_[l] > hi_[l])
+        continue;
+      // Column col of laser l at base_[l] + col (as unsigned arithmetic wraps, for any lo_).
+      base_[l] = bytes_size_ + static_cast<std::size_t>(kMargin) - static_cast<std::size_t>(lo_[l]);
+      columns_ += static_cast<std::size_t>(hi_[l] - lo_[l] + 1);
+      bytes_size_ += static_cast<std::size_t>(hi_[l] - lo_[l] + 1 + 2 * kMargin);
     }
-    size_ = size;
   }
-  // The table's size: every column of every laser's trace, from its first to its last.
-  std::size_t size() const { return size_; }
+  // Every column of every laser's trace, from its first to its last.
+  std::size_t columns() const { return columns_; }
   void fill(const Columns& c) {
-    bits_.assign(size_, false);
+    bytes_.assign(bytes_size_, 0);
     for (std::size_t i = 0; i < c.laser.size(); ++i) {
       if (c.laser[i] != LaserLookup::kNone)
-        bits_[index(c.laser[i], c.column[i])] = true;
+        bytes_[index(c.laser[i], c.column[i])] = 1;
     }
   }
-  bool occupied(std::size_t laser, std::int64_t column) const {
-    return column >= lo_[laser] && column <= hi_[laser] && bits_[index(laser, column)];
-  }
+  // Column `column` of laser `laser`, within kMargin of its trace's first and last.
+  bool occupied(std::size_t laser, std::int64_t column) const { return bytes_[index(laser, column)] != 0; }
   std::int64_t first(std::size_t laser) const { return lo_[laser]; }
 
  private:
   std::size_t index(std::size_t laser, std::int64_t column) const {
-    return offset_[laser] + static_cast<std::size_t>(column - lo_[laser]);
+    return base_[laser] + static_cast<std::size_t>(column);
   }
   std::vector<std::int64_t> lo_, hi_;
-  std::vector<std::size_t> offset_;
-  std::size_t size_ = 0;
-  std::vector<bool> bits_;
+  std::vector<std::size_t> base_;
+  std::size_t columns_ = 0, bytes_size_ = 0;
+  std::vector<std::uint8_t> bytes_;
 };
 
 }  // namespace
@@ -102,10 +113,10 @@ AzimuthThinning thin_along_azimuth(std::span<const Eigen::Vector3d> points, cons
   Occupancy occupancy(c, lidar.elevations_rad.size());
   // Traces spread over far more columns than there are points are not dense along azimuth (and their
   // table would be large): left as they are.
-  if (occupancy.size() > 64 * finite)
+  if (occupancy.columns() > 64 * finite)
     return out;
   occupancy.fill(c);
-  const auto stride = static_cast<std::int64_t>((finite + max_points - 1) / max_points);
+  const auto stride = static_cast<std::uint32_t>((finite + max_points - 1) / max_points);
   out.stride = static_cast<int>(stride);
   out.points.reserve(finite / static_cast<std::size_t>(stride) + lidar.elevations_rad.size() * 4);
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -121,7 +132,8 @@ AzimuthThinning thin_along_azimuth(std::span<const Eigen::Vector3d> points, cons
     // is the angle noise moving a return into its neighbour's column).
     const bool end = (!occupancy.occupied(l, col + 1) && !occupancy.occupied(l, col + 2)) ||
                      (!occupancy.occupied(l, col - 1) && !occupancy.occupied(l, col - 2));
-    if (end || (col - occupancy.first(l)) % stride == 0)
+    // The column's place along the trace fits 32 bits (the table holds it): a cheaper division.
+    if (end || static_cast<std::uint32_t>(col - occupancy.first(l)) % stride == 0)
       out.points.push_back(points[i]);
   }
   return out;
