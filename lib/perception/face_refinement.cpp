@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -91,14 +92,10 @@ RectangleFit turned(const RectangleFit& fit, double change, std::span<const Eige
   return out;
 }
 
-}  // namespace
-
-RectangleFit refine_on_faces(const RectangleFit& fit, std::span<const Eigen::Vector2d> points,
-                             const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& fit_config,
-                             const FaceRefinementConfig& config) {
-  if (!fit.ok()) {
-    return fit;
-  }
+// The turn of the e1 direction (mod pi) that the least-squares lines of fit's seen faces give, or nothing
+// when no face has enough points.
+std::optional<double> face_turn(const RectangleFit& fit, std::span<const Eigen::Vector2d> points,
+                                const LShapeFitConfig& fit_config, const FaceRefinementConfig& config) {
   // Work relative to the fit's centre (conditioning).
   const Eigen::Vector2d origin = fit.center;
 
@@ -120,7 +117,7 @@ RectangleFit refine_on_faces(const RectangleFit& fit, std::span<const Eigen::Vec
   const bool use1 = along_e1.n >= config.min_face_points;
   const bool use2 = along_e2.n >= config.min_face_points;
   if (!use1 && !use2) {
-    return fit;
+    return std::nullopt;
   }
   // n: the unit normal of the e1-faces (i.e. the e2 direction).
   const Eigen::Matrix2d m = (use1 ? along_e1.centred() : Eigen::Matrix2d::Zero()) -
@@ -128,12 +125,41 @@ RectangleFit refine_on_faces(const RectangleFit& fit, std::span<const Eigen::Vec
   const SymmetricEigen2 eig(m);
   const Eigen::Vector2d n = eig.eigenvectors().col(0);
   const Eigen::Vector2d new_e1(n.y(), -n.x());
-  // The change of the e1 direction, mod pi (the eigenvector's sign is arbitrary).
-  const double change = std::remainder(std::atan2(new_e1.y(), new_e1.x()) - fit.yaw, std::numbers::pi);
-  if (!(std::abs(change) <= config.max_change_rad)) {
+  // The eigenvector's sign is arbitrary.
+  return std::remainder(std::atan2(new_e1.y(), new_e1.x()) - fit.yaw, std::numbers::pi);
+}
+
+}  // namespace
+
+RectangleFit refine_on_faces(const RectangleFit& fit, std::span<const Eigen::Vector2d> points,
+                             const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& fit_config,
+                             const FaceRefinementConfig& config) {
+  if (!fit.ok()) {
     return fit;
   }
-  return turned(fit, change, points, origin, lidar_xy, fit_config);
+  const std::optional<double> change = face_turn(fit, points, fit_config, config);
+  if (!change || !(std::abs(*change) <= config.max_change_rad)) {
+    return fit;
+  }
+  return turned(fit, *change, points, fit.center, lidar_xy, fit_config);
+}
+
+double refit_unsettled_rad(const RectangleFit& refined, std::span<const Eigen::Vector2d> points,
+                           const Eigen::Vector2d& lidar_xy, const LShapeFitConfig& fit_config,
+                           const FaceRefinementConfig& config) {
+  constexpr double kSettledRad = 1e-3;
+  RectangleFit fit = refined;
+  double total = 0.0, largest = 0.0;
+  for (std::size_t pass = 0; pass < config.settle_passes && fit.ok(); ++pass) {
+    const std::optional<double> turn = face_turn(fit, points, fit_config, config);
+    if (!turn || !(std::abs(total + *turn) <= config.max_change_rad) || std::abs(*turn) < kSettledRad) {
+      break;
+    }
+    fit = turned(fit, *turn, points, fit.center, lidar_xy, fit_config);
+    total += *turn;
+    largest = std::max(largest, std::abs(total));
+  }
+  return largest;
 }
 
 }  // namespace rsu::perception

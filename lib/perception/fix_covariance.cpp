@@ -84,6 +84,8 @@ double face_yaw_information(const FixEvidence& e, const CovarianceModelConfig& c
       yaw_information += 1.0 / (var_noise + var_shape);
     }
   }
+  if (yaw_information > 0.0 && e.faces_unsettled_rad > 0.0)
+    yaw_information = 1.0 / (1.0 / yaw_information + e.faces_unsettled_rad * e.faces_unsettled_rad);
   return yaw_information;
 }
 

@@ -103,6 +103,9 @@ struct FixEvidence {
   AxisEvidence length_axis;                         // centre coordinate along the length axis
   AxisEvidence width_axis;                          // and along the width axis
   std::array<FaceEvidence, 2> seen_faces{};         // unused entries have points = 0
+  // How far the faces' direction moved when they were refit again on the refit's support bands
+  // (face_refinement.h, refit_unsettled_rad): a direction the faces do not settle on is known no better.
+  double faces_unsettled_rad = 0.0;
   double assignment_confidence = 1.0;
   Eigen::Vector2d alternative_offset = Eigen::Vector2d::Zero();  // other assignment's centre - centre
   // 1 / sigma^2 of the vehicle's own yaw estimate when the fix's yaw was fused with it (0: not used).

@@ -413,7 +413,10 @@ CorrectedPose correct_improved(const RectangleFit& fit, std::span<const Eigen::V
   const View view = view_of(finite, refined, size, lidar, config, envelopes);
   // Yaw: what the seen faces tell, the length/width assignment, the vehicle's own heading where they
   // tell little.
-  const FixEvidence evidence = yaw_evidence(view, refined, size);
+  FixEvidence evidence = yaw_evidence(view, refined, size);
+  if (config.refine_on_faces)
+    evidence.faces_unsettled_rad =
+        refit_unsettled_rad(refined, outline, lidar.xy(), config.fit, config.refinement);
   const double face_information = face_yaw_information(evidence, config.covariance);
   const ChosenYaw yaw = choose_yaw(view, refined, size, face_information, outline, prior);
   if (yaw.refusal != CorrectionStatus::ok)

@@ -50,6 +50,22 @@ FixEvidence two_faces(double range, std::size_t points_per_face) {
   return e;
 }
 
+// A direction the faces' refit does not settle on is known no better than it moves: its variance adds.
+TEST(FixCovariance, UnsettledFacesWidenTheirYaw) {
+  const FixEvidence settled = two_faces(30.0, 12);
+  FixEvidence unsettled = settled;
+  unsettled.faces_unsettled_rad = deg_to_rad(4.0);
+  const double settled_info = face_yaw_information(settled);
+  ASSERT_GT(settled_info, 0.0);
+  EXPECT_NEAR(1.0 / face_yaw_information(unsettled), 1.0 / settled_info + std::pow(deg_to_rad(4.0), 2),
+              1e-12);
+  EXPECT_GT(fix_covariance(unsettled)(2, 2), fix_covariance(settled)(2, 2));
+  // No faces, no information, whatever the refit did.
+  FixEvidence none = unsettled;
+  none.seen_faces = {};
+  EXPECT_EQ(face_yaw_information(none), 0.0);
+}
+
 TEST(FixCovariance, ModelIsMonotoneInPointsRangeAndFaces) {
   const Eigen::Matrix3d base = fix_covariance(two_faces(15.0, 60));
   ASSERT_TRUE(positive_semidefinite(base));

@@ -58,7 +58,8 @@ double direction_error(const RectangleFit& fit) {
 // Where the fit is far enough off that one face's band reaches the other face's points by the corner, the
 // refit is turned by them: 8 deg off, it is 2.8 deg off. (Refitting again on the refit's bands until it
 // settles, tried on the pilot matrices, removed two yaw fixes beyond 3 sigma but moved the cells by -0.7
-// to +0.4 points under 0.10 m, not kept: README, the pilot matrix.)
+// to +0.4 points under 0.10 m, not kept; how far the refit would move widens its yaw instead:
+// refit_unsettled_rad, README, the pilot matrix.)
 TEST(FaceRefinement, ExactFacesGiveTheirDirectionUnlessABandHoldsTheOtherFace) {
   std::mt19937 rng(1);
   const std::vector<Eigen::Vector2d> points = l_of_points(0.0, rng);
@@ -87,6 +88,21 @@ TEST(FaceRefinement, NoisyFacesRefitNearer) {
   refit /= kTrials;
   EXPECT_LT(refit, deg_to_rad(6.0) / 2.0);
   EXPECT_GT(refit, deg_to_rad(1.0));
+}
+
+// Refit again and again, the refit of an exact L 8 deg off moves by as much as it is off (to the faces'
+// own direction); a refit already on the faces' direction does not move.
+TEST(FaceRefinement, AnUnsettledRefitSaysHowFarItMoves) {
+  std::mt19937 rng(1);
+  const std::vector<Eigen::Vector2d> points = l_of_points(0.0, rng);
+  const RectangleFit off = refine_on_faces(fit_at(points, deg_to_rad(8.0)), points, kLidar);
+  ASSERT_GT(direction_error(off), deg_to_rad(1.0));
+  EXPECT_NEAR(refit_unsettled_rad(off, points, kLidar), direction_error(off), 1e-6);
+  const RectangleFit on = refine_on_faces(fit_at(points, deg_to_rad(3.0)), points, kLidar);
+  EXPECT_LT(refit_unsettled_rad(on, points, kLidar), 1e-9);
+  FaceRefinementConfig none;
+  none.settle_passes = 0;
+  EXPECT_EQ(refit_unsettled_rad(off, points, kLidar, {}, none), 0.0);
 }
 
 // A refit more than max_change_rad from the fit is not taken, nor is a fit that is not ok refit.
