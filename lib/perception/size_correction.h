@@ -169,9 +169,10 @@ struct CorrectionConfig {
   // lost packets or a neighbour).
   double max_position_sigma_m = 0.5;
   double upper_face_tilt_m = 0.08;
-  // A face whose informative points span less than this (an evenly spread face's length, fix_covariance.h)
-  // may lie on a rounded corner of the body (0.2-0.35 m radii), whose direction is anything between the
-  // sides' and the ends': its direction departs from the footprint's by about short_face_tilt_m over it.
+  // A face whose informative points span less than this (an evenly spread face's length, fix_covariance.h,
+  // or from first to last where that is shorter: a few bunched at both ends of a short run) may lie on a
+  // rounded corner of the body (0.2-0.35 m radii) or in a wheel arch, whose direction is anything between
+  // the sides' and the ends': its direction departs from the footprint's by about short_face_tilt_m over it.
   // Without it one ring's 4-11 points over 0.4-0.7 m stated 4-7 deg and were 15-27 deg off (`rsu-pilot
   // matrix`, 11 of the 26 HMI fixes left after the faces' spread rule).
   double short_face_m = 1.0;

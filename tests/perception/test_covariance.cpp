@@ -275,6 +275,36 @@ RectangleFit coupe_fit() {
   return fit;
 }
 
+// A face's returns at `along` (x, on y = 0 at 0.5 m) on the coupe's fitted edge 0, seen head-on from 8 m by
+// a LiDAR 2 m up: the departure it states.
+double face_departure(const std::vector<double>& along) {
+  const CorrectionConfig config;
+  LidarGeometry lidar;
+  lidar.position = Eigen::Vector3d(0.5, -8.0, 2.0);
+  std::vector<Eigen::Vector3d> points;
+  for (const double x : along)
+    points.emplace_back(x, 0.0, 0.5);
+  return informative_face(points, ranks_of(points, lidar), lidar, config, 0.78, 0.02, coupe_fit(), 0,
+                          {4.5, 1.9, 1.25})
+      .departure_m;
+}
+
+// Returns bunched at both ends of a run shorter than a short face spread as far as an evenly spread face
+// longer than one (spread_length): the face is still short (it may lie on a rounded corner or in a wheel
+// arch) and departs as one. Evenly over 1.2 m, it is not.
+TEST(InformativeFace, ReturnsBunchedAtTheEndsOfAShortRunAreAShortFace) {
+  const CorrectionConfig config;
+  const std::vector<double> bunched{0.0, 0.05, 0.1, 0.8, 0.85, 0.9};
+  double mean = 0.0, sum_sq = 0.0;
+  for (const double x : bunched)
+    mean += x / static_cast<double>(bunched.size());
+  for (const double x : bunched)
+    sum_sq += (x - mean) * (x - mean);
+  ASSERT_GT(std::sqrt(12.0 * sum_sq / static_cast<double>(bunched.size())), config.short_face_m);
+  EXPECT_GE(face_departure(bunched), config.short_face_tilt_m);
+  EXPECT_LT(face_departure({0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2}), config.short_face_tilt_m);
+}
+
 // One laser's straight trace (a vertical surface in plan) through the middle of a fitted edge along x from
 // 0 to 4.5 m at `angle` to it, every 0.12 m, seen by a laser 9 deg down from 6 m up, 34 m away; `step`: the
 // trace's second half lies this far farther inside the box (a laser leaving the side onto a higher surface).
