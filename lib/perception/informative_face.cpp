@@ -43,6 +43,18 @@ double effective_face_length(std::vector<double> along, double max_gap) {
   return effective_face_run(std::move(along), max_gap).length;
 }
 
+// Whether a face's direction is known no better than a short face's (CorrectionConfig::short_face_m): short
+// by either measure, its evenly spread length or how far its returns reach from first to last. Four returns
+// within 0.87 m at one end of a sports car's side, one of them 0.28 m in (a wheel arch), spread as if evenly
+// over 1.17 m and stated 5.1 deg, 21 deg off (a VLP-16 5.5 m up, 31 m away; a fourth pilot matrix, kept out
+// of the repository). And a face of fewer returns than the outline needs (min_lower_body_points), however
+// far they spread: each one alone turns its line. A hatchback's rear 16 m from a 32-ring sensor 7.5 m up
+// showed four below its lower body, three at one end and one on the far corner 0.2 m in: 9 deg off stating
+// 2.8 deg (the same matrix).
+bool short_face(double length, const FaceRun& run, std::size_t informative, const CorrectionConfig& config) {
+  return std::min(length, run.extent) < config.short_face_m || informative < config.min_lower_body_points;
+}
+
 // Whether one laser's points (their horizontal ranges from the LiDAR) spread in range by `tolerance`: a
 // level surface cut by one laser is an arc at one range.
 bool spreads_in_range(std::vector<double> ranges, double tolerance) {
@@ -272,10 +284,7 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, std::span
                                                run_tilt_departure(near, runs, face.length_m, noise_sigma,
                                                                   config.fit.min_face_points));
   }
-  // Short by either measure: four returns within 0.87 m at one end of a sports car's side, one of them 0.28
-  // m in (a wheel arch), spread as if evenly over 1.17 m and stated 5.1 deg, 21 deg off (a VLP-16 5.5 m up,
-  // 31 m away; a fourth pilot matrix, kept out of the repository).
-  if (std::min(face.length_m, run.extent) < config.short_face_m)
+  if (short_face(face.length_m, run, informative, config))
     face.departure_m = std::max(face.departure_m, config.short_face_tilt_m);
   const double crossing = crossing_trace_departure(
       span_traces(near, lookup.count(), line, lidar.ground_z, side_body_height(size, config)), face.length_m,

@@ -173,6 +173,7 @@ struct CorrectionConfig {
   // or from first to last where that is shorter: a few bunched at both ends of a short run) may lie on a
   // rounded corner of the body (0.2-0.35 m radii) or in a wheel arch, whose direction is anything between
   // the sides' and the ends': its direction departs from the footprint's by about short_face_tilt_m over it.
+  // So does a face of fewer informative points than min_lower_body_points: each one alone turns its line.
   // Without it one ring's 4-11 points over 0.4-0.7 m stated 4-7 deg and were 15-27 deg off (`rsu-pilot
   // matrix`, 11 of the 26 HMI fixes left after the faces' spread rule).
   double short_face_m = 1.0;

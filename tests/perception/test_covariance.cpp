@@ -305,6 +305,20 @@ TEST(InformativeFace, ReturnsBunchedAtTheEndsOfAShortRunAreAShortFace) {
   EXPECT_LT(face_departure({0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2}), config.short_face_tilt_m);
 }
 
+// A face of fewer returns than the lower body's outline needs (min_lower_body_points): each one alone turns
+// its line (one on a rounded corner, in a wheel arch), so it departs as a short face does, however far they
+// spread (five over 1.1 m, no gap wider than a short face). As many as that, evenly over 1.5 m, do not.
+TEST(InformativeFace, AFaceOfAFewReturnsDepartsAsAShortFace) {
+  const CorrectionConfig config;
+  const std::vector<double> few{0.0, 0.05, 0.1, 0.6, 1.1};
+  ASSERT_LT(few.size(), config.min_lower_body_points);
+  EXPECT_GE(face_departure(few), config.short_face_tilt_m);
+  std::vector<double> even;
+  for (std::size_t i = 0; i < config.min_lower_body_points; ++i)
+    even.push_back(1.5 * static_cast<double>(i) / static_cast<double>(config.min_lower_body_points - 1));
+  EXPECT_LT(face_departure(even), config.short_face_tilt_m);
+}
+
 // One laser's straight trace (a vertical surface in plan) through the middle of a fitted edge along x from
 // 0 to 4.5 m at `angle` to it, every 0.12 m, seen by a laser 9 deg down from 6 m up, 34 m away; `step`: the
 // trace's second half lies this far farther inside the box (a laser leaving the side onto a higher surface).

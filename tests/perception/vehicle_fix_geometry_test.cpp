@@ -1396,5 +1396,33 @@ TEST(VehicleFixGeometry, FewReturnsBunchedAtOneEndOfASideAreAShortFace) {
   EXPECT_NE(judge(cell.view, shape, cell.truth, deg_to_rad(-3.2749)), Verdict::withheld);
 }
 
+// A city hatchback (a fourth pilot matrix's vehicle, as the sports car): short, its belt line at 0.85 m.
+sim::VehicleShape city_hatchback() {
+  return {.length = 3.57,
+          .width = 1.63,
+          .height = 1.49,
+          .corner_radius = 0.38,
+          .ground_clearance = 0.13,
+          .belt_height = 0.85,
+          .cabin_inset = 0.1,
+          .hood_length = 0.65,
+          .windscreen_run = 0.75,
+          .rear_slope_run = 0.25,
+          .wheel_radius = 0.3,
+          .wheel_width = 0.2,
+          .wheelbase = 2.3};
+}
+
+// The hatchback's rear 16 m from a 32-ring sensor 7.5 m up (seed 11), 9 deg from head-on: one laser along
+// it at 0.72-0.87 m, crossing its belt line. Four of its returns lie below the lower body's 0.82 m, three at
+// one end and one on the far corner 0.2 m in: their face was 9 deg off stating 2.8 deg. A face of fewer
+// returns than the outline needs departs as a short face does (informative_face.cpp).
+TEST(VehicleFixGeometry, AFaceOfFourReturnsOneOnACornerStatesIt) {
+  const sim::VehicleShape shape = city_hatchback();
+  const PilotCell cell = pilot_cell(*lidar::sensor_model_by_name("generic32"), 7.5, shape, 16.0, 58, 11);
+  EXPECT_GT(cell.view.points.size(), 100U);
+  EXPECT_NE(judge(cell.view, shape, cell.truth, deg_to_rad(6.5194)), Verdict::withheld);
+}
+
 }  // namespace
 }  // namespace rsu::perception
