@@ -39,10 +39,6 @@ FaceRun effective_face_run(std::vector<double> along, double max_gap) {
   return longest;
 }
 
-double effective_face_length(std::vector<double> along, double max_gap) {
-  return effective_face_run(std::move(along), max_gap).length;
-}
-
 // Whether a face's direction is known no better than a short face's (CorrectionConfig::short_face_m): short
 // by either measure, its evenly spread length or how far its returns reach from first to last. Four returns
 // within 0.87 m at one end of a sports car's side, one of them 0.28 m in (a wheel arch), spread as if evenly
@@ -85,7 +81,7 @@ double upper_body_direction_sigma(std::span<const double> lower_along, std::span
   if (lower_along.size() < config.fit.min_face_points || upper_along.size() < config.fit.min_face_points)
     return -1.0;
   const double lower_length =
-      effective_face_length({lower_along.begin(), lower_along.end()}, config.short_face_m);
+      effective_face_run({lower_along.begin(), lower_along.end()}, config.short_face_m).length;
   if (lower_length < config.short_face_m)
     return -1.0;
   const double upper = std::atan(least_squares_slope(upper_along, upper_across));
