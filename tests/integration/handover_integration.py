@@ -302,10 +302,21 @@ def bad_peers(run):
     run.start_rsud(2, domain)
     r = run.rsud[2]
     wait_for_line(r["log"], "ready: serving", 20, watch=r["proc"])
+    go = run.path("go")
+    os.makedirs(go, exist_ok=True)
     publisher = run.children.spawn([run.args.peer_publisher, "--domain", str(domain), "--cyclone-config",
                                     os.path.join(ROOT, "deploy", "cyclonedds-loopback.xml"), "--topic",
-                                    "rsu/peer_announcements", "--rsu-id", "2", "--flood", "5000"],
+                                    "rsu/peer_announcements", "--rsu-id", "2", "--flood", "5000",
+                                    "--go-dir", go],
                                    run.path("publisher.out"))
+    # Each phase waits for rsud, not for a fixed time: under TSan and a loaded host, rsud's reader matched
+    # late or took late, and the 12 bad samples were lost to best effort or pushed out by the flood.
+    wait_for_line(r["log"], "peer bus: 1 other RSU(s)", 20, watch=r["proc"])
+    open(os.path.join(go, "bad"), "w").close()
+    reasons = ("peer:decode:parse_error", "peer:reply_to_mismatch:address", "peer:from_self", "peer_sample")
+    wait_for(lambda: all(read_text(r["log"]).count("bad input (%s)" % k) >= 3 for k in reasons), 20,
+             "rsud to log the 12 bad samples", watch=r["proc"], watch_log=r["log"])
+    open(os.path.join(go, "flood"), "w").close()
     wait_for(lambda: publisher.poll() is not None, 30, "the peer publisher to finish")
     assert publisher.returncode == 0, read_text(run.path("publisher.out"))
     wait_for_line(r["log"], "vehicle 9 registered from RSU 79", 3, watch=r["proc"])

@@ -1,17 +1,21 @@
 // SPDX-License-Identifier: Apache-2.0
 // Test helper for handover_integration.py's bad_peers case: a misbehaving "RSU" on the peer bus. It
 // joins the DDS domain, waits (bounded) until rsud's peer reader matches, and publishes on the peer
-// topic, in this order:
+// topic, in this order (with --go-dir DIR, each phase waits, bounded, for the test to create DIR/bad and
+// DIR/flood: the test sees rsud take the bad samples before the flood can push them out of its reader's
+// history, whatever the load; fixed sleeps did not hold under TSan):
 //   3 samples whose datagram is garbage                      (origin 77)
 //   3 valid announcements whose reply_to is not the sender   (origin 77)
 //   3 valid announcements carrying rsud's own rsu_id          (origin --rsu-id: a duplicated id)
 //   3 samples without a sender address                       (origin 77)
 //   --flood garbage samples as fast as it can                 (origin 78)
 //   then valid announcements of vehicle 9 at 10 Hz for 1 s    (origin 79: a well-behaved peer)
-// and prints one line per group. Exits 0, or 1 when rsud's reader did not match within 10 s.
+// and prints one line per group. Exits 0, or 1 when rsud's reader did not match within 10 s or a go
+// file did not appear within 30 s.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
@@ -30,7 +34,7 @@ using Sample = rsu_msgs_msg_dds__PeerAnnouncement_;
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
                "peer_publisher: %s\nusage: peer_publisher --domain N --cyclone-config FILE --topic ROS_NAME "
-               "--rsu-id N [--flood N]\n",
+               "--rsu-id N [--flood N] [--go-dir DIR]\n",
                why);
   std::exit(2);
 }
@@ -64,6 +68,23 @@ void publish(rsu::dds::Writer<Sample>& writer, std::uint64_t origin, const char*
   writer.write(s);
 }
 
+// Waits (bounded) until `dir`/`name` exists; no directory means no wait (a fixed settling time instead).
+bool wait_for_go(const std::string& dir, const char* name, std::chrono::milliseconds settle) {
+  if (dir.empty()) {
+    std::this_thread::sleep_for(settle);
+    return true;
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!std::filesystem::exists(std::filesystem::path(dir) / name)) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      std::fprintf(stderr, "peer_publisher: %s/%s did not appear within 30 s\n", dir.c_str(), name);
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -71,6 +92,7 @@ int main(int argc, char** argv) {
   std::string topic;
   std::uint64_t rsu_id = 0;
   int flood = 5000;
+  std::string go_dir;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--domain")
@@ -83,6 +105,8 @@ int main(int argc, char** argv) {
       rsu_id = std::strtoull(v.c_str(), nullptr, 10);
     else if (k == "--flood")
       flood = std::atoi(v.c_str());
+    else if (k == "--go-dir")
+      go_dir = v;
     else
       usage("unknown option");
   }
@@ -101,7 +125,10 @@ int main(int argc, char** argv) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the reader's side of discovery too
+  std::puts("matched");
+  std::fflush(stdout);
+  if (!wait_for_go(go_dir, "bad", std::chrono::milliseconds(200)))  // the reader's side of discovery too
+    return 1;
 
   const std::vector<std::uint8_t> garbage = {0xde, 0xad, 0xbe, 0xef, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01};
   for (int i = 0; i < 3; ++i)
@@ -116,8 +143,10 @@ int main(int argc, char** argv) {
   for (int i = 0; i < 3; ++i)
     publish(writer, 77, nullptr, announcement(7, 1, "127.0.0.1"));
   std::puts("published 3 no_sender");
+  std::fflush(stdout);
   // rsud takes these before the flood can push them out of its reader's history (KEEP_LAST).
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  if (!wait_for_go(go_dir, "flood", std::chrono::milliseconds(300)))
+    return 1;
   for (int i = 0; i < flood; ++i)
     publish(writer, 78, "127.0.0.1", garbage);
   std::printf("published %d flood\n", flood);
