@@ -13,7 +13,7 @@ packages=(
   libyaml-cpp-dev libsystemd-dev libpng-dev libsodium-dev
   libssl-dev  # tests: MD5, to compare Ouster range images with the Ouster SDK's digests
   cyclonedds-dev cyclonedds-tools
-  clang libclang-rt-14-dev  # fuzz/ (scripts/fuzz.sh): clang recommends, not depends on, the libFuzzer runtime
+  clang libclang-rt-14-dev  # build-asan/ and fuzz/: clang recommends, not depends on, the libFuzzer runtime
   systemd
   python3 python3-numpy python3-matplotlib python3-yaml
 )

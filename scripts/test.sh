@@ -9,9 +9,12 @@
 # 109 s, TSan build 162 s, tests 14 s, fuzz 158 s: 27.3 min; the CI run of 2026-11-29 at 70787cd took
 # 2522 s, 42 min, over the budget: the GCC ASan+UBSan build about 1050 s of it; the next, at 17d86b8,
 # 1507 s; at 1b96021 2295 s, over again; since, the test binaries' sources compile at -O0 with one shared
-# precompiled header, tests/CMakeLists.txt: at f633136 the Release build 348 s, ASan 602 s, 1822 s in all):
+# precompiled header, tests/CMakeLists.txt: at f633136 the Release build 348 s, ASan 602 s, 1822 s in all;
+# at 810e31d 2326 s again, over: Release 460 + 225 s, GCC's ASan 827 + 248 s, TSan 268 + 33 s, the fuzz
+# tree's clang build and runs 265 s; since, the ASan tree is clang's and holds the fuzz harnesses too,
+# scripts/build.sh: measured alone, 539 s to build, 273 s of tests):
 #   Release     every test
-#   ASan+UBSan  every test (memory errors and UB anywhere, our parsers above all) but those labelled
+#   ASan+UBSan  (clang) every test (memory errors and UB anywhere, our parsers above all) but those labelled
 #               `throughput` (the load smoke and the mis-association run): they assert the speed of an
 #               uninstrumented rsud (p99 latency, RSS slope, VLP-32C service rate), which ASan's
 #               slowdown and quarantine defeat; their code paths run in the other tests; nor those
@@ -28,7 +31,7 @@
 #               TSan-built rsud on 2 shared cores cannot give). The rest is single-threaded
 #               computation: TSan would only slow it down. Only their targets are built (build.sh
 #               tsan); the simulator and the fleet driving the live tests come from build/.
-#   fuzz        every libFuzzer harness for 3 s (scripts/fuzz.sh; 11 harnesses): a smoke run of the
+#   fuzz        every libFuzzer harness for 3 s (scripts/fuzz.sh, in build-asan/; 11 harnesses): a smoke run of the
 #               seed corpora and their near neighbours; `scripts/fuzz.sh` alone fuzzes 20 s each
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -84,7 +87,7 @@ if [ "${1:-}" != "--quick" ]; then
   end "TSan tests"
 
   begin "fuzz"
-  # Every parser of outside input under libFuzzer for 3 s each (fuzz/, clang build in build-fuzz/).
+  # Every parser of outside input under libFuzzer for 3 s each (fuzz/, built in build-asan/ above).
   scripts/fuzz.sh 3
   end "fuzz"
 fi

@@ -786,7 +786,7 @@ void check_exact_against_offline(const lidar::SensorModel& model, const std::vec
   }
   std::size_t isolated = 0;
   for (const Release& r : releases) {
-    const auto [lo, hi] = span.at(r.component);
+    const double lo = span.at(r.component).first, hi = span.at(r.component).second;
     const bool overlaps = std::any_of(span.begin(), span.end(), [&](const auto& other) {
       return other.first != r.component && other.second.first <= hi && other.second.second >= lo;
     });
