@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Test helper for handover_integration.py's bad_peers case: a misbehaving "RSU" on the peer bus. It
 // joins the DDS domain, waits (bounded) until rsud's peer reader matches, and publishes on the peer
-// topic, in this order (with --go-dir DIR, each phase waits, bounded, for the test to create DIR/bad and
+// topic, in this order (each phase waits, bounded, for the test to create --go-dir's DIR/bad and
 // DIR/flood: the test sees rsud take the bad samples before the flood can push them out of its reader's
 // history, whatever the load; fixed sleeps did not hold under TSan):
 //   3 samples whose datagram is garbage                      (origin 77)
@@ -34,7 +34,7 @@ using Sample = rsu_msgs_msg_dds__PeerAnnouncement_;
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
                "peer_publisher: %s\nusage: peer_publisher --domain N --cyclone-config FILE --topic ROS_NAME "
-               "--rsu-id N [--flood N] [--go-dir DIR]\n",
+               "--rsu-id N --go-dir DIR [--flood N]\n",
                why);
   std::exit(2);
 }
@@ -68,12 +68,8 @@ void publish(rsu::dds::Writer<Sample>& writer, std::uint64_t origin, const char*
   writer.write(s);
 }
 
-// Waits (bounded) until `dir`/`name` exists; no directory means no wait (a fixed settling time instead).
-bool wait_for_go(const std::string& dir, const char* name, std::chrono::milliseconds settle) {
-  if (dir.empty()) {
-    std::this_thread::sleep_for(settle);
-    return true;
-  }
+// Waits (bounded) until `dir`/`name` exists.
+bool wait_for_go(const std::string& dir, const char* name) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (!std::filesystem::exists(std::filesystem::path(dir) / name)) {
     if (std::chrono::steady_clock::now() > deadline) {
@@ -110,8 +106,8 @@ int main(int argc, char** argv) {
     else
       usage("unknown option");
   }
-  if (topic.empty() || rsu_id == 0)
-    usage("--topic and --rsu-id are required");
+  if (topic.empty() || rsu_id == 0 || go_dir.empty())
+    usage("--topic, --rsu-id and --go-dir are required");
 
   const rsu::dds::Participant participant(pc);
   const rsu::dds::Topic t(participant, rsu::dds::ros_topic(topic), rsu_msgs_msg_dds__PeerAnnouncement__desc);
@@ -127,7 +123,7 @@ int main(int argc, char** argv) {
   }
   std::puts("matched");
   std::fflush(stdout);
-  if (!wait_for_go(go_dir, "bad", std::chrono::milliseconds(200)))  // the reader's side of discovery too
+  if (!wait_for_go(go_dir, "bad"))
     return 1;
 
   const std::vector<std::uint8_t> garbage = {0xde, 0xad, 0xbe, 0xef, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01};
@@ -145,7 +141,7 @@ int main(int argc, char** argv) {
   std::puts("published 3 no_sender");
   std::fflush(stdout);
   // rsud takes these before the flood can push them out of its reader's history (KEEP_LAST).
-  if (!wait_for_go(go_dir, "flood", std::chrono::milliseconds(300)))
+  if (!wait_for_go(go_dir, "flood"))
     return 1;
   for (int i = 0; i < flood; ++i)
     publish(writer, 78, "127.0.0.1", garbage);
