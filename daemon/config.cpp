@@ -235,8 +235,8 @@ void read_background(const YamlField& f, DaemonConfig& c, const std::filesystem:
 void read_perception(const YamlField& f, DaemonConfig& c) {
   f.expect_map({"background_method", "ground_z", "ground_min_height_m", "range_image_margin_m",
                 "reference_match_radius_m", "cluster_tolerance_m", "cluster_min_points", "cluster_max_points",
-                "correction", "coverage_radius_m", "release_margin_deg", "joint_release_range_gap_m",
-                "footprint_track", "prepare_thread"});
+                "correction", "max_position_sigma_m", "coverage_radius_m", "release_margin_deg",
+                "joint_release_range_gap_m", "footprint_track", "prepare_thread"});
   auto& p = c.core.perception;
   if (f.has("background_method")) {
     const YamlField m = f.child("background_method");
@@ -278,6 +278,10 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
     else
       m.fail("expected improved or algorithm1, got \"" + v + "\"");
   }
+  auto& correction = p.fix.correction;
+  correction.max_position_sigma_m = f.positive_or("max_position_sigma_m", correction.max_position_sigma_m);
+  if (correction.max_position_sigma_m > 10)
+    f.child("max_position_sigma_m").fail("must be <= 10 m");
   c.core.coverage_radius_m = f.positive_or("coverage_radius_m", c.core.coverage_radius_m);
   c.core.sweep.release_margin_deg = f.non_negative_or("release_margin_deg", c.core.sweep.release_margin_deg);
   if (c.core.sweep.release_margin_deg > 30)

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <unistd.h>
@@ -161,6 +162,28 @@ TEST(LidarConfig, JointReleaseRangeGapIsReadAndChecked) {
         std::string::npos)
         << bad;
   }
+}
+
+// perception.max_position_sigma_m (issue 12): the fix's cap, the library default unless given (the pilot
+// measures the defaults, so the shipped file states that value); not positive, over 10 m or not a number:
+// refused with the field named.
+TEST(LidarConfig, MaxPositionSigmaIsReadAndChecked) {
+  const double fallback = perception::CorrectionConfig{}.max_position_sigma_m;
+  EXPECT_EQ(parse("  input: {udp: {}}\n").core.perception.fix.correction.max_position_sigma_m, fallback);
+  EXPECT_EQ(parse("  input: {udp: {}}\nperception: {max_position_sigma_m: 0.5}\n")
+                .core.perception.fix.correction.max_position_sigma_m,
+            0.5);
+  for (const char* bad : {"0", "-1", "11", "far"}) {
+    EXPECT_NE(refusal(std::string("  input: {udp: {}}\nperception: {max_position_sigma_m: ") + bad + "}\n")
+                  .find("perception.max_position_sigma_m"),
+              std::string::npos)
+        << bad;
+  }
+  std::ifstream shipped(RSU_SOURCE_DIR "/deploy/rsud.yaml");
+  const std::string text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(parse_config(text, "deploy/rsud.yaml").core.perception.fix.correction.max_position_sigma_m,
+            fallback);
 }
 
 }  // namespace
