@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "common/symmetric_eigen.h"
 #include "fusion/covariance_floor.h"
 
 namespace rsu::vehicle {
@@ -16,7 +17,7 @@ const char* CorrectionStep::label() const {
   if (check && !check->use()) {
     return to_string(check->verdict);
   }
-  return "not_fused";
+  return coarse ? "coarse" : "not_fused";
 }
 
 VehicleCore::VehicleCore(const VehicleCoreConfig& config)
@@ -118,6 +119,11 @@ CorrectionStep VehicleCore::on_correction(const v2i::Correction& received) {
   if (step.check) {
     weaken_covered_by(correction.sweep_time);  // checked and usable: an admitted RSU is heard
   }
+  if (too_coarse_to_fuse(correction)) {
+    step.coarse = true;
+    ++stats_.fixes_coarse_not_fused;
+    return step;
+  }
   const std::uint64_t reanchors = fuser_.stats().rsu_reanchors;
   step.outcome = fuser_.add_rsu(correction, reanchor);
   step.reanchored = fuser_.stats().rsu_reanchors > reanchors;
@@ -176,10 +182,20 @@ void VehicleCore::fuse_held_back(std::uint64_t rsu_id) {
   }
   for (const v2i::Correction& fix : it->second) {
     weaken_covered_by(fix.sweep_time);
+    if (too_coarse_to_fuse(fix)) {
+      ++stats_.fixes_coarse_not_fused;
+      continue;
+    }
     fuser_.add_rsu(fix);
     ++stats_.fixes_fused_after_probation;
   }
   held_back_.erase(it);
+}
+
+bool VehicleCore::too_coarse_to_fuse(const v2i::Correction& fix) const {
+  const double largest_variance = SymmetricEigen2(fix.pose_covariance.topLeftCorner<2, 2>()).eigenvalues()(1);
+  return !(largest_variance <= config_.coarse_fix_sigma_m * config_.coarse_fix_sigma_m) &&
+         own_status_at(fix.sweep_time) == OwnEstimate::kHealthy;
 }
 
 OwnEstimate VehicleCore::own_status_at(TimeNs t) const {

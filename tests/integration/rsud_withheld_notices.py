@@ -5,9 +5,7 @@ the real `rsu-sim stream` and the real `rsu-vehicle`, keys and trust lists made 
 loopback. The street is scenarios/handover_west.yaml with its VLP-16 raised from 2 m to 6 m (an elevated
 RSU, issue 12 item 5; written beside --work): the car drives past it at 10 m/s for 5 s, from 21 m before
 it to 31 m after. From 6 m up the LiDAR sees parts of the car that leave its place open over more than a
-fix may state at times: rsud withholds those fixes (position_unbounded) and tells the vehicle why. The cap
-is an operator's 0.5 m (perception.max_position_sigma_m; the shipped 1 m withholds 1-2 of this drive's
-fixes, too few to see the rate limit).
+fix may state at times: rsud withholds those fixes (position_unbounded) and tells the vehicle why.
 Checked:
   * the vehicle got corrections and FixWithheld notices, each verified and counted by the vehicle by reason
     (fix_withheld.<reason> in its --stats equal to rsud's withheld_notice.<reason>: nothing lost on
@@ -64,7 +62,7 @@ def drive(h):
     keygen(h, h.path("car"), "--trust-list", h.trust_list, "--role", "vehicle", "--ids", "1")
     keygen(h, "--public-key", h.path("rsu.pub"), "--trust-list", h.path("vehicle_trust.list"), "--role", "rsu",
            "--ids", "1")
-    h.write_config(signed=True, extra="perception:\n  max_position_sigma_m: 0.5\n")
+    h.write_config(signed=True)
     h.start_rsud()
     h.epoch_ns = time.time_ns() + 1_000_000_000 - int(START_S * 1e9)  # START_S is 1 s from now
     stream = h.stream(START_S, DRIVE_S)

@@ -765,7 +765,7 @@ TEST(VehicleFixGeometry, FaceEndingInATrucksShadow) {
     announced.size = {van.length, van.width, van.height};
     announced.yaw_prior = YawPrior{truth.yaw + deg_to_rad(4.6), deg_to_rad(10.0)};
     const VehicleFix fix = fix_vehicle(view.points, announced, view.lidar);
-    // The van's near side lies somewhere in the shadow: 0.83-0.86 m stated (sent since the cap is 1 m).
+    // The van's near side lies somewhere in the shadow: withheld (0.83-0.86 m stated when the cap is 1 m).
     EXPECT_TRUE(!fix.ok() || position_sigma_m(fix.corrected) > 0.5) << van_x;
   }
 }

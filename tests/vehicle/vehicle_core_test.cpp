@@ -8,6 +8,9 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
+#include <string>
+#include <vector>
 
 #include "common/angles.h"
 #include "common/random.h"
@@ -95,6 +98,69 @@ TEST(VehicleCore, FusesCorrectionsAndAnnouncesTheFusedStateWithItsMotionOnceSett
   EXPECT_EQ(core.integrity().totals().verdicts.count(FixVerdict::kProbation), 4U);
   // ... and those four are fused, late, once the fifth has admitted the RSU.
   EXPECT_EQ(core.stats().fixes_fused_after_probation, 4U);
+}
+
+// An elevated RSU's coarse fixes: each states 0.8 m along the road (0.05 m across) and is 1.0 m ahead of
+// the truth every time (the same open interval each rotation), honest one by one. Beside a healthy NDT
+// they are checked and usable but not fused: the fused pose is the NDT-only filter's, bit for bit. Fused
+// as independent they drag the pose ahead. With the NDT degraded (its match degenerate along the road)
+// they are fused.
+struct CoarseDrive {
+  double mean_x_error = 0.0;  // fused minus truth along the road, over the last 40 poses
+  std::vector<double> fused_x;
+  std::uint64_t coarse = 0, accepted = 0;
+  std::vector<std::string> labels;
+};
+
+CoarseDrive drive_with_coarse_fixes(const VehicleCoreConfig& config, bool degraded_ndt) {
+  VehicleCore core(config);
+  CoarseDrive r;
+  for (int k = 0; k < 60; ++k) {
+    NdtPose ndt = ndt_at(k);
+    if (degraded_ndt)
+      ndt.quality = {true, 4, 0.04, 8.3, 0.0};
+    const NdtStep step = core.on_ndt(ndt);
+    if (step.fused) {
+      r.fused_x.push_back(step.fused->state(fusion::kX));
+      if (k >= 20)
+        r.mean_x_error += (step.fused->state(fusion::kX) - truth_x(ndt.time)) / 40.0;
+    }
+    v2i::Correction fix = fix_at(k);
+    fix.pose.x = truth_x(fix.sweep_time) + 1.0;
+    fix.pose.y = 0.0;
+    fix.pose_covariance = Eigen::Vector3d(0.8 * 0.8, 0.05 * 0.05, 0.05 * 0.05).asDiagonal();
+    r.labels.emplace_back(core.on_correction(fix).label());
+  }
+  r.coarse = core.stats().fixes_coarse_not_fused;
+  r.accepted = core.fuser_stats().rsu_accepted;
+  return r;
+}
+
+TEST(VehicleCore, CoarseFixesAreFusedOnlyWhileTheOwnEstimateIsDegraded) {
+  VehicleCoreConfig ndt_only;
+  ndt_only.fuse_corrections = false;
+  VehicleCoreConfig every_fix;
+  every_fix.coarse_fix_sigma_m = std::numeric_limits<double>::infinity();
+  const CoarseDrive baseline = drive_with_coarse_fixes(ndt_only, false);
+  const CoarseDrive kept_out = drive_with_coarse_fixes(VehicleCoreConfig{}, false);
+  const CoarseDrive fused = drive_with_coarse_fixes(every_fix, false);
+  // Checked and usable (past probation), none fused; the pose is the NDT-only filter's.
+  EXPECT_GE(kept_out.coarse, 50U);
+  EXPECT_EQ(kept_out.accepted, 0U);
+  // Each said so, or was held on probation and kept out once the RSU was admitted.
+  const auto labelled = [&](const char* label) {
+    return static_cast<std::uint64_t>(std::count(kept_out.labels.begin(), kept_out.labels.end(), label));
+  };
+  EXPECT_EQ(labelled("coarse") + labelled("probation"), kept_out.coarse);
+  EXPECT_EQ(kept_out.fused_x, baseline.fused_x);
+  // Fused, their shared 1 m pulls the pose ahead of where NDT alone keeps it.
+  EXPECT_GE(fused.accepted, 50U);
+  EXPECT_EQ(fused.coarse, 0U);
+  EXPECT_GT(fused.mean_x_error, baseline.mean_x_error + 0.03);  // measured: 0.05 m ahead
+  // With the NDT degraded the vehicle needs them: fused.
+  const CoarseDrive degraded = drive_with_coarse_fixes(VehicleCoreConfig{}, true);
+  EXPECT_EQ(degraded.coarse, 0U);
+  EXPECT_GE(degraded.accepted, 50U);
 }
 
 TEST(VehicleCore, WithoutFusingCorrectionsItIsTheNdtOnlyFilter) {

@@ -156,7 +156,8 @@ void write_stats_file(const std::string& path, const VehicleClientStats& c,
   out << "ndt.poses " << core.stats().ndt_poses << "\nndt.degraded " << core.stats().ndt_degraded
       << "\nndt.weakened_in_fused " << core.stats().ndt_weakened_in_fused << "\nndt.weakened_along_axis "
       << core.stats().ndt_weakened_along_axis << "\nndt.weakened_late " << core.stats().ndt_weakened_late
-      << "\nintegrity.fixes_own_failed " << core.stats().fixes_own_failed << "\n";
+      << "\nintegrity.fixes_own_failed " << core.stats().fixes_own_failed << "\nfixes.coarse_not_fused "
+      << core.stats().fixes_coarse_not_fused << "\n";
   const vehicle::IntegrityTotals& t = core.integrity().totals();
   for (std::size_t i = 0; i < static_cast<std::size_t>(vehicle::FixVerdict::kCount); ++i) {
     const auto v = static_cast<vehicle::FixVerdict>(i);
