@@ -220,15 +220,17 @@ std::optional<AxisEstimate> face_on_outline(const AxisContext& ctx, int a, const
     // A face seen only above the height to which every vehicle's body keeps its full plan may be set back
     // (a bus's windscreen above its low front; a small car's side seen only above 55 % of its height, on
     // its doors or maybe the belt line's ledge) - unless a laser passing below it, at the face, would have
-    // hit the body had it reached farther out there: up to mid_height_inset_m, the middle of that with
-    // its spread.
+    // hit the body had it reached farther out there: up to mid_height_inset_m (low_bonnet_inset_m at the ends
+    // of a car or MPV, whose bonnet may lie under 55 % of its height), the middle of that with its spread.
     const bool seen_below =
         lowest <= std::min(config.full_plan_height_m, config.lower_body_fraction * ctx.vehicle_height) ||
         lidar.sees_surface(face_range(ctx, a, sign * env.position, along_mean) + 0.1,
                            config.ground_clearance_m, lowest - 0.05);
+    const double end_setback = config.lower_body_fraction * ctx.vehicle_height < config.max_end_body_height_m
+                                   ? config.low_bonnet_inset_m
+                                   : config.mid_height_inset_m;
     const double setback =
-        seen_below ? 0.0
-                   : (a == ctx.length_axis ? config.mid_height_inset_m : config.mid_height_inset_width_m);
+        seen_below ? 0.0 : (a == ctx.length_axis ? end_setback : config.mid_height_inset_width_m);
     const double face = sign * (env.position + setback / 2.0);
     // An end with fewer than a face's points away from the rounded corner by the seen side (the rest on
     // the corner or the side itself) may lie up to the corner's radius beyond them: the envelope of such
