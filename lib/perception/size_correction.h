@@ -148,7 +148,8 @@ struct CorrectionConfig {
   double max_end_body_height_m = 1.0;
   // Up to this height (and the lower body) the plan is full on any road vehicle (bumpers and doors; a
   // bus's windows start at about a third of its height, above it); a face seen only higher up, but
-  // within the lower body's share, may be set back by up to mid_height_inset_m (box_axis.h).
+  // within the lower body's share, may be set back by up to mid_height_inset_m or low_bonnet_inset_m
+  // (below; box_axis.h).
   double full_plan_height_m = 0.9;
   // At the front and back of a vehicle taller than max_end_body_height_m / lower_body_fraction (1.82 m:
   // vans, buses, lorries, their bonnets at 1 m or above): a bus's windscreen above its low front.
