@@ -152,6 +152,14 @@ int main(int argc, char** argv) {
     const std::span<const std::uint8_t> datagram(buffer.data(), static_cast<std::size_t>(n));
     const rsu::v2i::AuthenticatedMessage heard =
         authenticator.authenticate(datagram, rsu::edge::host_now_ns());
+    // rsud's own notice that this vehicle's fix was withheld (position_unbounded after shed packets, in a
+    // loaded sanitizer pass) is genuine: neither a correction nor a refusal.
+    const auto* w = std::get_if<rsu::v2i::FixWithheld>(&heard.message.body);
+    if (heard.accepted() && w != nullptr && w->vehicle_id == id) {
+      std::printf("withheld\n");
+      std::fflush(stdout);
+      continue;
+    }
     const auto* c = std::get_if<rsu::v2i::Correction>(&heard.message.body);
     if (!heard.accepted() || c == nullptr || c->vehicle_id != id) {
       std::printf("refused %s\n", heard.accepted() ? "not_mine" : rsu::v2i::to_string(heard.verdict));
