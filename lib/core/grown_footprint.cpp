@@ -58,4 +58,24 @@ bool GrownFootprint::inside_lane(const perception::Detection& detection) const {
   return fraction_inside(detection, lane_half_) >= min_inside_fraction_;
 }
 
+bool GrownFootprint::tightly_overlaps(const Eigen::AlignedBox2d& box) const {
+  if (box.isEmpty())
+    return false;
+  // Two rectangles are apart exactly when one of their four edge directions separates them: the map's
+  // axes (the footprint's extent on them against the box) and the footprint's own.
+  const double c = std::abs(std::cos(yaw_));
+  const double s = std::abs(std::sin(yaw_));
+  const Eigen::Vector2d extent(c * tight_half_.x() + s * tight_half_.y(),
+                               s * tight_half_.x() + c * tight_half_.y());
+  if (!Eigen::AlignedBox2d(centre_ - extent, centre_ + extent).intersects(box))
+    return false;
+  const Eigen::Rotation2Dd to_box(-yaw_);
+  Eigen::AlignedBox2d local;
+  for (const double x : {box.min().x(), box.max().x()}) {
+    for (const double y : {box.min().y(), box.max().y()})
+      local.extend(to_box * (Eigen::Vector2d(x, y) - centre_));
+  }
+  return local.intersects(Eigen::AlignedBox2d(-tight_half_, tight_half_));
+}
+
 }  // namespace rsu::core

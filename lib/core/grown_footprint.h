@@ -6,6 +6,7 @@
 #include <array>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "core/rsu_core_config.h"
 #include "perception/detection.h"
@@ -32,6 +33,9 @@ class GrownFootprint {
   bool inside_lane(const perception::Detection& detection) const;
 
   const std::array<Eigen::Vector2d, 4>& corners() const { return corners_; }
+  // Whether `box` (map frame, axis-aligned) shares any place with the footprint grown by the minimum
+  // margin and one sigma only (as tightly_inside): where a fragment of the vehicle itself may lie.
+  bool tightly_overlaps(const Eigen::AlignedBox2d& box) const;
 
  private:
   double fraction_inside(const perception::Detection& detection, const Eigen::Vector2d& half) const;

@@ -140,6 +140,7 @@ std::vector<perception::Detection> RsuCore::detect(std::vector<perception::Swept
       continue;
     auto d = prepared_.fit(cluster.points, *fixer_);
     d.ahead_of_open = cluster.ahead_of_open;
+    d.open_beyond = cluster.open_beyond;
     ++lidar_stats_.clusters_fitted;
     if (!d.fit.ok()) {
       ++lidar_stats_.fits_failed;  // too small or thin to fit alone, but maybe a fragment of a vehicle

@@ -56,9 +56,11 @@ struct HeldVehicle {
   // Held after the vehicle was released with an assigned detection earlier in this rotation (fixed or
   // refused): what is gathered for it now lies beside or ahead of what was judged its own.
   bool after_assigned_release = false;
-  bool far = false;            // beyond GatheringConfig::hold_beyond_m (held for its fragments)
-  bool ahead_of_open = false;  // a part released ahead of a nearer open cluster (held for its fragments)
-  TimeNs release_at = 0;       // firing time when the sweep has passed the footprint and its detections
+  bool far = false;  // beyond GatheringConfig::hold_beyond_m (held for its fragments)
+  // A part released ahead of a nearer open cluster, or of a farther one reaching into the footprint
+  // (GrownFootprint::tightly_overlaps; held for its fragments).
+  bool ahead_of_open = false;
+  TimeNs release_at = 0;  // firing time when the sweep has passed the footprint and its detections
 
   // The points' mean firing time: when the LiDAR swept the vehicle.
   TimeNs sweep_time() const { return first_time + weighted_offset / static_cast<TimeNs>(points.size()); }

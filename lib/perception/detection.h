@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "common/time.h"
 #include "lidar/point.h"
@@ -25,6 +26,7 @@ struct Detection {
   TimeNs sweep_time_ns = 0;             // mean firing time of its points: when the LiDAR swept it
   RectangleFit fit;                     // its status says whether a rectangle could be fitted
   bool ahead_of_open = false;           // SweptCluster::ahead_of_open: may continue behind a nearer one
+  std::vector<Eigen::AlignedBox2d> open_beyond;  // SweptCluster::open_beyond
 };
 
 // Which of a dense cluster's points the rectangle is fitted to: every k-th azimuth column of each laser's

@@ -144,6 +144,7 @@ std::uint32_t IncrementalClustering::unite(std::uint32_t a, std::uint32_t b) {
   s.close_at = std::max(s.close_at, t.close_at);
   s.min_range = std::min(s.min_range, t.min_range);
   s.max_range = std::max(s.max_range, t.max_range);
+  s.box.extend(t.box);
   s.first_seq = std::min(s.first_seq, t.first_seq);
   s.size += t.size;
   root.member_cells.insert(root.member_cells.end(), gone.member_cells.begin(), gone.member_cells.end());
@@ -195,6 +196,7 @@ void IncrementalClustering::add(const PendingPoint& p) {
   s.close_at = std::max(s.close_at, p.close_at);
   s.min_range = std::min(s.min_range, p.range);
   s.max_range = std::max(s.max_range, p.range);
+  s.box.extend(Eigen::Vector2d(p.point.x, p.point.y));
   s.first_seq = std::min(s.first_seq, p.seq);
   ++s.size;
   // The point's edges to earlier points: only those into another component can change anything.

@@ -25,6 +25,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "lidar/point.h"
 #include "perception/euclidean_clustering.h"
 #include "perception/point_hash_grid.h"
@@ -47,6 +49,7 @@ struct ComponentSummary {
   double close_at = -std::numeric_limits<double>::infinity();  // largest of its points'
   double min_range = std::numeric_limits<double>::infinity();  // planar, from the LiDAR
   double max_range = -std::numeric_limits<double>::infinity();
+  Eigen::AlignedBox2d box;  // planar bounding box of its points, map frame
   std::uint64_t first_seq = std::numeric_limits<std::uint64_t>::max();
   std::size_t size = 0;
 };

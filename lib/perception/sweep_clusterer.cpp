@@ -266,12 +266,12 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     const auto in_line_of_sight = [&](const ComponentSummary& o) {
       return o.min_azimuth <= s.max_azimuth && o.max_azimuth >= s.min_azimuth;
     };
-    const bool overlaps_open = std::any_of(open.begin(), open.end(), [&](const ComponentSummary& o) {
-      return in_line_of_sight(o) && o.min_range - s.max_range < gap && s.min_range - o.max_range < gap;
+    // Waits for an open cluster in its line of sight that starts nearer, within the gap (file comment).
+    const bool waits = std::any_of(open.begin(), open.end(), [&](const ComponentSummary& o) {
+      return in_line_of_sight(o) && o.min_range < s.min_range && s.min_range - o.max_range < gap;
     });
-    if (overlaps_open) {
+    if (waits)
       continue;
-    }
     const std::vector<PendingPoint> members = clusters_.take(c);
     if (cut_at_start(members)) {
       ++stats_.clusters_dropped_cut_at_start;
@@ -289,7 +289,13 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
     // (overtaken_open_points), and it may continue behind them. Only for clusters released, not dropped.
     SweptCluster cluster;
     for (const ComponentSummary& o : open) {
-      if (!in_line_of_sight(o) || !(o.min_range < s.max_range))
+      if (!in_line_of_sight(o))
+        continue;
+      // One it did not wait for, farther within the gap: what it holds so far (a fragment of the same
+      // vehicle if it lies in its footprint, core/vehicle_gatherer.h).
+      if (o.min_range >= s.min_range && o.min_range - s.max_range < gap)
+        cluster.open_beyond.push_back(o.box);
+      if (!(o.min_range < s.max_range))
         continue;
       cluster.ahead_of_open = true;
       if (std::find(overtaken_.begin(), overtaken_.end(), o.first_seq) == overtaken_.end())

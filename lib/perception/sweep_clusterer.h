@@ -30,13 +30,19 @@
 // `margin` (SweepConfig::release_margin_deg) covers the VLP-16's interpolated second-sequence
 // azimuths (not exactly monotone across packets) and a slightly tilted mount (azimuths are the
 // sensor's, ranges are measured from the LiDAR's map position).
-// A closed cluster is released when, in addition, no open cluster overlaps its azimuth span within
-// SweepConfig::joint_release_range_gap_m of its ranges, so that vehicles side by side in one line of
-// sight reach association together (the RSU associates each released batch with one global assignment:
+// A closed cluster is released when, in addition, no open cluster that starts nearer to the LiDAR
+// overlaps its azimuth span within SweepConfig::joint_release_range_gap_m of its ranges: such a one
+// may hide part of it, or be a fragment of the same vehicle in front of it, and the two reach
+// association together (the RSU associates each released batch with one global assignment:
 // lib/core/rsu_core.h). Clusters farther apart than that in range (|p - q| >= ||p| - |q||: in plane
 // too) cannot fall in one vehicle's association gate, and waiting for them cost a car parked behind a
 // passing one 10-20 ms (issue 16, load test: p99 17 ms with another vehicle in the line of sight, 5 ms
-// without).
+// without). An open cluster that starts no nearer is not waited for (issue 16, 2026-12-01: a car 10 m
+// away waited for a car passing 3-10 m behind it to close, 4.5-7 ms after its own last point): it
+// cannot hide the closed one, and what the early release can cost in the association the RSU's
+// gatherer catches (core/vehicle_gatherer.h): a vehicle whose gate took a cluster that is not tightly
+// inside its footprint is held until the sweep has passed the footprint, so its own cluster, released
+// later, is assigned too and wins as the nearer.
 //
 // Each point's bound is a threshold: it can gain no neighbour once a_future > a + asin(d / r) (the
 // test r sin(a_future - a) > d rearranged; never while r <= d), so a cluster closes once a_future passes the
@@ -58,6 +64,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "common/time.h"
 #include "lidar/point.h"
@@ -78,12 +85,12 @@ struct SweepConfig {
   std::size_t max_pending_points = 200000;
   // A gap in the point stream longer than this many rotations, or time going backwards, restarts it.
   double max_gap_rotations = 2.0;
-  // A closed cluster waits for an open one at overlapping azimuths only if their planar ranges from the
-  // LiDAR come this close (file comment): nearer, they may be one vehicle's fragments or fall in one
-  // vehicle's association gate, and are associated together. Farther apart, a vehicle whose gate took
-  // the other's cluster is held until its own is released and takes that instead
+  // A closed cluster waits for an open one at overlapping azimuths that starts nearer to the LiDAR only
+  // if their planar ranges come this close (file comment): nearer, they may be one vehicle's fragments
+  // or fall in one vehicle's association gate, and are associated together. Farther apart, a vehicle
+  // whose gate took the other's cluster is held until its own is released and takes that instead
   // (core/vehicle_gatherer.h): what the early release can cost is the other vehicle's fix in that
-  // rotation. Infinite: wait for every open cluster in the line of sight (the rule before issue 16).
+  // rotation. Infinite: wait for every open cluster in the line of sight that starts nearer.
   double joint_release_range_gap_m = 6.0;
 };
 
@@ -92,6 +99,10 @@ struct SweptCluster {
   // Released while a nearer cluster in its line of sight was still open (joint_release_range_gap_m):
   // part of it may be hidden behind that one and show again beyond it.
   bool ahead_of_open = false;
+  // The planar bounding boxes (map frame) of the clusters still open in its line of sight that it did
+  // not wait for, within joint_release_range_gap_m of its ranges: the points they hold so far. One that
+  // lies where its vehicle may be is a fragment of it still to come (core/vehicle_gatherer.h).
+  std::vector<Eigen::AlignedBox2d> open_beyond;
 };
 
 struct SweepClustererStats {

@@ -153,6 +153,38 @@ TEST(SweepClusterer, ReleasesAClusterFarInRangeFromTheOpenOneAlone) {
   EXPECT_EQ(first_release_near_and(30.0, always).first, 2U);
 }
 
+// A near object (3 m, 40-45 deg) closes first; a farther one within the gap (8.5 m) at the same azimuths
+// and on to 60 deg is still open. The near one cannot be hidden behind it and goes alone, as soon as it
+// is closed (asin(0.7 / 3) = 13.5 deg past its last point, plus the 0.5 deg margin, within the 0.25 deg
+// step of the points): under the rule before, it waited for the far one (4.7 deg past 59.75 deg).
+TEST(SweepClusterer, ANearClusterDoesNotWaitForAFartherOpenOne) {
+  SweepClusterer sweep({}, clustering(), Eigen::Vector2d::Zero(), kHz, 0.0);
+  start_stream(sweep);
+  std::vector<std::pair<std::size_t, double>> releases;  // size, sweep azimuth
+  const auto release = [&](double a) {
+    for (const SweptCluster& c : sweep.release_closed()) {
+      releases.emplace_back(c.points.size(), a);
+      EXPECT_FALSE(c.ahead_of_open) << "nothing nearer was open";
+    }
+  };
+  for (int i = 0; i < 80; ++i) {
+    const double a = 40.0 + 0.25 * i;
+    if (i < 20)
+      sweep.add(at(3.0, a), true);
+    sweep.add(at(8.5, a), true);
+    release(a);
+  }
+  for (double a = 60.05; a < 90.0; a += 0.05) {
+    sweep.add(at(50.0, a), false);
+    release(a);
+  }
+  ASSERT_EQ(releases.size(), 2U);
+  EXPECT_EQ(releases[0].first, 20U);
+  EXPECT_NEAR(releases[0].second - 44.75, rad_to_deg(std::asin(0.7 / 3.0)) + 0.5, 0.3);
+  EXPECT_EQ(releases[1].first, 80U);
+  EXPECT_NEAR(releases[1].second - 59.75, rad_to_deg(std::asin(0.7 / 8.5)) + 0.5, 0.1);
+}
+
 // The nearer objects a far one was released ahead of: their points swept so far are offered as what may
 // hide part of it (RsuCore's occluders) while they stay open; none once they are released too.
 TEST(SweepClusterer, OffersTheOpenClustersAReleaseWentAheadOf) {
@@ -498,8 +530,8 @@ std::vector<int> offline_components(const std::vector<lidar::LidarPoint>& points
 // The release rule as a batch, as the sweep clusterer ran it before it clustered incrementally (issue
 // 16): on each packet, every pending foreground point clustered again (cluster_grid), each
 // component closed when every point is farther than the tolerance from the future wedge (r sin(behind)
-// > d), released when closed, clear of the stream's start and overlapping no open component at ranges
-// within the joint release gap; stale
+// > d), released when closed, clear of the stream's start and overlapping no open component that starts
+// nearer, within the joint release gap; stale
 // points (half a turn behind) dropped first. The incremental clusterer must release exactly the same
 // clusters, packet by packet, in the same order.
 class BatchReleaseReference {
@@ -553,8 +585,8 @@ class BatchReleaseReference {
     for (const auto& [first, l] : by_first) {
       const State& st = state.at(l);
       const bool overlaps_open = std::any_of(state.begin(), state.end(), [&](const auto& o) {
-        return !o.second.closed && o.second.lo <= st.hi && o.second.hi >= st.lo &&
-               o.second.near - st.far < joint_gap_ && st.near - o.second.far < joint_gap_;
+        return !o.second.closed && o.second.lo <= st.hi && o.second.hi >= st.lo && o.second.near < st.near &&
+               st.near - o.second.far < joint_gap_;
       });
       if (!st.closed || overlaps_open)
         continue;
