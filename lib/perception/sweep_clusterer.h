@@ -42,7 +42,9 @@
 // cannot hide the closed one, and what the early release can cost in the association the RSU's
 // gatherer catches (core/vehicle_gatherer.h): a vehicle whose gate took a cluster that is not tightly
 // inside its footprint is held until the sweep has passed the footprint, so its own cluster, released
-// later, is assigned too and wins as the nearer.
+// later, is assigned too and wins as the nearer. Such a farther open cluster may still be a fragment of
+// the same vehicle: the released cluster names it (SweptCluster::open_beyond), and the gatherer holds
+// the vehicle for it where it reaches into the vehicle's footprint.
 //
 // Each point's bound is a threshold: it can gain no neighbour once a_future > a + asin(d / r) (the
 // test r sin(a_future - a) > d rearranged; never while r <= d), so a cluster closes once a_future passes the
