@@ -388,7 +388,8 @@ void read_association(const YamlField& f, DaemonConfig& c) {
 
 // security: mode, key files, replay window (lib/v2i/message_authenticator.h).
 void read_security(const YamlField& f, DaemonConfig& c, const std::filesystem::path& base) {
-  f.expect_map({"mode", "key_file", "trust_list_file", "max_age_s", "max_future_s", "max_signers"});
+  f.expect_map({"mode", "key_file", "trust_list_file", "max_age_s", "max_future_s", "max_signers",
+                "verify_beyond_coverage_m"});
   auto& s = c.core.security;
   if (f.has("mode")) {
     const YamlField m = f.child("mode");
@@ -414,6 +415,19 @@ void read_security(const YamlField& f, DaemonConfig& c, const std::filesystem::p
     s.replay.max_signers = unsigned_of(f.child("max_signers"), 1e7);
   if (s.replay.max_signers == 0)
     f.child("max_signers").fail("must be >= 1");
+  // Verify on demand (RsuCoreConfig::verify_beyond_coverage_m): a margin in metres, or "all".
+  if (f.has("verify_beyond_coverage_m")) {
+    const YamlField v = f.child("verify_beyond_coverage_m");
+    const std::string text = v.text();
+    char* end = nullptr;
+    const double margin = std::strtod(text.c_str(), &end);
+    if (text == "all")
+      c.core.verify_beyond_coverage_m.reset();
+    else if (text.empty() || *end != '\0' || !std::isfinite(margin) || margin < 0)
+      v.fail("expected a margin in metres (>= 0) or \"all\", got \"" + text + "\"");
+    else
+      c.core.verify_beyond_coverage_m = margin;
+  }
 }
 
 void read_logging(const YamlField& f, DaemonConfig& c) {
@@ -695,7 +709,13 @@ std::string summarize(const DaemonConfig& c) {
         << c.core.trust_list.count(v2i::security::SignerRole::kVehicle) << " vehicle key(s), "
         << c.core.trust_list.count(v2i::security::SignerRole::kRsu) << " RSU key(s); window -"
         << to_seconds(s.replay.max_age) << " s / +" << to_seconds(s.replay.max_future)
-        << " s, sequence window 64\n";
+        << " s, sequence window 64; ";
+    if (c.core.verify_beyond_coverage_m)
+      out << "announcements verified within " << c.core.coverage_radius_m + *c.core.verify_beyond_coverage_m
+          << " m of the LiDAR (coverage + " << *c.core.verify_beyond_coverage_m
+          << " m), dropped unverified beyond\n";
+    else
+      out << "every announcement verified\n";
   } else {
     out << "security INSECURE: nothing is signed or verified (local development only)\n";
   }

@@ -570,7 +570,7 @@ void RsuDaemon::start_v2i_reception() {
   v2i_receiver_ = std::make_unique<V2iReceiver>(
       v2i_socket_.native_handle(), io_, [this] { on_v2i_arrival(); },
       config_.core.security.mode == v2i::SecurityMode::kSigned, config_.core.trust_list, kMaxWaiting,
-      receiver_time_window());
+      receiver_time_window(), core::announcement_security(config_.core).verify_within);
   spdlog::info("V2I announcements read and their signatures checked on a thread of their own");
 }
 
@@ -646,7 +646,9 @@ void RsuDaemon::on_v2i_datagram(std::span<const std::uint8_t> datagram, const ud
   // A repeated sequence number is what a retransmitting vehicle does, and a signed datagram verified
   // already is also what a vehicle announcing to several RSUs looks like once a peer shared its copy
   // first (README, "Several RSUs on one bus"): counted, not warned about.
-  if ((outcome.stage == core::DatagramStage::kRegistry &&
+  // Nor is an announcement from beyond the verification radius (a vehicle in radio range, out of sight).
+  if (outcome.stage == core::DatagramStage::kBeyondVerification ||
+      (outcome.stage == core::DatagramStage::kRegistry &&
        outcome.upsert == v2i::UpsertOutcome::kDuplicateSequence) ||
       (outcome.stage == core::DatagramStage::kAuthentication &&
        outcome.auth == v2i::AuthVerdict::kDuplicate)) {
@@ -673,6 +675,7 @@ void RsuDaemon::on_peer_announcement(std::span<const std::uint8_t> datagram,
   }
   // Not news (the vehicle announced here too, or another peer shared it first): counted only.
   if (outcome.stage == core::DatagramStage::kNotFresher ||
+      outcome.stage == core::DatagramStage::kBeyondVerification ||
       (outcome.stage == core::DatagramStage::kRegistry &&
        outcome.upsert == v2i::UpsertOutcome::kDuplicateSequence)) {
     return;
@@ -967,7 +970,8 @@ void RsuDaemon::reload() {
     config_ = std::move(next);
     if (v2i_receiver_)
       v2i_receiver_->set_trust(config_.core.security.mode == v2i::SecurityMode::kSigned,
-                               config_.core.trust_list, receiver_time_window());
+                               config_.core.trust_list, receiver_time_window(),
+                               core::announcement_security(config_.core).verify_within);
     spdlog::set_level(spdlog::level::from_str(config_.logging.level));
     bad_input_.set_limits(config_.logging.bad_input_log_first, seconds(config_.logging.summary_interval_s));
     warn_if_insecure();

@@ -30,14 +30,16 @@ constexpr std::size_t kDatagramBytes = 65536;
 
 V2iReceiver::V2iReceiver(int socket_fd, boost::asio::io_context& io, std::function<void()> on_arrival,
                          bool verify, v2i::security::TrustList trust, std::size_t max_waiting,
-                         std::optional<v2i::security::ReplayConfig> window)
+                         std::optional<v2i::security::ReplayConfig> window,
+                         std::optional<v2i::VerificationRadius> verify_within)
     : socket_fd_(socket_fd),
       io_(io),
       on_arrival_(std::move(on_arrival)),
       max_waiting_(max_waiting),
       verify_(verify),
       trust_(std::make_shared<const v2i::security::TrustList>(std::move(trust))),
-      window_(window) {
+      window_(window),
+      verify_within_(verify_within) {
   wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
   if (wake_fd_ < 0)
     throw std::runtime_error(std::string("V2I receiver thread: eventfd: ") + std::strerror(errno));
@@ -59,12 +61,14 @@ void V2iReceiver::stop() {
 }
 
 void V2iReceiver::set_trust(bool verify, v2i::security::TrustList trust,
-                            std::optional<v2i::security::ReplayConfig> window) {
+                            std::optional<v2i::security::ReplayConfig> window,
+                            std::optional<v2i::VerificationRadius> verify_within) {
   auto next = std::make_shared<const v2i::security::TrustList>(std::move(trust));
   const std::lock_guard lock(trust_mutex_);
   verify_ = verify;
   trust_ = std::move(next);
   window_ = window;
+  verify_within_ = verify_within;
 }
 
 std::vector<ReceivedDatagram> V2iReceiver::take(std::size_t at_most) {
@@ -147,11 +151,13 @@ void V2iReceiver::run() {
       std::shared_ptr<const v2i::security::TrustList> trust;
       bool verify = false;
       std::optional<v2i::security::ReplayConfig> window;
+      std::optional<v2i::VerificationRadius> verify_within;
       {
         const std::lock_guard lock(trust_mutex_);
         trust = trust_;
         verify = verify_;
         window = window_;
+        verify_within = verify_within_;
       }
       const TimeNs now = edge::host_now_ns();
       for (int i = 0; i < n; ++i) {
@@ -165,8 +171,8 @@ void V2iReceiver::run() {
         d.sender.resize(length);
         d.received = arrival_in(headers[static_cast<std::size_t>(i)].msg_hdr);
         if (verify && window)
-          d.signature =
-              v2i::check_signature_ahead(d.bytes, *trust, {now, window->max_age, window->max_future});
+          d.signature = v2i::check_signature_ahead(d.bytes, *trust,
+                                                   {now, window->max_age, window->max_future}, verify_within);
         else if (verify)
           d.signature = v2i::check_signature_ahead(d.bytes, *trust);
         batch.push_back(std::move(d));

@@ -44,9 +44,12 @@ class V2iReceiver {
   // `window`: the time window (security.max_age_s, max_future_s) on the host's clock; a datagram generated
   // outside it is not checked ahead (the event loop refuses it before its signature). None: check all
   // (rsud replaying a capture runs on the capture's clock).
+  // `verify_within`: an announcement beyond it is not checked ahead either (with a window only; the event
+  // loop drops it unverified, v2i::VerificationRadius).
   V2iReceiver(int socket_fd, boost::asio::io_context& io, std::function<void()> on_arrival, bool verify,
               v2i::security::TrustList trust, std::size_t max_waiting,
-              std::optional<v2i::security::ReplayConfig> window);
+              std::optional<v2i::security::ReplayConfig> window,
+              std::optional<v2i::VerificationRadius> verify_within);
   ~V2iReceiver();
   V2iReceiver(const V2iReceiver&) = delete;
   V2iReceiver& operator=(const V2iReceiver&) = delete;
@@ -56,7 +59,8 @@ class V2iReceiver {
   // SIGHUP: later datagrams are checked against this list (RsuCore verifies again any checked against a
   // key the reloaded list no longer holds).
   void set_trust(bool verify, v2i::security::TrustList trust,
-                 std::optional<v2i::security::ReplayConfig> window);
+                 std::optional<v2i::security::ReplayConfig> window,
+                 std::optional<v2i::VerificationRadius> verify_within);
   // Up to `at_most` of the waiting datagrams, oldest first (event loop thread). When some are left,
   // the caller is expected to come back (no new on_arrival is posted until a take() empties the queue).
   std::vector<ReceivedDatagram> take(std::size_t at_most);
@@ -79,6 +83,7 @@ class V2iReceiver {
   bool verify_;
   std::shared_ptr<const v2i::security::TrustList> trust_;
   std::optional<v2i::security::ReplayConfig> window_;
+  std::optional<v2i::VerificationRadius> verify_within_;
 
   std::mutex queue_mutex_;
   std::deque<ReceivedDatagram> waiting_;

@@ -10,12 +10,23 @@
 
 namespace rsu::core {
 
+v2i::SecurityConfig announcement_security(const RsuCoreConfig& config) {
+  v2i::SecurityConfig security = config.security;
+  if (config.verify_beyond_coverage_m) {
+    security.verify_within =
+        v2i::VerificationRadius{.x = config.mount.x,
+                                .y = config.mount.y,
+                                .radius_m = config.coverage_radius_m + *config.verify_beyond_coverage_m};
+  }
+  return security;
+}
+
 AnnouncementIntake::AnnouncementIntake(const RsuCoreConfig& config)
     : rsu_id_(config.rsu_id),
       reply_to_policy_(config.reply_to),
       flood_limiter_(config.datagram_flood),
       peer_flood_limiter_(config.peers.flood),
-      authenticator_(config.security, config.trust_list),
+      authenticator_(announcement_security(config), config.trust_list),
       validator_(config.announcement_limits),
       registry_(config.registry) {}
 
@@ -45,6 +56,10 @@ std::optional<v2i::VehicleAnnouncement> AnnouncementIntake::screen(std::span<con
                                                                    std::optional<TimeNs> received) {
   v2i::AuthenticatedMessage authenticated = authenticator_.authenticate(bytes, now, checked);
   out.auth = authenticated.verdict;
+  if (authenticated.verdict == v2i::AuthVerdict::kNotNeeded) {
+    out.stage = DatagramStage::kBeyondVerification;
+    return std::nullopt;
+  }
   if (authenticated.verdict == v2i::AuthVerdict::kMalformed) {
     decode_counts_.add(authenticated.message.status);
     out.stage = DatagramStage::kDecode;
@@ -154,7 +169,7 @@ AnnouncementIntake AnnouncementIntake::reloaded(const RsuCoreConfig& next, TimeN
       fresh.registry_.upsert(v->announcement, v->source, v->last_heard);
   }
   fresh.authenticator_ = std::move(authenticator_);
-  fresh.authenticator_.reconfigure(next.security, next.trust_list);
+  fresh.authenticator_.reconfigure(announcement_security(next), next.trust_list);
   fresh.datagram_stages_ = datagram_stages_;
   fresh.peer_stages_ = peer_stages_;
   fresh.decode_counts_ = decode_counts_;

@@ -40,6 +40,10 @@ struct PeerProvenance {
   SourceEndpoint sender;            // the vehicle, as that RSU saw it (reply_to is checked against it)
 };
 
+// The security configuration the intake authenticates with: RsuCoreConfig::security with the
+// verification radius around the LiDAR (RsuCoreConfig::verify_beyond_coverage_m).
+v2i::SecurityConfig announcement_security(const RsuCoreConfig& config);
+
 class AnnouncementIntake {
  public:
   explicit AnnouncementIntake(const RsuCoreConfig& config);

@@ -21,6 +21,8 @@ const char* to_string(DatagramStage stage) {
       return "reply_to_mismatch";
     case DatagramStage::kRegistry:
       return "registry";
+    case DatagramStage::kBeyondVerification:
+      return "beyond_verification_radius";
     case DatagramStage::kFromSelf:
       return "from_self";
     case DatagramStage::kNotFresher:

@@ -25,6 +25,9 @@ enum class DatagramStage : std::uint8_t {
   kValidation,       // an announcement with implausible content (see `validation`)
   kReplyToMismatch,  // reply_to is not the sender's address and port (RsuCoreConfig::reply_to, `reply_to`)
   kRegistry,         // refused by the registry: rate limit, stale sequence, full (see `upsert`)
+  // Not a refusal: an announcement claiming a place beyond the verification radius (coverage radius +
+  // security.verify_beyond_coverage_m), dropped unverified (v2i::VerificationRadius: verify on demand).
+  kBeyondVerification,
   // Only for announcements shared by other RSUs (RsuCore::on_peer_announcement):
   kFromSelf,    // carries this RSU's own id: its own share echoed back, or another RSU with the same id
   kNotFresher,  // the registry already holds this announcement (same or newer sequence)

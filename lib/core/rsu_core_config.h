@@ -155,6 +155,14 @@ struct RsuCoreConfig {
   // Clusters whose fitted centre is farther than this from the LiDAR get no correction: beyond it the
   // fit is too sparse to beat the vehicle's own estimate (paper Table 2: VLP-16 beyond 36 m).
   double coverage_radius_m = 50.0;
+  // Verify on demand (v2i::VerificationRadius): an announcement claiming a place farther than the
+  // coverage radius plus this from the LiDAR is neither verified nor registered. Its vehicle is in radio
+  // range but out of sight, and there it costs no Ed25519 check (~50 us: 1000 vehicles at 10 Hz had taken
+  // half a core). The margin covers a vehicle driving in (registered 1.6 s before it reaches coverage at
+  // 30 m/s), a vehicle's own pose error far beyond the association gate's, and, on a bus of RSUs
+  // (README, "Several RSUs on one bus"), a neighbour up to 50 m away: only announcements this RSU verified
+  // are shared. None: verify every announcement.
+  std::optional<double> verify_beyond_coverage_m = 50.0;
 
   // V2I: validation limits, registry (expiry, capacity, per-source rate), association gates.
   v2i::AnnouncementLimits announcement_limits;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "v2i/message_authenticator.h"
 
+#include <cmath>
 #include <cstring>
 #include <variant>
 
@@ -72,7 +73,8 @@ bool signature_verifies(const Envelope& envelope, const security::PublicKey& key
 namespace {
 
 std::optional<SignatureCheck> check_ahead(std::span<const std::uint8_t> bytes,
-                                          const security::TrustList& trust, const TimeWindow* window) {
+                                          const security::TrustList& trust, const TimeWindow* window,
+                                          const std::optional<VerificationRadius>& verify_within) {
   const DecodedEnvelope decoded = decode_envelope(bytes);
   if (decoded.status != DecodeStatus::kOk)
     return std::nullopt;
@@ -84,7 +86,8 @@ std::optional<SignatureCheck> check_ahead(std::span<const std::uint8_t> bytes,
     const DecodedMessage payload = decode_payload(decoded.envelope);
     const TimeNs t = payload.header.generation_time;
     if (payload.status == DecodeStatus::kOk &&
-        (t < window->now - window->max_age || t > window->now + window->max_future))
+        (t < window->now - window->max_age || t > window->now + window->max_future ||
+         (verify_within && !verify_within->needs(payload.body))))
       return std::nullopt;
   }
   return SignatureCheck{entry->public_key, signature_verifies(decoded.envelope, entry->public_key)};
@@ -94,13 +97,23 @@ std::optional<SignatureCheck> check_ahead(std::span<const std::uint8_t> bytes,
 
 std::optional<SignatureCheck> check_signature_ahead(std::span<const std::uint8_t> bytes,
                                                     const security::TrustList& trust) {
-  return check_ahead(bytes, trust, nullptr);
+  return check_ahead(bytes, trust, nullptr, std::nullopt);
 }
 
 std::optional<SignatureCheck> check_signature_ahead(std::span<const std::uint8_t> bytes,
                                                     const security::TrustList& trust,
-                                                    const TimeWindow& window) {
-  return check_ahead(bytes, trust, &window);
+                                                    const TimeWindow& window,
+                                                    const std::optional<VerificationRadius>& verify_within) {
+  return check_ahead(bytes, trust, &window, verify_within);
+}
+
+bool VerificationRadius::needs(const MessageBody& body) const {
+  const auto* a = std::get_if<VehicleAnnouncement>(&body);
+  if (a == nullptr)
+    return true;
+  // A NaN or infinite pose is verified (validation then refuses it, counted by its reason).
+  return !(std::hypot(a->pose.x - x, a->pose.y - y) > radius_m) || !std::isfinite(a->pose.x) ||
+         !std::isfinite(a->pose.y);
 }
 
 const char* to_string(SecurityMode mode) {
@@ -135,6 +148,8 @@ const char* to_string(AuthVerdict verdict) {
       return "duplicate";
     case AuthVerdict::kTooOld:
       return "too_old";
+    case AuthVerdict::kNotNeeded:
+      return "not_needed";
     case AuthVerdict::kCount:
       break;
   }
@@ -190,6 +205,8 @@ AuthVerdict MessageAuthenticator::check(std::span<const std::uint8_t> bytes, Tim
       ++refused_before_signature_;
       return from_replay(early);
     }
+    if (config_.verify_within && !config_.verify_within->needs(payload.body))
+      return AuthVerdict::kNotNeeded;  // not verified, nothing recorded (VerificationRadius)
   }
   bool valid = false;
   if (checked != nullptr && checked->public_key == entry->public_key) {

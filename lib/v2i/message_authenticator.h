@@ -10,7 +10,8 @@
 // verifying what it then refused as stale) -> Ed25519 over kSigningContext || 0 || the payload bytes as
 // received -> payload parses -> signer's role and ids allow this body -> generation-time window ->
 // per-signer sequence window (only now is the signer's replay state updated, so a forger cannot move it).
-// Nothing in an unverified payload is returned or acted on.
+// Nothing in an unverified payload is returned or acted on. With a verification radius (verify on demand,
+// below), a vehicle announcement claiming a place beyond it is dropped after the windows, unverified.
 //
 // Insecure mode (local development only; the daemon and client warn loudly): any well-formed message
 // is taken without checking signature, time or sequence, and counted as accepted_unverified.
@@ -44,9 +45,27 @@ enum class SecurityMode : std::uint8_t {
 
 const char* to_string(SecurityMode mode);
 
+// Verify on demand: a receiver verifies what it may act on. V2X security (IEEE 1609.2, ETSI TS 103 097)
+// leaves to the receiver which messages it verifies, and stacks verify those that feed a decision; an RSU
+// acts on a vehicle's announcement only where its LiDAR may see the vehicle, while its radio hears
+// vehicles hundreds of metres away. A vehicle announcement whose pose lies farther than `radius_m` from
+// (x, y) is therefore not verified (AuthVerdict::kNotNeeded): nothing in it is used or recorded, so a
+// forged one changes nothing, and a genuine one is verified as soon as its vehicle claims a place within
+// the radius. Every other message, and an announcement whose pose is not finite, is verified.
+struct VerificationRadius {
+  double x = 0.0;
+  double y = 0.0;
+  double radius_m = 0.0;
+
+  // Whether `body` must be verified before it is refused or used.
+  bool needs(const MessageBody& body) const;
+  bool operator==(const VerificationRadius&) const = default;
+};
+
 struct SecurityConfig {
   SecurityMode mode = SecurityMode::kSigned;
   security::ReplayConfig replay;
+  std::optional<VerificationRadius> verify_within;  // none: verify every message (the library's default)
 };
 
 enum class AuthVerdict : std::uint8_t {
@@ -63,6 +82,7 @@ enum class AuthVerdict : std::uint8_t {
   kFuture,              // generated more than max_future after now
   kDuplicate,           // the signer's sequence number was already accepted
   kTooOld,              // the sequence number fell behind the window, or predates a restart
+  kNotNeeded,           // an announcement beyond the verification radius: dropped unverified (not a refusal)
   kCount,
 };
 
@@ -102,9 +122,10 @@ struct TimeWindow {
 
 // The same, but nothing for a message generated outside `window` (authenticate() refuses it before its
 // signature): a receiver thread behind with a backlog does not verify what is refused as stale anyway.
-std::optional<SignatureCheck> check_signature_ahead(std::span<const std::uint8_t> bytes,
-                                                    const security::TrustList& trust,
-                                                    const TimeWindow& window);
+// Nor for an announcement beyond `verify_within`, when given (authenticate() drops it unverified).
+std::optional<SignatureCheck> check_signature_ahead(
+    std::span<const std::uint8_t> bytes, const security::TrustList& trust, const TimeWindow& window,
+    const std::optional<VerificationRadius>& verify_within = {});
 
 class MessageAuthenticator {
  public:
@@ -130,6 +151,8 @@ class MessageAuthenticator {
   std::uint64_t signatures_checked_ahead() const { return signatures_checked_ahead_; }
   // Refused by the time window or the signer's sequence window before their signature was checked.
   std::uint64_t refused_before_signature() const { return refused_before_signature_; }
+  // Announcements dropped unverified beyond the verification radius (counted as kNotNeeded too).
+  std::uint64_t not_needed() const { return counts_.count(AuthVerdict::kNotNeeded); }
 
  private:
   AuthVerdict check(std::span<const std::uint8_t> bytes, TimeNs now, const SignatureCheck* checked,

@@ -242,6 +242,76 @@ TEST(RsuCoreSecurity, ReloadKeepsReplayStateAndAppliesTheNewTrustList) {
   EXPECT_EQ(core.on_datagram(bytes, from("192.0.2.10"), kNow + 4).reason(), "auth:duplicate");  // remembered
 }
 
+// Verify on demand (RsuCoreConfig::verify_beyond_coverage_m): a vehicle in radio range but out of
+// sight is neither verified nor registered, and is the moment it claims a place within coverage + margin
+// (of the LiDAR's position, not the map's origin); a peer's share of it likewise; a reload applies a new
+// margin, and "all" (none) verifies everything again.
+TEST(RsuCoreSecurity, AnnouncementsBeyondCoveragePlusMarginAreNeitherVerifiedNorRegistered) {
+  Keys keys;
+  RsuCoreConfig config = signed_config(keys);
+  config.coverage_radius_m = 50.0;
+  config.verify_beyond_coverage_m = 30.0;  // 80 m from the LiDAR at (2, -3)
+  RsuCore core(config);
+  v2i::MessageSigner car1(keys.car1);
+  const std::string host = "192.0.2.10";
+  const auto signed_at = [&](std::uint32_t seq, double x, double y) {
+    return car1.encode(announce(1, seq, kNow, {x, y, 0.0}, host), kNow);
+  };
+  const auto verified = [&] {
+    for (const auto& [name, value] : core.counters())
+      if (name == "auth.signatures_verified")
+        return value;
+    ADD_FAILURE() << "auth.signatures_verified not listed";
+    return std::uint64_t{0};
+  };
+  // Driving in along y = -3 from 200 m: dropped unverified until 80 m from the LiDAR.
+  std::uint32_t seq = 1;
+  for (double x = 202.0; x > 82.5; x -= 10.0)
+    EXPECT_EQ(core.on_datagram(signed_at(seq++, x, -3.0), from(host), kNow).reason(),
+              "beyond_verification_radius")
+        << x;
+  EXPECT_EQ(verified(), 0U);
+  EXPECT_EQ(core.registry().size(), 0U);
+  // 79.9 m from the LiDAR (but 80.0 m from the map's origin): verified and registered.
+  EXPECT_EQ(core.on_datagram(signed_at(seq++, 81.9, -3.0), from(host), kNow + 1).reason(), "accepted:added");
+  EXPECT_EQ(verified(), 1U);
+  // A forgery claiming a far place for car 1 changes nothing, and costs no verification.
+  std::vector<std::uint8_t> forged = signed_at(seq, 300.0, -3.0);
+  forged[forged.size() - 5] ^= 0x01;  // in the signature, the envelope's last field
+  EXPECT_EQ(core.on_datagram(forged, from(host), kNow + 2).reason(), "beyond_verification_radius");
+  EXPECT_EQ(verified(), 1U);
+  EXPECT_EQ(core.on_datagram(signed_at(seq++, 70.0, -3.0), from(host), kNow + 3).reason(),
+            "accepted:updated");
+  EXPECT_EQ(core.registry().find(1, kNow + 3)->announcement.pose.x, 70.0);
+  // A peer's share of car 2 out of sight: not registered; within the radius: registered.
+  const PeerProvenance shared{.origin_rsu_id = kRsuId + 1, .sender = {"192.0.2.20", 40000}};
+  v2i::MessageSigner car2(keys.car2);
+  EXPECT_EQ(core.on_peer_announcement(car2.encode(announce(2, 1, kNow, {2.0, 90.0, 0.0}, "192.0.2.20"), kNow),
+                                      shared, kNow + 4)
+                .reason(),
+            "beyond_verification_radius");
+  EXPECT_EQ(core.on_peer_announcement(car2.encode(announce(2, 2, kNow, {2.0, 70.0, 0.0}, "192.0.2.20"), kNow),
+                                      shared, kNow + 5)
+                .reason(),
+            "accepted:added");
+  EXPECT_EQ(core.datagram_stages().count(DatagramStage::kBeyondVerification), 13U);
+  EXPECT_EQ(core.peer_stages().count(DatagramStage::kBeyondVerification), 1U);
+  bool listed = false;
+  for (const auto& [name, value] : core.counters()) {
+    if (name == "datagram.beyond_verification_radius") {
+      listed = true;
+      EXPECT_EQ(value, 13U);
+    }
+  }
+  EXPECT_TRUE(listed);
+  // Reloaded with every announcement verified: the far one is verified (and accepted).
+  config.verify_beyond_coverage_m.reset();
+  core.reload(config, kNow + 6);
+  EXPECT_EQ(core.on_datagram(signed_at(seq++, 300.0, -3.0), from(host), kNow + 7).reason(),
+            "accepted:updated");
+  EXPECT_EQ(verified(), 4U);
+}
+
 TEST(RsuCoreSecurity, InsecureModeSendsUnsignedAndSaysSo) {
   Keys keys;
   RsuCoreConfig c = signed_config(keys);

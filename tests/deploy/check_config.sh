@@ -31,6 +31,11 @@ sed "s|/etc/rsud/keys/|$work/keys/|" "$shipped" > "$config"
 out=$("$rsud" --check-config --config "$config") || { echo "FAIL: the shipped configuration is refused"; exit 1; }
 case "$out" in *"security signed: key "*"1 vehicle key(s)"*) ;; *) echo "FAIL: no security summary in: $out"; exit 1 ;; esac
 case "$out" in *"readable by group"*) echo "FAIL: rsu-keygen's key reported readable: $out"; exit 1 ;; esac
+case "$out" in *"announcements verified within 100 m of the LiDAR (coverage + 50 m)"*) ;;
+  *) echo "FAIL: no verification radius in: $out"; exit 1 ;; esac
+sed 's/^  verify_beyond_coverage_m: 50 /  verify_beyond_coverage_m: all /' "$config" > "$work/verify_all.yaml"
+out=$("$rsud" --check-config --config "$work/verify_all.yaml") || { echo "FAIL: verify all refused"; exit 1; }
+case "$out" in *"every announcement verified"*) ;; *) echo "FAIL: verify all not reported: $out"; exit 1 ;; esac
 # A secret key others can read is reported.
 cp "$work/keys/rsu.key" "$work/keys/open.key" && chmod 644 "$work/keys/open.key"
 sed "s|$work/keys/rsu.key|$work/keys/open.key|" "$config" > "$work/open_key.yaml"
@@ -51,6 +56,8 @@ sed 's/^  capacity: 256/  capacitty: 256/' "$config" > "$work/typo.yaml"
 expect_refused typo "registry.capacitty: unknown field"
 sed 's/^  port: 4500/  port: 70000/' "$config" > "$work/bad_port.yaml"
 expect_refused bad_port "v2i.port: must be a port number"
+sed 's/^  verify_beyond_coverage_m: 50 /  verify_beyond_coverage_m: -5 /' "$config" > "$work/bad_margin.yaml"
+expect_refused bad_margin "security.verify_beyond_coverage_m: expected a margin in metres (>= 0) or \"all\", got \"-5\""
 printf 'rsu_id: 1\nlidar: [1, 2\n' > "$work/syntax.yaml"
 expect_refused syntax "syntax.yaml:"
 # Security: a missing key file, a malformed key, a malformed trust list, no security section at all.

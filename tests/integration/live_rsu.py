@@ -90,11 +90,12 @@ class LiveRsu:
         self.trust_list = self.path("fleet.trust")
 
     def write_config(self, reorder_packets=0, capacity=256, learning_frames=None, extra="", signed=False,
-                     verifier_thread=False, advertise_port=None):
+                     verifier_thread=False, advertise_port=None, verify_beyond_coverage=None):
         """rsud.yaml; signed: verify the fleet's signatures (call make_keys() and write the fleet's trust
         list first, fleet(write_trust_list=...)), else insecure mode; verifier_thread: rsud's
         v2i.verifier_thread (False: announcements read and verified on its event loop's thread);
-        advertise_port: rsud advertises to 127.0.0.1:advertise_port every 0.2 s."""
+        advertise_port: rsud advertises to 127.0.0.1:advertise_port every 0.2 s; verify_beyond_coverage:
+        security.verify_beyond_coverage_m (a margin in m, or "all"; None: rsud's default)."""
         mount = self.scene["lidar"].get("mount", {})
         lidar_input = "%s: {bind_address: 127.0.0.1, port: %d%s}" % (
             "udp" if self.ouster_options else "velodyne_udp", self.lidar_port,
@@ -126,7 +127,10 @@ logging:
          "true" if verifier_thread else "false",
          "  advertisement: {enabled: true, address: 127.0.0.1, port: %d, interval_s: 0.2}\n" % advertise_port
          if advertise_port else "",
-         "{mode: signed, key_file: %s, trust_list_file: %s}" % (self.path("rsu.key"), self.trust_list) if signed
+         "{mode: signed, key_file: %s, trust_list_file: %s%s}" % (
+             self.path("rsu.key"), self.trust_list,
+             "" if verify_beyond_coverage is None else ", verify_beyond_coverage_m: %s" % verify_beyond_coverage)
+         if signed
          else "mode: insecure", capacity, self.path("stats"), extra)
         with open(self.path("rsud.yaml"), "w") as f:
             f.write(text)

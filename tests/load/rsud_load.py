@@ -173,6 +173,7 @@ def run(args):
             h.make_keys()
             h.write_trust_list(extra=args.vehicles - len(IN_VIEW))
         h.write_config(capacity=args.vehicles + 64, signed=args.signed, verifier_thread=args.verifier_thread,
+                       verify_beyond_coverage=args.verify_beyond_coverage,
                        learning_frames=3 if args.ouster else None,
                        extra={"on": "", "off": "mount_integrity: {enabled: false}\n",
                               "on-loop": "mount_integrity: {check_thread: false}\n"}[args.mount_integrity] +
@@ -265,7 +266,7 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
     not_rejections = ("datagram.accepted", "auth.accepted", "auth.accepted_unverified", "auth.signers_tracked",
                       "auth.sequence_restarts", "auth.signers_evicted", "auth.trusted_keys",
                       "auth.signatures_verified", "auth.signatures_checked_ahead",
-                      "auth.refused_before_signature")
+                      "auth.refused_before_signature", "auth.not_needed", "datagram.beyond_verification_radius")
     rejected = {k: int(v) for k, v in s.items() if v > 0 and k not in not_rejections and k.startswith(
         ("datagram.", "auth.", "validation.", "decode.", "registry.rate_limited", "registry.registry_full",
          "registry.too_many_sources", "registry.stale_sequence", "registry.duplicate_sequence"))}
@@ -288,10 +289,11 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
         count("packet.accepted"), count("decoder.columns_skipped"), count("decoder.frames_complete")))
     print("rsud counted: v2i.kernel_drops %s, lidar.kernel_drops %s, LiDAR packets lost %s, shed too late %s; "
           "signatures verified on the loop %s, checked ahead on the receiver thread %s, refused before their "
-          "signature was checked %s, dropped with its queue full %s (most waiting %s)" % (
+          "signature was checked %s, not verified beyond coverage + margin %s, dropped with its queue full %s "
+          "(most waiting %s)" % (
               count("v2i.kernel_drops"), count("lidar.kernel_drops"), count("packet.lost"), count("packet.too_late"),
               count("auth.signatures_verified"), count("auth.signatures_checked_ahead"),
-              count("auth.refused_before_signature"),
+              count("auth.refused_before_signature"), count("datagram.beyond_verification_radius"),
               count("v2i.receiver_queue_full"), count("v2i.receiver_waiting_max")))
     print("rsud counted: fixes prepared ahead of their release %s, of them used by it %s (issue 16: a release "
           "whose fix was not prepared computes it; one prepared and not used was computed twice)" % (
@@ -362,6 +364,16 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
         assert p99 < 50.0, "p99 latency %.1f ms" % p99
         assert unmatched == 0 and last_latency, "%d corrections without a pass over their vehicle" % unmatched
         assert abs(slope) < 5.0, "RSS grows %.2f MB/min" % slope
+        if args.signed and args.verify_beyond_coverage != "all":
+            # Verify on demand: the fleet's vehicles beyond coverage + margin (most of them, 80-280 m out)
+            # are dropped unverified, every other datagram rsud read is accepted.
+            beyond = int(s.get("datagram.beyond_verification_radius", 0))
+            accepted = int(s.get("datagram.accepted", 0))
+            read = summary["sent"] - (int(kernel_drops) if str(kernel_drops).isdigit() else 0)
+            assert beyond > summary["sent"] // 2, "only %d dropped unverified beyond the radius" % beyond
+            # (The last few may still have waited in the socket when rsud was stopped.)
+            assert read - 50 <= beyond + accepted <= read, "%d + %d of %d announcements" % (beyond, accepted, read)
+            assert int(s.get("auth.signatures_verified", 0)) == accepted, "verified other than accepted"
         print("ok")
     return 0
 
@@ -374,6 +386,9 @@ def main():
     ap.add_argument("--smoke", action="store_true", help="200 vehicles for 5 s, with the assertions")
     ap.add_argument("--check", action="store_true", help="assert (see above)")
     ap.add_argument("--signed", action="store_true", help="signed announcements (rsud verifies every one)")
+    ap.add_argument("--verify-beyond-coverage", default=None, metavar="M|all",
+                    help="with --signed: rsud's security.verify_beyond_coverage_m (default: rsud's, 50 m; "
+                         "all: verify every announcement, as before verification on demand)")
     ap.add_argument("--verifier-thread", action="store_true",
                     help="rsud reads and verifies announcements on a receiver thread (v2i.verifier_thread: "
                          "true), not on its event loop's thread")

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -186,6 +188,77 @@ TEST_F(MessageAuthenticatorTest, WindowRefusalsComeBeforeTheSignature) {
   EXPECT_EQ(auth_.signatures_checked_ahead(), 1U);
 }
 
+// Verify on demand (VerificationRadius): an announcement claiming a place beyond the radius is dropped
+// unverified, whatever its signature, and leaves no trace; within it, or with a pose that is not finite,
+// or any other message, is verified as before.
+TEST(VerificationRadius, AnAnnouncementBeyondItIsDroppedUnverifiedAndLeavesNoTrace) {
+  const Keys keys;
+  const VerificationRadius radius{.x = 10.0, .y = -5.0, .radius_m = 100.0};
+  MessageAuthenticator auth({.mode = SecurityMode::kSigned, .replay = {}, .verify_within = radius},
+                            keys.trust());
+  const auto at = [&](double x, double y, std::uint32_t seq, const SigningKey* key) {
+    VehicleAnnouncement a = testing::make_announcement(kVehicle, seq, kNow);
+    a.pose.x = x;
+    a.pose.y = y;
+    return encode_v2i_message(a, {kNow, seq}, key);
+  };
+  const auto forge = [](const std::vector<std::uint8_t>& bytes) {
+    return tamper(bytes, [](auto& m) { m.mutable_signature()->front() ^= 1; });
+  };
+  // Distances from (10, -5): 100.0 exactly (kept), 100.01 and 250 (dropped), in every direction.
+  for (int k = 0; k < 8; ++k) {
+    const double a = k * 0.785398;
+    const auto s = static_cast<std::uint32_t>(100 + 10 * k);
+    EXPECT_EQ(
+        auth.authenticate(forge(at(10 + 100.01 * std::cos(a), -5 + 100.01 * std::sin(a), s, &keys.car)), kNow)
+            .verdict,
+        AuthVerdict::kNotNeeded)
+        << k;
+    EXPECT_EQ(
+        auth.authenticate(at(10 + 250 * std::cos(a), -5 + 250 * std::sin(a), s + 1, &keys.car), kNow).verdict,
+        AuthVerdict::kNotNeeded)
+        << k;
+    EXPECT_EQ(auth.authenticate(
+                      forge(at(10 + 99.99 * std::cos(a), -5 + 99.99 * std::sin(a), s + 2, &keys.car)), kNow)
+                  .verdict,
+              AuthVerdict::kBadSignature)
+        << k;
+  }
+  EXPECT_EQ(auth.signatures_verified(), 8U);  // only the eight within the radius
+  EXPECT_EQ(auth.not_needed(), 16U);
+  // Nothing was recorded: the genuine announcements with the dropped sequence numbers are fresh, once.
+  EXPECT_EQ(auth.authenticate(at(10, -5, 100, &keys.car), kNow).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(auth.authenticate(at(10, -5, 101, &keys.car), kNow).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(auth.authenticate(at(10, -5, 101, &keys.car), kNow).verdict, AuthVerdict::kDuplicate);
+  // A pose that is not finite is verified (validation refuses it later, by its reason).
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(auth.authenticate(forge(at(nan, 0, 200, &keys.car)), kNow).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth.authenticate(forge(at(inf, 0, 201, &keys.car)), kNow).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth.authenticate(forge(at(0, -inf, 202, &keys.car)), kNow).verdict, AuthVerdict::kBadSignature);
+  // Unsigned, unknown signers and the windows refuse first, by their own reasons.
+  EXPECT_EQ(auth.authenticate(at(500, 0, 300, nullptr), kNow).verdict, AuthVerdict::kUnsigned);
+  EXPECT_EQ(auth.authenticate(at(500, 0, 301, &keys.stranger), kNow).verdict, AuthVerdict::kUnknownSigner);
+  EXPECT_EQ(auth.authenticate(at(500, 0, 101, &keys.car), kNow).verdict, AuthVerdict::kDuplicate);
+  // Other messages are verified wherever they say anything is.
+  MessageSigner rsu(keys.rsu);
+  Correction far = correction_from(kRsu);
+  far.pose = {900.0, 900.0, 0.0};
+  EXPECT_EQ(auth.authenticate(forge(rsu.encode(far, kNow)), kNow).verdict, AuthVerdict::kBadSignature);
+  // Checked ahead (rsud's receiver thread): not verified there either.
+  const TimeWindow window{kNow, 1000 * kNsPerMs, 1000 * kNsPerMs};
+  EXPECT_FALSE(check_signature_ahead(at(10, 96, 400, &keys.car), keys.trust(), window, radius));
+  const auto near = check_signature_ahead(at(10, 94, 401, &keys.car), keys.trust(), window, radius);
+  ASSERT_TRUE(near);
+  EXPECT_TRUE(near->valid);
+  EXPECT_TRUE(check_signature_ahead(at(10, 96, 402, &keys.car), keys.trust(), window));  // no radius
+  // Without a radius (the library's default) everything is verified.
+  MessageAuthenticator everything(SecurityConfig{}, keys.trust());
+  EXPECT_EQ(everything.authenticate(forge(at(10, 5000, 500, &keys.car)), kNow).verdict,
+            AuthVerdict::kBadSignature);
+  EXPECT_EQ(everything.not_needed(), 0U);
+}
+
 TEST_F(MessageAuthenticatorTest, SignedGarbageIsMalformedNotAccepted) {
   std::string payload = "\xFF\xFF\xFF";
   v2::SignedV2iMessage m;
@@ -225,7 +298,8 @@ TEST_F(MessageAuthenticatorTest, ForwardedOriginalBytesVerifyOnce) {
 }
 
 TEST_F(MessageAuthenticatorTest, InsecureModeTakesWellFormedMessagesUnchecked) {
-  MessageAuthenticator insecure(SecurityConfig{.mode = SecurityMode::kInsecure, .replay = {}}, {});
+  MessageAuthenticator insecure(
+      SecurityConfig{.mode = SecurityMode::kInsecure, .replay = {}, .verify_within = {}}, {});
   const std::vector<std::uint8_t> unsigned_bytes = announcement(nullptr, 1, kNow - 60 * kNsPerSecond);
   EXPECT_EQ(insecure.authenticate(unsigned_bytes, kNow).verdict, AuthVerdict::kAcceptedUnverified);
   EXPECT_EQ(insecure.authenticate(unsigned_bytes, kNow).verdict, AuthVerdict::kAcceptedUnverified);

@@ -15,7 +15,10 @@ constexpr std::uint64_t kVehicleId = 99;
 constexpr TimeNs kNow = 1'700'000'000 * kNsPerSecond;
 
 CorrectionFilterConfig insecure(std::size_t max_tracked_rsus) {
-  return {kVehicleId, max_tracked_rsus, {.mode = v2i::SecurityMode::kInsecure, .replay = {}}, {}};
+  return {kVehicleId,
+          max_tracked_rsus,
+          {.mode = v2i::SecurityMode::kInsecure, .replay = {}, .verify_within = {}},
+          {}};
 }
 
 v2i::Correction correction(std::uint64_t rsu_id, std::uint32_t sequence, TimeNs sweep_time) {
