@@ -1021,8 +1021,9 @@ TEST(AzimuthThinning, FixStatesTheCoarserSpacing) {
 // from all its points: the fix is the same bit for bit as with thinning off.
 TEST(AzimuthThinning, ClusterUnderTheThresholdIsUntouched) {
   const Traces dense = near_dense_car();
-  // A car 10 m from a VLP-32C 2 m up: 1,358 points (at 3.6 m it holds 2,177, thinned).
-  const View sparse = look(lidar::make_vlp32c(), 2.0, sim::VehicleShape{}, {1.5, 10.0, deg_to_rad(8.0)});
+  // A car 20 m from a VLP-32C 2 m up: under the threshold (at 10 m it holds 1,358 points, at 3.6 m 2,177).
+  const View sparse = look(lidar::make_vlp32c(), 2.0, sim::VehicleShape{}, {1.5, 20.0, deg_to_rad(8.0)});
+  ASSERT_GE(sparse.points.size(), 400U);  // a cluster that is not trivially small
   ASSERT_LE(sparse.points.size(), VehicleFixConfig{}.thin_above_points);
   View unknown_lasers = dense.view;
   unknown_lasers.lidar.elevations_rad.clear();
