@@ -111,9 +111,9 @@ bool VerificationRadius::needs(const MessageBody& body) const {
   const auto* a = std::get_if<VehicleAnnouncement>(&body);
   if (a == nullptr)
     return true;
-  // A NaN or infinite pose is verified (validation then refuses it, counted by its reason).
-  return !(std::hypot(a->pose.x - x, a->pose.y - y) > radius_m) || !std::isfinite(a->pose.x) ||
-         !std::isfinite(a->pose.y);
+  // A NaN or infinite pose (so distance) is verified: validation then refuses it, counted by its reason.
+  const double distance = std::hypot(a->pose.x - x, a->pose.y - y);
+  return !(distance > radius_m && std::isfinite(distance));
 }
 
 const char* to_string(SecurityMode mode) {

@@ -59,7 +59,6 @@ struct VerificationRadius {
 
   // Whether `body` must be verified before it is refused or used.
   bool needs(const MessageBody& body) const;
-  bool operator==(const VerificationRadius&) const = default;
 };
 
 struct SecurityConfig {
@@ -151,8 +150,6 @@ class MessageAuthenticator {
   std::uint64_t signatures_checked_ahead() const { return signatures_checked_ahead_; }
   // Refused by the time window or the signer's sequence window before their signature was checked.
   std::uint64_t refused_before_signature() const { return refused_before_signature_; }
-  // Announcements dropped unverified beyond the verification radius (counted as kNotNeeded too).
-  std::uint64_t not_needed() const { return counts_.count(AuthVerdict::kNotNeeded); }
 
  private:
   AuthVerdict check(std::span<const std::uint8_t> bytes, TimeNs now, const SignatureCheck* checked,

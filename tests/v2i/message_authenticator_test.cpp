@@ -225,7 +225,7 @@ TEST(VerificationRadius, AnAnnouncementBeyondItIsDroppedUnverifiedAndLeavesNoTra
         << k;
   }
   EXPECT_EQ(auth.signatures_verified(), 8U);  // only the eight within the radius
-  EXPECT_EQ(auth.not_needed(), 16U);
+  EXPECT_EQ(auth.counts().count(AuthVerdict::kNotNeeded), 16U);
   // Nothing was recorded: the genuine announcements with the dropped sequence numbers are fresh, once.
   EXPECT_EQ(auth.authenticate(at(10, -5, 100, &keys.car), kNow).verdict, AuthVerdict::kAccepted);
   EXPECT_EQ(auth.authenticate(at(10, -5, 101, &keys.car), kNow).verdict, AuthVerdict::kAccepted);
@@ -256,7 +256,7 @@ TEST(VerificationRadius, AnAnnouncementBeyondItIsDroppedUnverifiedAndLeavesNoTra
   MessageAuthenticator everything(SecurityConfig{}, keys.trust());
   EXPECT_EQ(everything.authenticate(forge(at(10, 5000, 500, &keys.car)), kNow).verdict,
             AuthVerdict::kBadSignature);
-  EXPECT_EQ(everything.not_needed(), 0U);
+  EXPECT_EQ(everything.counts().count(AuthVerdict::kNotNeeded), 0U);
 }
 
 TEST_F(MessageAuthenticatorTest, SignedGarbageIsMalformedNotAccepted) {
