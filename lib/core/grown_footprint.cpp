@@ -29,8 +29,10 @@ GrownFootprint::GrownFootprint(const tracking::VehicleHypothesis& h, const Gathe
   const Eigen::Rotation2Dd r(h.yaw);
   std::size_t k = 0;
   for (const double sx : {-1.0, 1.0}) {
-    for (const double sy : {-1.0, 1.0})
-      corners_[k++] = h.centre + r * Eigen::Vector2d(sx * half_.x(), sy * half_.y());
+    for (const double sy : {-1.0, 1.0}) {
+      corners_[k] = h.centre + r * Eigen::Vector2d(sx * half_.x(), sy * half_.y());
+      tight_corners_[k++] = h.centre + r * Eigen::Vector2d(sx * tight_half_.x(), sy * tight_half_.y());
+    }
   }
 }
 

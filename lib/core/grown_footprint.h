@@ -33,6 +33,8 @@ class GrownFootprint {
   bool inside_lane(const perception::Detection& detection) const;
 
   const std::array<Eigen::Vector2d, 4>& corners() const { return corners_; }
+  // The corners of the footprint grown by the minimum margin and one sigma (as tightly_inside).
+  const std::array<Eigen::Vector2d, 4>& tight_corners() const { return tight_corners_; }
   // Whether `box` (map frame, axis-aligned) shares any place with the footprint grown by the minimum
   // margin and one sigma only (as tightly_inside): where a fragment of the vehicle itself may lie.
   bool tightly_overlaps(const Eigen::AlignedBox2d& box) const;
@@ -47,6 +49,7 @@ class GrownFootprint {
   Eigen::Vector2d lane_half_;   // grown along, tight across
   double min_inside_fraction_;
   std::array<Eigen::Vector2d, 4> corners_;
+  std::array<Eigen::Vector2d, 4> tight_corners_;
 };
 
 }  // namespace rsu::core

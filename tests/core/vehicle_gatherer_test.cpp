@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The grown footprint's overlap with a box against an independent test (corners inside, edges
 // crossing), and the gatherer's hold for a farther cluster still open where the vehicle may be
-// (perception::SweptCluster::open_beyond; issue 16).
+// (perception::SweptCluster::open_beyond) or a nearer one (ahead_of_open; issue 16).
 #include <gtest/gtest.h>
 
 #include <array>
@@ -82,6 +82,22 @@ Polygon tight_footprint(const tracking::VehicleHypothesis& v) {
           v.centre + r * Eigen::Vector2d(-half.x(), half.y())};
 }
 
+constexpr TimeNs kNow = 2'000'000'000;
+
+// A single-laser sensor at 10 Hz whose newest point, fired at kNow, is just past a car 10 m east at
+// y < 0 (clockwise) and short of its footprints' far corners.
+SweepPosition sweep_past_car(const LidarMount& mount) {
+  lidar::SweepGeometry geometry;
+  geometry.rotation_hz = 10.0;
+  geometry.ring_azimuth_offset_rad = {0.0};
+  SweepPosition sweep(mount, 0.7, 0.5, geometry);
+  lidar::LidarPoint newest;
+  newest.azimuth_rad = static_cast<float>(std::atan2(3.0, 10.0));
+  newest.time_ns = kNow;
+  sweep.advance(std::span<const lidar::LidarPoint>(&newest, 1));
+  return sweep;
+}
+
 TEST(GrownFootprint, TightlyOverlapsABoxExactlyWhenTheyShareAPlace) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> coordinate(-6.0, 6.0);
@@ -112,18 +128,10 @@ TEST(GrownFootprint, TightlyOverlapsABoxExactlyWhenTheyShareAPlace) {
 // (another car passing behind it) it is released at once.
 TEST(VehicleGatherer, HoldsForAFartherOpenClusterOnlyWhereTheVehicleMayBe) {
   const LidarMount mount(Pose3{});
-  lidar::SweepGeometry geometry;
-  geometry.rotation_hz = 10.0;
-  geometry.ring_azimuth_offset_rad = {0.0};
-  SweepPosition sweep(mount, 0.7, 0.5, geometry);
-  const TimeNs now = 2'000'000'000;
-  lidar::LidarPoint newest;
-  newest.azimuth_rad = static_cast<float>(std::atan2(3.0, 10.0));  // clockwise: just past the car at y < 0
-  newest.time_ns = now;
-  sweep.advance(std::span<const lidar::LidarPoint>(&newest, 1));
+  const SweepPosition sweep = sweep_past_car(mount);
   const tracking::VehicleHypothesis vehicle = car({10.0, -0.5}, 0.0);
   perception::Detection own;
-  own.sweep_time_ns = now - 1'000'000;
+  own.sweep_time_ns = kNow - 1'000'000;
   for (double x = 8.0; x <= 12.0; x += 0.1)
     own.points.emplace_back(x, 0.35, 0.8);  // its near side
   tracking::AssociationResult association;
@@ -141,12 +149,68 @@ TEST(VehicleGatherer, HoldsForAFartherOpenClusterOnlyWhereTheVehicleMayBe) {
   EXPECT_EQ(release_at({}), own.sweep_time_ns);
   const Eigen::AlignedBox2d roof(Eigen::Vector2d(9.0, -1.2), Eigen::Vector2d(11.0, -0.3));
   const TimeNs held = release_at({roof});
-  EXPECT_GT(held, now);
+  EXPECT_GT(held, kNow);
   const GrownFootprint footprint(vehicle, GatheringConfig{});
   EXPECT_EQ(held, sweep.passed_time(footprint.corners()));
   const Eigen::AlignedBox2d behind(Eigen::Vector2d(8.0, -6.0), Eigen::Vector2d(12.0, -4.5));
   EXPECT_FALSE(footprint.tightly_overlaps(behind));
   EXPECT_EQ(release_at({behind}), own.sweep_time_ns);
+}
+
+// The same car behind a nearer cluster still open in its line of sight (a car passing in front): held
+// until the sweep has passed its own place, whichever of its two footprints that reaches first. Stated
+// 0.5 m uncertain (the fleet's announcements), the one grown by 2.5 sigma reaches 1.85 m beyond the box
+// and the one grown by the minimum margin and one sigma 0.9 m: the hold ends with the latter, earlier.
+// Stated 0.1 m, the grown one (0.4 m) is the smaller. A car whose assigned cluster lies outside its
+// tight footprint (maybe a neighbour's) is held for the whole grown one, as before.
+TEST(VehicleGatherer, BehindANearerOpenClusterHoldsUntilTheSweepPassedTheSmallerFootprint) {
+  const LidarMount mount(Pose3{});
+  const SweepPosition sweep = sweep_past_car(mount);
+  perception::Detection seen;
+  seen.sweep_time_ns = kNow - 1'000'000;
+  seen.ahead_of_open = true;
+  for (double x = 8.0; x <= 12.0; x += 0.1)
+    seen.points.emplace_back(x, 0.35, 0.8);
+  tracking::AssociationResult association;
+  association.pairs.push_back({0, 0, 0.5});
+  const auto release_at = [&](const tracking::VehicleHypothesis& vehicle, const perception::Detection& d) {
+    VehicleGatherer gatherer({}, {}, mount.xy());
+    std::vector<perception::Detection> detections{d};
+    gatherer.gather(std::move(detections), std::span<const tracking::VehicleHypothesis>(&vehicle, 1),
+                    association, sweep);
+    EXPECT_EQ(gatherer.held().size(), 1U);
+    return gatherer.held().empty() ? TimeNs{0} : gatherer.held().front().release_at;
+  };
+  // Every corner of a footprint as far as it reaches: the box's half extents plus `grow`.
+  const auto corners_grown = [](const tracking::VehicleHypothesis& v, double grow) {
+    std::vector<Eigen::Vector2d> c;
+    for (const double sx : {-1.0, 1.0}) {
+      for (const double sy : {-1.0, 1.0})
+        c.push_back(v.centre +
+                    Eigen::Vector2d(sx * (0.5 * v.size.length_m + grow), sy * (0.5 * v.size.width_m + grow)));
+    }
+    return c;
+  };
+
+  tracking::VehicleHypothesis uncertain = car({10.0, -0.5}, 0.0);
+  uncertain.covariance = Eigen::Vector3d(0.25, 0.25, 1e-4).asDiagonal();
+  const TimeNs tight_passed = sweep.passed_time(corners_grown(uncertain, 0.4 + 0.5));
+  const TimeNs grown_passed =
+      sweep.passed_time(corners_grown(uncertain, 2.5 * (0.5 + 0.01 * std::hypot(4.6, 1.8) / 2)));
+  ASSERT_LT(tight_passed, grown_passed);
+  EXPECT_GT(tight_passed, kNow);
+  EXPECT_EQ(release_at(uncertain, seen), tight_passed);
+
+  const tracking::VehicleHypothesis certain = car({10.0, -0.5}, 0.0);
+  const TimeNs certain_tight = sweep.passed_time(corners_grown(certain, 0.4 + 0.1));
+  const TimeNs certain_grown = sweep.passed_time(corners_grown(certain, 0.4));
+  ASSERT_LT(certain_grown, certain_tight);
+  EXPECT_EQ(release_at(certain, seen), certain_grown);
+
+  perception::Detection neighbour = seen;  // its points 1.4 m off the car's side: outside the tight one
+  for (Eigen::Vector3d& p : neighbour.points)
+    p.y() += 1.4;
+  EXPECT_EQ(release_at(uncertain, neighbour), grown_passed);
 }
 
 }  // namespace
