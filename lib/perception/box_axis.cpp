@@ -222,22 +222,27 @@ std::optional<AxisEstimate> face_on_outline(const AxisContext& ctx, int a, const
     // its doors or maybe the belt line's ledge) - unless a laser passing below it, at the face, would have
     // hit the body had it reached farther out there: up to mid_height_inset_m (low_bonnet_inset_m at the ends
     // of a car or MPV, whose bonnet may lie under 55 % of its height), the middle of that with its spread.
-    const bool seen_below =
-        lowest <= std::min(config.full_plan_height_m, config.lower_body_fraction * ctx.vehicle_height) ||
-        lidar.sees_surface(face_range(ctx, a, sign * env.position, along_mean) + 0.1,
-                           config.ground_clearance_m, lowest - 0.05);
-    const double end_setback = config.lower_body_fraction * ctx.vehicle_height < config.max_end_body_height_m
-                                   ? config.low_bonnet_inset_m
-                                   : config.mid_height_inset_m;
+    const double lower_body = config.lower_body_fraction * ctx.vehicle_height;
+    const bool car_end = a == ctx.length_axis && lower_body < config.max_end_body_height_m;
+    const bool seen_lower = lidar.sees_surface(face_range(ctx, a, sign * env.position, along_mean) + 0.1,
+                                               config.ground_clearance_m, lowest - 0.05);
+    const bool seen_below = lowest <= std::min(config.full_plan_height_m, lower_body) || seen_lower;
+    const double end_setback = car_end ? config.low_bonnet_inset_m : config.mid_height_inset_m;
     const double setback =
         seen_below ? 0.0 : (a == ctx.length_axis ? end_setback : config.mid_height_inset_width_m);
     const double face = sign * (env.position + setback / 2.0);
+    // Such an end seen lowest between min_bonnet_height_m and the full plan's height may be the front
+    // itself or the windscreen's base above a low bonnet: it stays, 3 sigma reaching the bonnet's front.
+    const bool over_low_bonnet =
+        car_end && seen_below && !seen_lower && lowest > std::min(config.min_bonnet_height_m, lower_body);
+    const double bonnet = over_low_bonnet ? config.low_bonnet_inset_m / 3.0 : 0.0;
     // An end with fewer than a face's points away from the rounded corner by the seen side (the rest on
     // the corner or the side itself) may lie up to the corner's radius beyond them: the envelope of such
     // 3-4 returns stated 0.02 m and was 0.14-0.15 m off (HDL-32E 6-7 m up, a minibus at 30 m and an
     // estate at 33 m, seen broadside a little from one end: the second and third pilot matrices).
     const double corner = off_corner < config.fit.min_face_points ? config.corner_radius_m / 2.0 : 0.0;
-    const double sigma = std::sqrt(env.sigma * env.sigma + setback * setback / 12.0 + corner * corner);
+    const double sigma =
+        std::sqrt(env.sigma * env.sigma + setback * setback / 12.0 + corner * corner + bonnet * bonnet);
     AxisEstimate out;
     out.centre = face - sign * dim / 2.0;
     out.across = along_mean;
