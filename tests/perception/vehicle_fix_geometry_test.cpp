@@ -1521,8 +1521,8 @@ TEST(VehicleFixGeometry, FrontSeenOnlyAtTheWindscreensBase) {
 }
 
 // The same view on the minivan: the returns nearest its front lie on the windscreen's base at 0.86-0.9 m,
-// below the full plan's height, and were taken for the front: 0.78-0.84 m off stating 0.05-0.1 m (NEES
-// 400-740; the pilot's cells, seed 5, 109 HMI fixes over 9 of them). Such an end, seen lowest above
+// below the full plan's height, and were taken for the front: these four 0.80-0.89 m off stating 0.04-0.1
+// m (NEES 160-740; the pilot's cells, seed 5, 109 HMI fixes over 9 of them). Such an end, seen lowest above
 // min_bonnet_height_m, now states a bonnet's length at 3 sigma along the length: covered.
 TEST(VehicleFixGeometry, FrontSeenOnlyAtTheWindscreensBaseUnderTheFullPlanHeight) {
   struct Case {
