@@ -195,6 +195,10 @@ def run(args):
             caller_nice = autogroup_nice(os.getpid())
             for pid in (rsud.pid, os.getpid()):
                 set_autogroup_nice(pid, args.group_nice)
+        if args.rsud_nice is not None:
+            # rsud's autogroup alone, as the deploy unit's Nice= sets it: the generators stand for a LiDAR
+            # and vehicles, which do not run on the roadside unit (rsud in a session of its own).
+            set_autogroup_nice(rsud.pid, args.rsud_nice)
         if args.ouster:
             h.wait_for(lambda: "ready: serving" in h.log(), 20, "rsud to learn the background and serve")
         else:
@@ -277,7 +281,8 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
               "%s %s %s (simulated)" % (args.ouster, args.lidar_mode, args.profile) if args.ouster else "VLP-32C",
               len(IN_VIEW), "its receiver thread" if args.verifier_thread else "its event loop's thread",
               "its own" if args.rsud_session == "own" else "the load generators'")
-          + ("" if args.group_nice is None else "; rsud's and the generators' autogroups at nice %d" % args.group_nice))
+          + ("" if args.group_nice is None else "; rsud's and the generators' autogroups at nice %d" % args.group_nice)
+          + ("" if args.rsud_nice is None else "; rsud's autogroup at nice %d" % args.rsud_nice))
     print("announcements: sent %d (send failures %d), dropped by the kernel at rsud's full receive buffer %s, "
           "accepted %d, rejected %s" % (summary["sent"], summary["send_failed"], kernel_drops,
                                         s.get("datagram.accepted", 0), rejected or "none"))
@@ -401,6 +406,9 @@ def main():
                     help="the nice value of rsud's scheduling autogroup and of this driver's (the load "
                          "generators), e.g. -10 to model a machine of their own while others build on it "
                          "(needs root to lower it)")
+    ap.add_argument("--rsud-nice", type=int, default=None,
+                    help="the nice value of rsud's scheduling autogroup alone, e.g. -10 as deploy/rsud.service "
+                         "sets it (Nice=-10); the load generators stay at the caller's (needs root to lower it)")
     ap.add_argument("--ouster", default=None, metavar="MODEL",
                     help="the LiDAR is a simulated Ouster (rsu-sim stream --ouster), e.g. os1-128, instead of the "
                          "street's VLP-32C; rsud learns the background from the first 3 s of stream")
@@ -418,6 +426,8 @@ def main():
                          "own (perception.prepare_thread: true); off (its default): on its event loop")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
+    if args.rsud_nice is not None and args.rsud_session != "own":
+        ap.error("--rsud-nice needs rsud in a session of its own (--rsud-session own)")
     if args.smoke:
         args.vehicles, args.seconds, args.check = 200, 5.0, True
     args.build = os.path.abspath(args.build)
