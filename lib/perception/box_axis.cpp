@@ -235,10 +235,13 @@ std::optional<AxisEstimate> face_on_outline(const AxisContext& ctx, int a, const
         seen_below ? 0.0 : (a == ctx.length_axis ? end_setback : config.mid_height_inset_width_m);
     const double face = sign * (env.position + setback / 2.0);
     // Such an end seen lowest between min_bonnet_height_m and the full plan's height may be the front
-    // itself or the windscreen's base above a low bonnet: it stays, 3 sigma reaching the bonnet's front.
+    // itself or the windscreen above a low bonnet, its lowest return up the screen's rake from its base:
+    // it stays, 3 sigma reaching the bonnet's front.
     const bool over_low_bonnet =
         car_end && seen_below && !seen_lower && lowest > std::min(config.min_bonnet_height_m, lower_body);
-    const double bonnet = over_low_bonnet ? config.low_bonnet_inset_m / 3.0 : 0.0;
+    const double up_the_screen =
+        std::max(0.0, lowest - config.min_bonnet_height_m) * config.windscreen_run_per_rise;
+    const double bonnet = over_low_bonnet ? (config.low_bonnet_inset_m + up_the_screen) / 3.0 : 0.0;
     // An end with fewer than a face's points away from the rounded corner by the seen side (the rest on
     // the corner or the side itself) may lie up to the corner's radius beyond them: the envelope of such
     // 3-4 returns stated 0.02 m and was 0.14-0.15 m off (HDL-32E 6-7 m up, a minibus at 30 m and an

@@ -1532,8 +1532,9 @@ TEST(VehicleFixGeometry, FrontSeenOnlyAtTheWindscreensBaseUnderTheFullPlanHeight
   };
   // A minivan of our own: 1.76 m tall, its bonnet 0.75 m long and at 0.86 m, 49 % of its height.
   const sim::VehicleShape shape = vehicle_file("low_bonnet/minivan");
-  for (const Case c : {Case{"vlp16", 4.5, 15.0, 29}, Case{"vlp32c", 2.5, 5.0, 29},
-                       Case{"vlp32c", 6.5, 21.0, 24}, Case{"generic64", 4.5, 9.0, 27}}) {
+  for (const Case c :
+       {Case{"vlp16", 4.5, 15.0, 29}, Case{"vlp32c", 2.5, 5.0, 29}, Case{"vlp32c", 6.5, 21.0, 24},
+        Case{"generic64", 4.5, 9.0, 27}, Case{"vlp16", 4.5, 14.0, 37}, Case{"vlp32c", 6.5, 36.0, 40}}) {
     const PilotCell cell =
         pilot_cell(*lidar::sensor_model_by_name(c.model), c.height, shape, c.distance, c.frame, 5);
     // The claimed view: nothing within 0.6 m of the front, the lowest return within 0.15 m of the foremost
