@@ -121,8 +121,19 @@ struct BandPoints {
 
 BandPoints band_points(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
                        const LaserLookup& lookup, std::span<const std::size_t> ranks, const FaceLine& line,
-                       double end_height, const std::vector<bool>& crossing) {
+                       double end_height, const std::vector<bool>& crossing, const CorrectionConfig& config,
+                       double noise_sigma) {
+  // A car's or MPV's bonnet may lie as low as min_bonnet_height_m, under its lower body's share.
+  const double bonnet_from = end_height < config.max_end_body_height_m
+                                 ? std::min(end_height, config.min_bonnet_height_m)
+                                 : end_height;
+  const double arc_tolerance = std::max(config.min_range_spread_m, 4.0 * noise_sigma);
   BandPoints band;
+  struct Mid {
+    int laser;
+    double range, s, n;
+  };
+  std::vector<Mid> mid;  // below end_height, above bonnet_from
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d& p = points[i];
     const Eigen::Vector2d r = p.head<2>() - line.a;
@@ -131,13 +142,31 @@ BandPoints band_points(std::span<const Eigen::Vector3d> points, const LidarGeome
     if (s < -line.band || s > line.length + line.band || std::abs(n) > line.band)
       continue;
     band.across.push_back(n);
-    if (p.z() - lidar.ground_z <= end_height) {
+    const double z = p.z() - lidar.ground_z;
+    if (z <= end_height && z > bonnet_from && ranks[i] != LaserLookup::kNone) {
+      mid.push_back({lookup.laser(ranks[i]), (p.head<2>() - lidar.xy()).norm(), s, n});
+    } else if (z <= end_height) {
       band.lower_along.push_back(s);
       band.lower_across.push_back(n);
     } else if (!crossing[i]) {
       band.upper_across.push_back(n);
       band.upper.add(p, s, lidar.xy(), lookup, ranks[i]);
     }
+  }
+  // Between bonnet_from and end_height, one laser's arc at one range may be a level bonnet's or boot lid's
+  // trace (across the line of sight whatever the heading), not the front's: it tells no direction.
+  std::sort(mid.begin(), mid.end(), [](const Mid& x, const Mid& y) { return x.laser < y.laser; });
+  for (std::size_t begin = 0; begin < mid.size();) {
+    std::size_t end = begin;
+    std::vector<double> ranges;
+    for (; end < mid.size() && mid[end].laser == mid[begin].laser; ++end)
+      ranges.push_back(mid[end].range);
+    const bool level_arc = ranges.size() >= 3 && !spreads_in_range(std::move(ranges), arc_tolerance);
+    for (std::size_t k = begin; k < end && !level_arc; ++k) {
+      band.lower_along.push_back(mid[k].s);
+      band.lower_across.push_back(mid[k].n);
+    }
+    begin = end;
   }
   return band;
 }
@@ -245,7 +274,8 @@ FaceEvidence informative_face(std::span<const Eigen::Vector3d> points, std::span
   const std::vector<TracePoint> near = traces_near(points, ranks, line, config.crossing_depth_m);
   const TraceRuns runs = trace_runs(near, lookup.count(), line);
   BandPoints band = band_points(points, lidar, lookup, ranks, line, end_height,
-                                crossing_returns(near, runs, points.size(), config.fit.min_face_points));
+                                crossing_returns(near, runs, points.size(), config.fit.min_face_points),
+                                config, noise_sigma);
   const UpperPoints& upper = band.upper;
   const std::vector<double>& lower_along = band.lower_along;
   const UpperInformation informative_above = informative_upper(upper, lidar, config, noise_sigma);

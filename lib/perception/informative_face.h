@@ -2,9 +2,10 @@
 // What one fitted edge of a vehicle's rectangle tells about its yaw (the improved correction,
 // size_correction.h): only its points that lie on a vertical surface of the body count (below the bonnet,
 // or above it rising over several heights or spreading in range: one laser's trace across a roof or a
-// bonnet is a line across the line of sight whatever the heading), over the extent they span along the
-// face (a least-squares line's direction is as well known as its points' spread makes it, not the fitted
-// edge's length), with the body's departure from a plane (fix_covariance.h).
+// bonnet is a line across the line of sight whatever the heading; a car's bonnet may lie as low as
+// min_bonnet_height_m, so one laser's arc at one range between there and end_height does not count either),
+// over the extent they span along the face (a least-squares line's direction is as well known as its points'
+// spread makes it, not the fitted edge's length), with the body's departure from a plane (fix_covariance.h).
 #pragma once
 
 #include <cstddef>

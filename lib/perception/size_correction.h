@@ -170,6 +170,8 @@ struct CorrectionConfig {
   // under 0.10 m); grown, they stay and are stated honestly. Nor is such an end's body seen to stop where a
   // laser's trace leaves it above this height (box_axis.cpp, observable_beyond): one trace along a minivan's
   // glasshouse at 0.95 m left it over the bonnet and was taken for the front, 0.8-1.0 m off (HMI).
+  // Nor does one laser's arc at one range above this height tell the end's direction (informative_face.h):
+  // across a minivan's bonnet at 0.82-0.89 m it was taken for the front's face, 17-18 deg off (HMI).
   double min_bonnet_height_m = 0.8;
   // ... and such a face's lowest return may lie up the windscreen from its base, this much farther back per
   // metre of rise (a screen raked 27 deg from the horizontal): the minivan's front seen 0.87 m up, 0.81 m
