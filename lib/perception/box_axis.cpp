@@ -153,7 +153,10 @@ double shadow_allowance(const AxisContext& ctx, int a, const BoxPoint& extreme, 
     // Rising, or meeting the body at or before the extreme point (the laser that saw it among them).
     if (!(down > 0.0) || h - extreme.range * down < extreme.height + config.end_tolerance_m)
       continue;
-    nearest = std::min(nearest, (h - config.lowest_body_m) / down - extreme.range);
+    // Under lowest_body_m already at the extreme (which lies lower still): the body ends there, but for the
+    // rounded corner (end_allowance_m, below), which a negative reach ate: a minivan's sill at 0.25 m, 0.36 m
+    // short of its front, gave 0.15 m and a fix 0.42 m off stating 0.15 m.
+    nearest = std::min(nearest, std::max(0.0, (h - config.lowest_body_m) / down - extreme.range));
   }
   if (!std::isfinite(nearest))
     return kInf;
