@@ -133,9 +133,9 @@ bool observable_beyond(const AxisContext& ctx, int a, double sign, const Extreme
   // Towards the front or back the body may go on only bonnet high (a laser passing above the bonnet
   // sees nothing of it): only a laser meeting it below that would have seen it. A car's or MPV's bonnet
   // may lie under its lower body's share, down to min_bonnet_height_m.
-  const bool car_end = config.lower_body_fraction * ctx.vehicle_height < config.max_end_body_height_m;
-  const double bonnet = car_end ? std::min(ctx.end_height, config.min_bonnet_height_m) : ctx.end_height;
-  const double top = a == ctx.length_axis ? std::min(bonnet, ctx.vehicle_height) : ctx.vehicle_height;
+  const double top = a == ctx.length_axis
+                         ? std::min(surely_bonnet_high(ctx.end_height, config), ctx.vehicle_height)
+                         : ctx.vehicle_height;
   return lidar.sees_surface(range, config.lowest_body_m, top);
 }
 

@@ -123,10 +123,7 @@ BandPoints band_points(std::span<const Eigen::Vector3d> points, const LidarGeome
                        const LaserLookup& lookup, std::span<const std::size_t> ranks, const FaceLine& line,
                        double end_height, const std::vector<bool>& crossing, const CorrectionConfig& config,
                        double noise_sigma) {
-  // A car's or MPV's bonnet may lie as low as min_bonnet_height_m, under its lower body's share.
-  const double bonnet_from = end_height < config.max_end_body_height_m
-                                 ? std::min(end_height, config.min_bonnet_height_m)
-                                 : end_height;
+  const double bonnet_from = surely_bonnet_high(end_height, config);
   const double arc_tolerance = std::max(config.min_range_spread_m, 4.0 * noise_sigma);
   BandPoints band;
   struct Mid {

@@ -53,6 +53,11 @@ double end_body_height(const VehicleSize& size, const CorrectionConfig& config) 
   return std::isfinite(lower) ? std::min(lower, config.max_end_body_height_m) : lower;
 }
 
+double surely_bonnet_high(double end_height, const CorrectionConfig& config) {
+  return end_height < config.max_end_body_height_m ? std::min(end_height, config.min_bonnet_height_m)
+                                                   : end_height;
+}
+
 std::string_view to_string(CorrectionStatus status) {
   switch (status) {
     case CorrectionStatus::ok:

@@ -270,6 +270,9 @@ double side_body_height(const VehicleSize& size, const CorrectionConfig& config)
 // Up to which height a point can be on the footprint's front or back: the lower body, at most
 // max_end_body_height_m (every point, as for the lower body, when the height is unknown).
 double end_body_height(const VehicleSize& size, const CorrectionConfig& config);
+// How high the body surely reaches at the front and back, given end_body_height: all of it, but on a car or
+// MPV (end_body_height under max_end_body_height_m) only min_bonnet_height_m, its bonnet maybe lower.
+double surely_bonnet_high(double end_height, const CorrectionConfig& config);
 // The largest position sigma a fix may state (position_unbounded beyond it): max_position_sigma_m, or
 // tighter when packets were lost while the sweep passed the vehicle (LidarGeometry::complete_sweep false).
 double max_position_sigma_m(bool complete_sweep, const CorrectionConfig& config);
