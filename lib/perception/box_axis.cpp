@@ -229,7 +229,8 @@ std::optional<AxisEstimate> face_on_outline(const AxisContext& ctx, int a, const
     // hit the body had it reached farther out there: up to mid_height_inset_m (low_bonnet_inset_m at the ends
     // of a car or MPV, whose bonnet may lie under 55 % of its height), the middle of that with its spread.
     const double lower_body = config.lower_body_fraction * ctx.vehicle_height;
-    const bool car_end = a == ctx.length_axis && lower_body < config.max_end_body_height_m;
+    const bool car_or_mpv = lower_body < config.max_end_body_height_m;
+    const bool car_end = a == ctx.length_axis && car_or_mpv;
     const bool seen_lower = lidar.sees_surface(face_range(ctx, a, sign * env.position, along_mean) + 0.1,
                                                config.ground_clearance_m, lowest - 0.05);
     const bool seen_below = lowest <= std::min(config.full_plan_height_m, lower_body) || seen_lower;
@@ -239,19 +240,22 @@ std::optional<AxisEstimate> face_on_outline(const AxisContext& ctx, int a, const
     const double face = sign * (env.position + setback / 2.0);
     // Such an end seen lowest between min_bonnet_height_m and the full plan's height may be the front
     // itself or the windscreen above a low bonnet, its lowest return up the screen's rake from its base:
-    // it stays, 3 sigma reaching the bonnet's front.
-    const bool over_low_bonnet =
-        car_end && seen_below && !seen_lower && lowest > std::min(config.min_bonnet_height_m, lower_body);
+    // it stays, 3 sigma reaching the bonnet's front. Such a side may be the glasshouse above a low belt
+    // line, a window's inset inside the doors: it stays, 3 sigma reaching the doors.
+    const bool over_low_body =
+        car_or_mpv && seen_below && !seen_lower && lowest > std::min(config.min_bonnet_height_m, lower_body);
     const double up_the_screen =
         std::max(0.0, lowest - config.min_bonnet_height_m) * config.windscreen_run_per_rise;
-    const double bonnet = over_low_bonnet ? (config.low_bonnet_inset_m + up_the_screen) / 3.0 : 0.0;
+    const double low_body = !over_low_body         ? 0.0
+                            : a == ctx.length_axis ? (config.low_bonnet_inset_m + up_the_screen) / 3.0
+                                                   : config.mid_height_inset_width_m / 3.0;
     // An end with fewer than a face's points away from the rounded corner by the seen side (the rest on
     // the corner or the side itself) may lie up to the corner's radius beyond them: the envelope of such
     // 3-4 returns stated 0.02 m and was 0.14-0.15 m off (HDL-32E 6-7 m up, a minibus at 30 m and an
     // estate at 33 m, seen broadside a little from one end: the second and third pilot matrices).
     const double corner = off_corner < config.fit.min_face_points ? config.corner_radius_m / 2.0 : 0.0;
     const double sigma =
-        std::sqrt(env.sigma * env.sigma + setback * setback / 12.0 + corner * corner + bonnet * bonnet);
+        std::sqrt(env.sigma * env.sigma + setback * setback / 12.0 + corner * corner + low_body * low_body);
     AxisEstimate out;
     out.centre = face - sign * dim / 2.0;
     out.across = along_mean;
