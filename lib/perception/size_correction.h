@@ -174,7 +174,8 @@ struct CorrectionConfig {
   // across a minivan's bonnet at 0.82-0.89 m it was taken for the front's face, 17-18 deg off (HMI).
   // Its belt line may lie as low: a side seen lowest between this height and the full plan's may be the
   // glasshouse a window's inset inside the doors, and its sigma grows by mid_height_inset_width_m / 3
-  // (box_axis.cpp; the minivan's glasshouse at 0.89 m taken for its doors: 0.43 m off, NEES 15-16, HMI).
+  // (box_axis.cpp; the minivan's glasshouse at 0.89 m taken for its doors: 0.43 m off, NEES 15-16, HMI);
+  // and returns there tell the direction as the upper body's (informative_face.cpp).
   double min_bonnet_height_m = 0.8;
   // ... and such a face's lowest return may lie up the windscreen from its base, this much farther back per
   // metre of rise (a screen raked 27 deg from the horizontal): the minivan's front seen 0.87 m up, 0.81 m

@@ -388,7 +388,12 @@ TEST(RsuCore, RegisteredVehicleGetsCorrectionsNearTheTruth) {
     EXPECT_EQ(out.destination.address, "192.0.2.10");
     EXPECT_EQ(out.destination.port, testing::kVehiclePort);
     EXPECT_LT(distance(c, truth), 0.10) << c.pose.x << ", " << c.pose.y;
-    EXPECT_LT(angle_distance(c.pose.yaw, truth.yaw), deg_to_rad(2.0));
+    // The faces' direction fused with the vehicle's own, 4 deg off: a side seen between 0.8 m and the lower
+    // body's height may be a glasshouse over a low belt line, so it counts less there (the first fix 2.0 deg
+    // off, stating 4.0 deg; 0.1 deg off before it counted less).
+    const double yaw_sigma = std::sqrt(c.pose_covariance(2, 2));
+    EXPECT_LT(angle_distance(c.pose.yaw, truth.yaw), deg_to_rad(2.5));
+    EXPECT_LT(angle_distance(c.pose.yaw, truth.yaw), 3.0 * yaw_sigma);
     // Swept in the last rotation before it was sent, and sent at most a few ms after.
     EXPECT_LE(c.sweep_time, emitted_at);
     EXPECT_GT(c.sweep_time, emitted_at - stream.rotation_ns());
