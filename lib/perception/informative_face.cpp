@@ -108,11 +108,11 @@ struct UpperPoints {
 };
 
 // A face's returns within its support band: how far across it each lies, and where along and across it
-// those below the bonnet (end_height) and above it lie. Above the bonnet, a laser's few returns in the band
-// where its trace crosses the face (`crossing`, face_traces.h) say nothing of its direction: a HDL-32E 4.5 m
-// up saw a coupe 40 m away with one laser along its side and across its windscreen's foot, and a face
-// through the crossings was 26 deg off stating 5 deg (a third pilot matrix, kept out of the repository).
-// Below it they are the footprint's outline.
+// those below the bonnet (end_height; on a car or MPV, surely_bonnet_high of it) and above it lie. Above
+// the bonnet, a laser's few returns in the band where its trace crosses the face (`crossing`,
+// face_traces.h) say nothing of its direction: a HDL-32E 4.5 m up saw a coupe 40 m away with one laser
+// along its side and across its windscreen's foot, and a face through the crossings was 26 deg off stating
+// 5 deg (a third pilot matrix, kept out of the repository). Below it they are the footprint's outline.
 struct BandPoints {
   std::vector<double> across;
   std::vector<double> lower_along, lower_across, upper_across;
