@@ -23,6 +23,7 @@
 #include <pcl/segmentation/extract_clusters.h>
 
 #include "corridor_frames.h"
+#include "perception/azimuth_thinning.h"
 #include "perception/pipeline.h"
 #include "perception/vehicle_fix.h"
 
@@ -363,50 +364,108 @@ void BM_FixVehicle(benchmark::State& state, int model) {
 
 // A car near the LiDAR (2 m up), its own returns only (the simulator's truth), as rsud fixes it: the lasers'
 // elevations and azimuth step known. A near car is where a dense sensor's clusters are large (issue 16:
-// 5,600-17,600 points for an OS1-128 within 10 m). Args: model (1 = VLP-32C, 2 = 128 rings), the car's
-// distance from the LiDAR (dm), VehicleFixConfig::thin_above_points (0: never thinned, the baseline;
-// 3000: the default until issue 16's trace of the live latency).
-void BM_FixVehicleNear(benchmark::State& state) {
-  const auto model = *rsu::lidar::sensor_model_by_name(kModels[static_cast<std::size_t>(state.range(0))]);
-  const double distance = static_cast<double>(state.range(1)) / 10.0;
+// 5,600-17,600 points for an OS1-128 within 10 m).
+struct NearCar {
+  std::vector<Eigen::Vector3d> points;
+  LidarGeometry lidar;
+  AnnouncedVehicle announced;
+  rsu::Pose2 truth;
+};
+
+// model: 1 = VLP-32C, 2 = 128 rings; distance_dm: the car's distance from the LiDAR in decimetres.
+NearCar near_car(std::int64_t model_index, std::int64_t distance_dm) {
+  const auto model = *rsu::lidar::sensor_model_by_name(kModels[static_cast<std::size_t>(model_index)]);
+  const double distance = static_cast<double>(distance_dm) / 10.0;
   const rsu::sim::VehicleShape shape;
-  const rsu::Pose2 truth{1.5, distance, rsu::deg_to_rad(8.0)};
+  NearCar car;
+  car.truth = rsu::Pose2{1.5, distance, rsu::deg_to_rad(8.0)};
   rsu::sim::Scene scene;
   scene.ground.half_extent_m = 60.0;
   rsu::sim::Vehicle vehicle;
   vehicle.id = 1;
   vehicle.shape = shape;
-  vehicle.trajectory = rsu::sim::StaticPose{truth};
+  vehicle.trajectory = rsu::sim::StaticPose{car.truth};
   scene.vehicles.push_back(vehicle);
   rsu::Pose3 mount;
   mount.z = 2.0;
   const rsu::sim::LidarSimulator simulator(model, mount, rsu::sim::NoiseModel{}, scene);
   const rsu::sim::SimulatedFrame frame = simulator.simulate_frame(0);
-  std::vector<Eigen::Vector3d> points;
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
     const LidarPoint& p = frame.frame.points[i];
     // The ground filter's 0.2 m (the pilot drops those returns too); the mount is level at the origin.
     if (frame.truth[i].surface == rsu::sim::SurfaceClass::kVehicle && p.z + 2.0F >= 0.2F)
-      points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z) + 2.0);
+      car.points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y),
+                              static_cast<double>(p.z) + 2.0);
   }
-  LidarGeometry lidar;
-  lidar.position = {0.0, 0.0, 2.0};
+  car.lidar.position = {0.0, 0.0, 2.0};
   for (const double e : model.elevation_deg)
-    lidar.elevations_rad.push_back(rsu::deg_to_rad(e));
-  lidar.azimuth_step_rad = rsu::deg_to_rad(model.azimuth_step_deg());
-  const AnnouncedVehicle announced{{shape.length, shape.width, shape.height},
-                                   YawPrior{truth.yaw + 0.05, 0.17}};
+    car.lidar.elevations_rad.push_back(rsu::deg_to_rad(e));
+  car.lidar.azimuth_step_rad = rsu::deg_to_rad(model.azimuth_step_deg());
+  car.announced = {{shape.length, shape.width, shape.height}, YawPrior{car.truth.yaw + 0.05, 0.17}};
+  return car;
+}
+
+// A near car's whole fix. Args: model, distance (dm), VehicleFixConfig::thin_above_points (0: never
+// thinned, the baseline; 3000: the default until issue 16's trace of the live latency).
+void BM_FixVehicleNear(benchmark::State& state) {
+  const NearCar car = near_car(state.range(0), state.range(1));
   VehicleFixConfig config;
   config.thin_above_points = static_cast<std::size_t>(state.range(2));
   VehicleFix fix;
   for (auto _ : state) {
-    fix = fix_vehicle(points, announced, lidar, config);
+    fix = fix_vehicle(car.points, car.announced, car.lidar, config);
     benchmark::DoNotOptimize(fix);
   }
-  state.counters["cluster_points"] = static_cast<double>(points.size());
+  state.counters["cluster_points"] = static_cast<double>(car.points.size());
   state.counters["points_used"] = static_cast<double>(fix.points_used);
-  state.counters["error_m"] = std::hypot(fix.corrected.pose.x - truth.x, fix.corrected.pose.y - truth.y);
+  state.counters["error_m"] =
+      std::hypot(fix.corrected.pose.x - car.truth.x, fix.corrected.pose.y - car.truth.y);
   state.counters["ok"] = fix.ok() ? 1.0 : 0.0;
+}
+
+// The thinning alone (rsud runs it on a dense cluster twice: for the detection's rectangle, then for its
+// fix). Args: model, distance (dm), as BM_FixVehicleNear; thinned to the default's 800 points.
+void BM_ThinNear(benchmark::State& state) {
+  const NearCar car = near_car(state.range(0), state.range(1));
+  const std::size_t above = VehicleFixConfig{}.thin_above_points;
+  AzimuthThinning thinned;
+  for (auto _ : state) {
+    thinned = thin_along_azimuth(car.points, car.lidar, above);
+    benchmark::DoNotOptimize(thinned);
+  }
+  state.counters["cluster_points"] = static_cast<double>(car.points.size());
+  state.counters["kept"] = static_cast<double>(thinned.points.size());
+  state.counters["stride"] = static_cast<double>(thinned.stride);
+}
+
+// The thinning's azimuths (the angle of each of a near car's points from the first's direction, seen
+// from the LiDAR): azimuth_angle against float's atan2f, which the thinning used before, on the same
+// points in the same run. Args: model, distance (dm); 0 / 1 as the last: atan2f / azimuth_angle.
+void BM_ThinningAzimuths(benchmark::State& state) {
+  const NearCar car = near_car(state.range(0), state.range(1));
+  std::vector<Eigen::Vector2d> cross_dot;
+  const Eigen::Vector2d reference = car.points.front().head<2>() - car.lidar.xy();
+  for (const Eigen::Vector3d& p : car.points) {
+    const Eigen::Vector2d d = p.head<2>() - car.lidar.xy();
+    cross_dot.emplace_back(reference.x() * d.y() - reference.y() * d.x(), reference.dot(d));
+  }
+  const bool ours = state.range(2) != 0;
+  double worst = 0.0;
+  for (auto _ : state) {
+    double sum = 0.0;
+    for (const Eigen::Vector2d& c : cross_dot) {
+      sum += ours ? azimuth_angle(c.x(), c.y())
+                  : static_cast<double>(std::atan2(static_cast<float>(c.x()), static_cast<float>(c.y())));
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  for (const Eigen::Vector2d& c : cross_dot)
+    worst = std::max(worst, std::abs((ours ? azimuth_angle(c.x(), c.y())
+                                           : static_cast<double>(std::atan2(static_cast<float>(c.x()),
+                                                                            static_cast<float>(c.y())))) -
+                                     std::atan2(c.x(), c.y())));
+  state.counters["points"] = static_cast<double>(cross_dot.size());
+  state.counters["worst_error_rad"] = worst;
 }
 
 }  // namespace
@@ -416,6 +475,8 @@ BENCHMARK(BM_FixVehicleNear)
                    {36, 50, 70, 100},
                    {0, 3000, static_cast<std::int64_t>(VehicleFixConfig{}.thin_above_points)}})
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ThinNear)->ArgsProduct({{1, 2}, {36, 50, 70, 100}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ThinningAzimuths)->ArgsProduct({{2}, {36, 100}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 #define RSU_PER_MODEL(fn)                                          \
   BENCHMARK_CAPTURE(fn, vlp16, 0)->Unit(benchmark::kMicrosecond);  \

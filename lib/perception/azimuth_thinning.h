@@ -42,4 +42,8 @@ struct AzimuthThinning {
 AzimuthThinning thin_along_azimuth(std::span<const Eigen::Vector3d> points, const LidarGeometry& lidar,
                                    std::size_t max_points);
 
+// atan2(y, x) within 1e-10 rad, as the columns above are measured (float's atan2f, used before, is within
+// ~1e-7: a column is the same); 0 for (0, 0).
+double azimuth_angle(double y, double x);
+
 }  // namespace rsu::perception
