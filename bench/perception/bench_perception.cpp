@@ -423,6 +423,33 @@ void BM_FixVehicleNear(benchmark::State& state) {
   state.counters["ok"] = fix.ok() ? 1.0 : 0.0;
 }
 
+// A near car's detection and fix as rsud makes them: the rectangle fitted to the thinned cluster
+// (detect with FitThinning), then the fix. Args: model, distance (dm); 1 as the last: the fix takes the
+// detection's thinning (rsud since issue 16's reuse), 0: it thins the points again (the baseline).
+void BM_DetectAndFixNear(benchmark::State& state) {
+  const NearCar car = near_car(state.range(0), state.range(1));
+  std::vector<LidarPoint> cloud;
+  for (const Eigen::Vector3d& p : car.points) {
+    LidarPoint q;
+    q.x = static_cast<float>(p.x());
+    q.y = static_cast<float>(p.y());
+    q.z = static_cast<float>(p.z());
+    cloud.push_back(q);
+  }
+  const VehicleFixConfig config;
+  const bool reuse = state.range(2) != 0;
+  VehicleFix fix;
+  for (auto _ : state) {
+    const Detection d = detect(cloud, car.lidar.xy(), config.fit, {&car.lidar, config.thin_above_points});
+    fix = reuse ? fix_vehicle(d.points, *d.thinning, car.announced, car.lidar, config)
+                : fix_vehicle(d.points, car.announced, car.lidar, config);
+    benchmark::DoNotOptimize(fix);
+  }
+  state.counters["cluster_points"] = static_cast<double>(cloud.size());
+  state.counters["error_m"] =
+      std::hypot(fix.corrected.pose.x - car.truth.x, fix.corrected.pose.y - car.truth.y);
+}
+
 // The thinning alone (rsud runs it on a dense cluster twice: for the detection's rectangle, then for its
 // fix). Args: model, distance (dm), as BM_FixVehicleNear; thinned to the default's 800 points.
 void BM_ThinNear(benchmark::State& state) {
@@ -476,6 +503,7 @@ BENCHMARK(BM_FixVehicleNear)
                    {0, 3000, static_cast<std::int64_t>(VehicleFixConfig{}.thin_above_points)}})
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ThinNear)->ArgsProduct({{1, 2}, {36, 50, 70, 100}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DetectAndFixNear)->ArgsProduct({{1, 2}, {36, 50, 100}, {0, 1}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ThinningAzimuths)->ArgsProduct({{2}, {36, 100}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 #define RSU_PER_MODEL(fn)                                          \

@@ -61,6 +61,7 @@ perception::Detection GatheredVehicleFixer::detect(std::span<const lidar::LidarP
 }
 
 perception::VehicleFix GatheredVehicleFixer::fix_announced(std::span<const Eigen::Vector3d> points,
+                                                           const perception::AzimuthThinning* thinning,
                                                            const v2i::VehicleAnnouncement& a,
                                                            TimeNs sweep_time,
                                                            const perception::LidarGeometry& lidar) const {
@@ -73,7 +74,9 @@ perception::VehicleFix GatheredVehicleFixer::fix_announced(std::span<const Eigen
   if (std::isfinite(at_sweep.yaw) && std::isfinite(yaw_var) && yaw_var >= 0.0) {
     vehicle.yaw_prior = perception::YawPrior{at_sweep.yaw, std::max(std::sqrt(yaw_var), 1e-3)};
   }
-  return perception::fix_vehicle(points, vehicle, lidar, fix_config_);
+  // The detection's thinning was made with lidar_, whose position, lasers and azimuth step `lidar` shares.
+  return thinning != nullptr ? perception::fix_vehicle(points, *thinning, vehicle, lidar, fix_config_)
+                             : perception::fix_vehicle(points, vehicle, lidar, fix_config_);
 }
 
 bool GatheredVehicleFixer::fits_vehicle(const perception::RectangleFit& fit,
@@ -113,7 +116,7 @@ GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::Vehicl
     out.outcome = GatheredFixOutcome::no_assigned_cluster;
     return out;
   }
-  out.fix = fix_announced(held.points, a, out.sweep_time, lidar);
+  out.fix = fix_announced(held.points, held.thinning ? &*held.thinning : nullptr, a, out.sweep_time, lidar);
   if (held.parts > 1 && fits_vehicle(out.fix.fit, a, out.sweep_time)) {
     out.fragments_merged = held.parts - 1;
   } else if (held.parts > 1 && held.assigned_size == 0) {
@@ -125,7 +128,7 @@ GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::Vehicl
     // detection the assignment chose, alone; the correction's consistency check guards it.
     out.fragments_unmatched = held.parts - 1;
     out.sweep_time = held.assigned_time;
-    out.fix = fix_announced(held.assigned_points(), a, out.sweep_time, lidar);
+    out.fix = fix_announced(held.assigned_points(), nullptr, a, out.sweep_time, lidar);
   }
   if (!out.fix.fit.ok())
     out.outcome = GatheredFixOutcome::fit_failed;

@@ -62,8 +62,9 @@ class GatheredVehicleFixer {
 
  private:
   // The vehicle's fix from its points swept at `sweep_time`, with its announced size and its announced
-  // heading carried to that time as the yaw prior.
+  // heading carried to that time as the yaw prior; `thinning`: the points' as detect made it, if known.
   perception::VehicleFix fix_announced(std::span<const Eigen::Vector3d> points,
+                                       const perception::AzimuthThinning* thinning,
                                        const v2i::VehicleAnnouncement& a, TimeNs sweep_time,
                                        const perception::LidarGeometry& lidar) const;
   // Whether the fitted rectangle passes the vehicle's association gate at `sweep_time`.

@@ -143,6 +143,10 @@ std::size_t VehicleGatherer::gather(std::vector<perception::Detection>&& detecti
           held.ahead_of_open || part.ahead_of_open ||
           std::any_of(part.open_beyond.begin(), part.open_beyond.end(),
                       [&](const Eigen::AlignedBox2d& box) { return footprints[j].tightly_overlaps(box); });
+      if (held.parts == 0)
+        held.thinning = part.thinning;
+      else
+        held.thinning.reset();
       held.points.insert(held.points.end(), part.points.begin(), part.points.end());
       held.weighted_offset +=
           static_cast<TimeNs>(part.points.size()) * (part.sweep_time_ns - held.first_time);

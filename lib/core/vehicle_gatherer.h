@@ -17,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <utility>
 #include <vector>
@@ -40,6 +41,9 @@ struct HeldVehicle {
   TimeNs first_time = 0;                // sweep time of the first gathered detection
   TimeNs weighted_offset = 0;           // sum over points of (their detection's time - first_time)
   std::size_t parts = 0;                // detections gathered
+  // The one gathered detection's thinning (perception::Detection::thinning): the fix of `points` takes
+  // it; none once a second part is gathered (the union is thinned anew).
+  std::optional<perception::AzimuthThinning> thinning;
   // The detection the global assignment gave this vehicle (the nearest in Mahalanobis distance if it
   // was given one in several batches), its range in `points`: what it is fixed from when the gathered
   // union is not one vehicle. The other parts may be a neighbour's (a car beside it, a van behind it)

@@ -2,45 +2,11 @@
 #include "perception/azimuth_thinning.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numbers>
 
 namespace rsu::perception {
-
-// 43 % of the thinning's time went to atan2f (issue 16, bench_perception BM_ThinNear). The angle is folded
-// to [0, pi/8] (octant symmetry, then atan(lo / hi) = pi/4 + atan((lo - hi) / (lo + hi)) above tan(pi/8)),
-// where the Taylor series to t^21 leaves under 0.4142^23 / 23 ~ 1e-10. One division, and the series in
-// Estrin's form (powers of t^2 side by side): Horner's chain of 11 dependent multiply-adds was as slow as
-// atan2f.
-double azimuth_angle(double y, double x) {
-  const double ax = std::abs(x), ay = std::abs(y);
-  const double lo = std::min(ax, ay), hi = std::max(ax, ay);
-  if (!(hi > 0.0))
-    return 0.0;
-  constexpr double kTanPiOver8 = 0.41421356237309503;
-  const bool upper = lo > kTanPiOver8 * hi;
-  const double t = upper ? (lo - hi) / (lo + hi) : lo / hi;  // |t| <= tan(pi/8)
-  // The series' coefficients (-1)^k / (2k + 1), k = 0..10.
-  static constexpr auto c = [] {
-    std::array<double, 11> out{};
-    for (std::size_t k = 0; k < out.size(); ++k)
-      out[k] = (k % 2 == 0 ? 1.0 : -1.0) / static_cast<double>(2 * k + 1);
-    return out;
-  }();
-  const double t2 = t * t, t4 = t2 * t2, t8 = t4 * t4;
-  const double low = (c[0] + c[1] * t2) + t4 * (c[2] + c[3] * t2);
-  const double mid = (c[4] + c[5] * t2) + t4 * (c[6] + c[7] * t2);
-  const double high = (c[8] + c[9] * t2) + t4 * c[10];
-  double a = t * (low + t8 * (mid + t8 * high)) + (upper ? std::numbers::pi / 4.0 : 0.0);
-  if (ay > ax)
-    a = std::numbers::pi / 2.0 - a;
-  if (x < 0.0)
-    a = std::numbers::pi - a;
-  return std::signbit(y) ? -a : a;
-}
 
 namespace {
 
@@ -58,25 +24,34 @@ Columns columns_of(std::span<const Eigen::Vector3d> points, const LidarGeometry&
               std::vector<std::int64_t>(points.size(), 0)};
   // Azimuths are measured from the first point's direction, so that a cluster across the +-pi line (the
   // LiDAR's -x axis) does not wrap; each laser's columns from its own first point.
-  Eigen::Vector2d reference = Eigen::Vector2d::Zero();
+  const auto valid = [&](const Eigen::Vector3d& p) {
+    return p.allFinite() && (p.head<2>() - lidar.xy()).squaredNorm() > 0.0;
+  };
+  const auto first_valid = std::find_if(points.begin(), points.end(), valid);
+  if (first_valid == points.end())
+    return out;
+  const Eigen::Vector2d reference = first_valid->head<2>() - lidar.xy();
+  // The angles in a pass of their own: its iterations are independent (a long chain of arithmetic
+  // each), where the pass below waits on the laser search's hint.
+  std::vector<double> azimuth(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector2d d = points[i].head<2>() - lidar.xy();
+    azimuth[i] = azimuth_angle(reference.x() * d.y() - reference.y() * d.x(), reference.dot(d));
+  }
   std::vector<double> first(lookup.count(), std::numeric_limits<double>::quiet_NaN());
   const double per_step = 1.0 / lidar.azimuth_step_rad;
   std::size_t hint = 0;  // points arrive firing by firing: the next is mostly a neighbour's laser
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d& p = points[i];
-    const Eigen::Vector2d d = p.head<2>() - lidar.xy();
-    const double run = d.norm();
+    const double run = (p.head<2>() - lidar.xy()).norm();
     if (!p.allFinite() || !(run > 0.0))
       continue;
     hint = lookup.rank((p.z() - lidar.position.z()) / run, hint);
     const std::size_t laser = hint;
     out.laser[i] = laser;
-    if (reference.isZero())
-      reference = d;
-    const double azimuth = azimuth_angle(reference.x() * d.y() - reference.y() * d.x(), reference.dot(d));
     if (std::isnan(first[laser]))
-      first[laser] = azimuth;
-    const double steps = (azimuth - first[laser]) * per_step;
+      first[laser] = azimuth[i];
+    const double steps = (azimuth[i] - first[laser]) * per_step;
     out.column[i] = static_cast<std::int64_t>(steps + (steps < 0.0 ? -0.5 : 0.5));  // the nearest
   }
   return out;

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "perception/detection.h"
 
-#include "perception/azimuth_thinning.h"
-
 namespace rsu::perception {
 namespace {
 
@@ -24,10 +22,10 @@ Detection detect_points(std::size_t n, PointAt point_at, const Eigen::Vector2d& 
   }
   d.sweep_time_ns = t0 + offset_sum / static_cast<TimeNs>(n);
   if (thinning.lidar != nullptr) {
-    const AzimuthThinning thinned = thin_along_azimuth(d.points, *thinning.lidar, thinning.above_points);
-    if (thinned.stride > 1) {
+    d.thinning = thin_along_azimuth(d.points, *thinning.lidar, thinning.above_points);
+    if (d.thinning->stride > 1) {
       footprint.clear();
-      for (const Eigen::Vector3d& p : thinned.points)
+      for (const Eigen::Vector3d& p : d.thinning->points)
         footprint.emplace_back(p.x(), p.y());
     }
   }

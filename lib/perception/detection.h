@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -15,6 +16,7 @@
 
 #include "common/time.h"
 #include "lidar/point.h"
+#include "perception/azimuth_thinning.h"
 #include "perception/l_shape_fitting.h"
 #include "perception/lidar_geometry.h"
 #include "perception/rectangle_fit.h"
@@ -27,6 +29,10 @@ struct Detection {
   RectangleFit fit;                     // its status says whether a rectangle could be fitted
   bool ahead_of_open = false;           // SweptCluster::ahead_of_open: may continue behind a nearer one
   std::vector<Eigen::AlignedBox2d> open_beyond;  // SweptCluster::open_beyond
+  // Its points as detect thinned them for the rectangle (FitThinning given; none without): as fix_vehicle
+  // thins them with the same LiDAR and threshold, so the fix of a vehicle of this detection alone takes
+  // it (a dense cluster's thinning is a third of its fix: issue 16).
+  std::optional<AzimuthThinning> thinning;
 };
 
 // Which of a dense cluster's points the rectangle is fitted to: every k-th azimuth column of each laser's

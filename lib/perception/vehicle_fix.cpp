@@ -10,7 +10,6 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/angles.h"
-#include "perception/azimuth_thinning.h"
 
 namespace rsu::perception {
 namespace {
@@ -114,9 +113,15 @@ std::vector<Eigen::Vector2d> outline_points(std::span<const Eigen::Vector3d> poi
 
 VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> cluster, const AnnouncedVehicle& vehicle,
                        const LidarGeometry& lidar, const VehicleFixConfig& config) {
-  VehicleFix out;
   // A dense cluster is fixed from fewer of its points (azimuth_thinning.h); a sparse one as it is.
-  const AzimuthThinning thinned = thin_along_azimuth(cluster, lidar, config.thin_above_points);
+  return fix_vehicle(cluster, thin_along_azimuth(cluster, lidar, config.thin_above_points), vehicle, lidar,
+                     config);
+}
+
+VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> cluster, const AzimuthThinning& thinned,
+                       const AnnouncedVehicle& vehicle, const LidarGeometry& lidar,
+                       const VehicleFixConfig& config) {
+  VehicleFix out;
   const std::span<const Eigen::Vector3d> points =
       thinned.stride > 1 ? std::span<const Eigen::Vector3d>(thinned.points) : cluster;
   out.azimuth_stride = thinned.stride;

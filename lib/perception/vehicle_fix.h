@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include "perception/azimuth_thinning.h"
 #include "perception/l_shape_fitting.h"
 #include "perception/lidar_geometry.h"
 #include "perception/rectangle_fit.h"
@@ -64,5 +65,10 @@ struct VehicleFix {
 
 VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> points, const AnnouncedVehicle& vehicle,
                        const LidarGeometry& lidar, const VehicleFixConfig& config = {});
+// The same from `points` already thinned: `thinning` is thin_along_azimuth(points, lidar,
+// config.thin_above_points) (a detection's, detection.h), so that a dense cluster is not thinned twice.
+VehicleFix fix_vehicle(std::span<const Eigen::Vector3d> points, const AzimuthThinning& thinning,
+                       const AnnouncedVehicle& vehicle, const LidarGeometry& lidar,
+                       const VehicleFixConfig& config = {});
 
 }  // namespace rsu::perception

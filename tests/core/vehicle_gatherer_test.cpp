@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The grown footprint's overlap with a box against an independent test (corners inside, edges
 // crossing), and the gatherer's hold for a farther cluster still open where the vehicle may be
-// (perception::SweptCluster::open_beyond) or a nearer one (ahead_of_open; issue 16).
+// (perception::SweptCluster::open_beyond) or a nearer one (ahead_of_open; issue 16), and the one
+// detection's thinning a held vehicle carries to its fix.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -122,6 +123,22 @@ TEST(GrownFootprint, TightlyOverlapsABoxExactlyWhenTheyShareAPlace) {
   EXPECT_FALSE(GrownFootprint(car({0.0, 0.0}, 0.0), config).tightly_overlaps(Eigen::AlignedBox2d()));
 }
 
+// The closed cluster of the car 10 m east (car({10.0, -0.5}, 0)): its near side, swept 1 ms before kNow.
+perception::Detection near_side() {
+  perception::Detection d;
+  d.sweep_time_ns = kNow - 1'000'000;
+  for (double x = 8.0; x <= 12.0; x += 0.1)
+    d.points.emplace_back(x, 0.35, 0.8);
+  return d;
+}
+
+// The one detection assigned to the one vehicle.
+tracking::AssociationResult assigned_to_it() {
+  tracking::AssociationResult association;
+  association.pairs.push_back({0, 0, 0.5});
+  return association;
+}
+
 // A car 10 m east of the LiDAR, its cluster closed and assigned to it, tightly inside its footprint. Alone
 // it is released at once; with a farther cluster still open inside its footprint (its own roof seen from
 // high up) it is held until the sweep has passed the grown footprint; with one open 3 m beyond it
@@ -130,12 +147,8 @@ TEST(VehicleGatherer, HoldsForAFartherOpenClusterOnlyWhereTheVehicleMayBe) {
   const LidarMount mount(Pose3{});
   const SweepPosition sweep = sweep_past_car(mount);
   const tracking::VehicleHypothesis vehicle = car({10.0, -0.5}, 0.0);
-  perception::Detection own;
-  own.sweep_time_ns = kNow - 1'000'000;
-  for (double x = 8.0; x <= 12.0; x += 0.1)
-    own.points.emplace_back(x, 0.35, 0.8);  // its near side
-  tracking::AssociationResult association;
-  association.pairs.push_back({0, 0, 0.5});
+  const perception::Detection own = near_side();
+  const tracking::AssociationResult association = assigned_to_it();
   const auto release_at = [&](const std::vector<Eigen::AlignedBox2d>& open_beyond) {
     VehicleGatherer gatherer({}, {}, mount.xy());
     perception::Detection d = own;
@@ -157,6 +170,33 @@ TEST(VehicleGatherer, HoldsForAFartherOpenClusterOnlyWhereTheVehicleMayBe) {
   EXPECT_EQ(release_at({behind}), own.sweep_time_ns);
 }
 
+// The fix of a vehicle gathered from one detection takes that detection's thinning (the thinning of the
+// same points); once a second part is gathered the union's is made anew (none carried).
+TEST(VehicleGatherer, CarriesTheOneDetectionsThinning) {
+  const LidarMount mount(Pose3{});
+  const SweepPosition sweep = sweep_past_car(mount);
+  const tracking::VehicleHypothesis vehicle = car({10.0, -0.5}, 0.0);
+  perception::Detection own = near_side();
+  own.thinning = perception::AzimuthThinning{3, {own.points.front(), own.points.back()}};
+  const tracking::AssociationResult association = assigned_to_it();
+  VehicleGatherer gatherer({}, {}, mount.xy());
+  const auto gather = [&] {
+    std::vector<perception::Detection> detections{own};
+    gatherer.gather(std::move(detections), std::span<const tracking::VehicleHypothesis>(&vehicle, 1),
+                    association, sweep);
+  };
+  gather();
+  ASSERT_EQ(gatherer.held().size(), 1U);
+  const HeldVehicle& held = gatherer.held().front();
+  ASSERT_TRUE(held.thinning.has_value());
+  EXPECT_EQ(held.thinning->stride, 3);
+  EXPECT_EQ(held.thinning->points, own.thinning->points);
+  gather();
+  ASSERT_EQ(gatherer.held().size(), 1U);
+  EXPECT_EQ(gatherer.held().front().parts, 2U);
+  EXPECT_FALSE(gatherer.held().front().thinning.has_value());
+}
+
 // The same car behind a nearer cluster still open in its line of sight (a car passing in front): held
 // until the sweep has passed its own place, whichever of its two footprints that reaches first. Stated
 // 0.5 m uncertain (the fleet's announcements), the one grown by 2.5 sigma reaches 1.85 m beyond the box
@@ -166,13 +206,9 @@ TEST(VehicleGatherer, HoldsForAFartherOpenClusterOnlyWhereTheVehicleMayBe) {
 TEST(VehicleGatherer, BehindANearerOpenClusterHoldsUntilTheSweepPassedTheSmallerFootprint) {
   const LidarMount mount(Pose3{});
   const SweepPosition sweep = sweep_past_car(mount);
-  perception::Detection seen;
-  seen.sweep_time_ns = kNow - 1'000'000;
+  perception::Detection seen = near_side();
   seen.ahead_of_open = true;
-  for (double x = 8.0; x <= 12.0; x += 0.1)
-    seen.points.emplace_back(x, 0.35, 0.8);
-  tracking::AssociationResult association;
-  association.pairs.push_back({0, 0, 0.5});
+  const tracking::AssociationResult association = assigned_to_it();
   const auto release_at = [&](const tracking::VehicleHypothesis& vehicle, const perception::Detection& d) {
     VehicleGatherer gatherer({}, {}, mount.xy());
     std::vector<perception::Detection> detections{d};

@@ -25,6 +25,7 @@
 #include "common/time.h"
 #include "lidar/sensor_model.h"
 #include "perception/azimuth_thinning.h"
+#include "perception/detection.h"
 #include "perception/face_envelope.h"
 #include "perception/l_shape_criteria.h"
 #include "perception/vehicle_fix.h"
@@ -971,6 +972,45 @@ TEST(AzimuthThinning, KeepsThePointsBesideABreakInATrace) {
     EXPECT_TRUE(contains(thinned.points, t.view.points[after])) << "laser " << laser;
   }
   EXPECT_GE(broken, 40U);  // the claimed view: the break crosses most traces
+}
+
+// rsud fits a dense cluster's rectangle to its thinned points (detect with FitThinning) and fixes the
+// vehicle of that detection alone from the detection's thinning: the same thinning fix_vehicle makes of
+// the points, and the same fix to the last bit. Without FitThinning the detection has none.
+TEST(AzimuthThinning, TheDetectionsThinningFixesAsThePointsDo) {
+  const Traces t = near_dense_car();
+  std::vector<lidar::LidarPoint> cloud;
+  for (const Eigen::Vector3d& p : t.view.points) {
+    lidar::LidarPoint q;
+    q.x = static_cast<float>(p.x());
+    q.y = static_cast<float>(p.y());
+    q.z = static_cast<float>(p.z());
+    cloud.push_back(q);
+  }
+  const VehicleFixConfig config;
+  const LidarGeometry& lidar = t.view.lidar;
+  const Detection d = detect(cloud, lidar.xy(), config.fit, {&lidar, config.thin_above_points});
+  ASSERT_TRUE(d.thinning.has_value());
+  const AzimuthThinning again = thin_along_azimuth(d.points, lidar, config.thin_above_points);
+  ASSERT_GT(again.stride, 1);
+  EXPECT_EQ(d.thinning->stride, again.stride);
+  EXPECT_EQ(d.thinning->points, again.points);
+  EXPECT_FALSE(detect(cloud, lidar.xy(), config.fit).thinning.has_value());
+
+  const sim::VehicleShape shape;
+  AnnouncedVehicle announced;
+  announced.size = {shape.length, shape.width, shape.height};
+  announced.yaw_prior = YawPrior{deg_to_rad(8.0), deg_to_rad(10.0)};
+  const VehicleFix reused = fix_vehicle(d.points, *d.thinning, announced, lidar, config);
+  const VehicleFix made = fix_vehicle(d.points, announced, lidar, config);
+  ASSERT_TRUE(made.ok()) << to_string(made.status());
+  EXPECT_EQ(reused.status(), made.status());
+  EXPECT_EQ(reused.azimuth_stride, made.azimuth_stride);
+  EXPECT_EQ(reused.points_used, made.points_used);
+  EXPECT_EQ(reused.corrected.pose.x, made.corrected.pose.x);
+  EXPECT_EQ(reused.corrected.pose.y, made.corrected.pose.y);
+  EXPECT_EQ(reused.corrected.pose.yaw, made.corrected.pose.yaw);
+  EXPECT_EQ(reused.corrected.covariance, made.corrected.covariance);
 }
 
 // The thinned points lie k azimuth steps apart along a trace, and the fix says so: its stride is k, and
