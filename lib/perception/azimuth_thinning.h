@@ -49,11 +49,11 @@ AzimuthThinning thin_along_azimuth(std::span<const Eigen::Vector3d> points, cons
 // atan2(y, x) within 1e-10 rad, as the columns above are measured (float's atan2f, used before, is within
 // ~1e-7: a column is the same); 0 for (0, 0).
 //
-// 43 % of the thinning's time went to atan2f (issue 16, bench_perception BM_ThinNear). The angle is folded
-// to [0, pi/8] (octant symmetry, then atan(lo / hi) = pi/4 + atan((lo - hi) / (lo + hi)) above tan(pi/8)),
-// where the Taylor series to t^21 leaves under 0.4142^23 / 23 ~ 1e-10. One division, and the series in
-// Estrin's form (powers of t^2 side by side): Horner's chain of 11 dependent multiply-adds was as slow as
-// atan2f. Inline, so that the thinning's pass over the angles inlines it.
+// About half of the thinning's time went to atan2f (issue 16, bench_perception BM_ThinNear). The angle is
+// folded to [0, pi/8] (octant symmetry, then atan(lo / hi) = pi/4 + atan((lo - hi) / (lo + hi)) above
+// tan(pi/8)), where the Taylor series to t^21 leaves under 0.4142^23 / 23 ~ 1e-10. One division, and the
+// series in Estrin's form (powers of t^2 side by side): Horner's chain of 11 dependent multiply-adds was as
+// slow as atan2f. Inline, so that the thinning's pass over the angles inlines it.
 inline double azimuth_angle(double y, double x) {
   const double ax = std::abs(x), ay = std::abs(y);
   const double lo = std::min(ax, ay), hi = std::max(ax, ay);

@@ -31,7 +31,7 @@ struct Detection {
   std::vector<Eigen::AlignedBox2d> open_beyond;  // SweptCluster::open_beyond
   // Its points as detect thinned them for the rectangle (FitThinning given; none without): as fix_vehicle
   // thins them with the same LiDAR and threshold, so the fix of a vehicle of this detection alone takes
-  // it (a dense cluster's thinning is a third of its fix: issue 16).
+  // it (a dense cluster's thinning was a quarter to a third of its fix: issue 16).
   std::optional<AzimuthThinning> thinning;
 };
 
