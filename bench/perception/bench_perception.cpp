@@ -450,8 +450,9 @@ void BM_DetectAndFixNear(benchmark::State& state) {
       std::hypot(fix.corrected.pose.x - car.truth.x, fix.corrected.pose.y - car.truth.y);
 }
 
-// The thinning alone (rsud runs it on a dense cluster twice: for the detection's rectangle, then for its
-// fix). Args: model, distance (dm), as BM_FixVehicleNear; thinned to the default's 800 points.
+// The thinning alone (rsud runs it once per dense cluster, for the detection's rectangle; the fix of a
+// vehicle of that detection alone reuses it). Args: model, distance (dm), as BM_FixVehicleNear; thinned to
+// the default's 800 points.
 void BM_ThinNear(benchmark::State& state) {
   const NearCar car = near_car(state.range(0), state.range(1));
   const std::size_t above = VehicleFixConfig{}.thin_above_points;
@@ -477,20 +478,19 @@ void BM_ThinningAzimuths(benchmark::State& state) {
     cross_dot.emplace_back(reference.x() * d.y() - reference.y() * d.x(), reference.dot(d));
   }
   const bool ours = state.range(2) != 0;
-  double worst = 0.0;
+  const auto angle = [ours](const Eigen::Vector2d& c) {
+    return ours ? azimuth_angle(c.x(), c.y())
+                : static_cast<double>(std::atan2(static_cast<float>(c.x()), static_cast<float>(c.y())));
+  };
   for (auto _ : state) {
     double sum = 0.0;
-    for (const Eigen::Vector2d& c : cross_dot) {
-      sum += ours ? azimuth_angle(c.x(), c.y())
-                  : static_cast<double>(std::atan2(static_cast<float>(c.x()), static_cast<float>(c.y())));
-    }
+    for (const Eigen::Vector2d& c : cross_dot)
+      sum += angle(c);
     benchmark::DoNotOptimize(sum);
   }
+  double worst = 0.0;
   for (const Eigen::Vector2d& c : cross_dot)
-    worst = std::max(worst, std::abs((ours ? azimuth_angle(c.x(), c.y())
-                                           : static_cast<double>(std::atan2(static_cast<float>(c.x()),
-                                                                            static_cast<float>(c.y())))) -
-                                     std::atan2(c.x(), c.y())));
+    worst = std::max(worst, std::abs(angle(c) - std::atan2(c.x(), c.y())));
   state.counters["points"] = static_cast<double>(cross_dot.size());
   state.counters["worst_error_rad"] = worst;
 }

@@ -7,7 +7,6 @@
 #include <limits>
 
 namespace rsu::perception {
-
 namespace {
 
 // Each point's laser and azimuth column (LaserLookup::kNone: not finite, dropped).
@@ -43,9 +42,9 @@ Columns columns_of(std::span<const Eigen::Vector3d> points, const LidarGeometry&
   std::size_t hint = 0;  // points arrive firing by firing: the next is mostly a neighbour's laser
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d& p = points[i];
-    const double run = (p.head<2>() - lidar.xy()).norm();
-    if (!p.allFinite() || !(run > 0.0))
+    if (!valid(p))
       continue;
+    const double run = (p.head<2>() - lidar.xy()).norm();
     hint = lookup.rank((p.z() - lidar.position.z()) / run, hint);
     const std::size_t laser = hint;
     out.laser[i] = laser;
