@@ -218,6 +218,7 @@ void Decoder::advance_frame(PacketInfo& info) {
 
 void Decoder::append_points(std::span<const std::uint8_t> payload, std::vector<LidarPoint>& out) {
   const std::size_t before = out.size();
+  out.reserve(before + static_cast<std::size_t>(metadata_.columns_per_packet * metadata_.pixels_per_column));
   for (int c = 0; c < metadata_.columns_per_packet; ++c) {
     const ColumnHeader col = reader_.column(payload, c);
     if (!col.valid()) {

@@ -37,32 +37,11 @@ BeamGeometry::BeamGeometry(const Metadata& metadata)
   }
 }
 
-Eigen::Vector3d BeamGeometry::lidar_direction(int row, int measurement_id) const {
-  const auto r = static_cast<std::size_t>(row);
-  const auto m = static_cast<std::size_t>(measurement_id);
-  // cos and sin of theta_e + theta_a by the angle sum rule: no trigonometry per point.
-  const double c = cos_encoder_[m] * cos_offset_[r] - sin_encoder_[m] * sin_offset_[r];
-  const double s = sin_encoder_[m] * cos_offset_[r] + cos_encoder_[m] * sin_offset_[r];
-  return {c * cos_altitude_[r], s * cos_altitude_[r], sin_altitude_[r]};
-}
-
 Eigen::Vector3d BeamGeometry::direction(int row, int measurement_id) const {
   return rotation_ * lidar_direction(row, measurement_id);
 }
 
-Eigen::Vector3d BeamGeometry::point(int row, int measurement_id, double range_mm) const {
-  const auto m = static_cast<std::size_t>(measurement_id);
-  const Eigen::Vector3d beam_origin(beam_x_mm_ * cos_encoder_[m], beam_x_mm_ * sin_encoder_[m], beam_z_mm_);
-  const Eigen::Vector3d lidar =
-      beam_origin + (range_mm - beam_length_mm_) * lidar_direction(row, measurement_id);
-  return (rotation_ * lidar + translation_mm_) * 1e-3;
-}
-
-double BeamGeometry::azimuth_rad(int row, int measurement_id) const {
-  if (!row_azimuth_rad_.empty()) {
-    return wrap_angle_positive(row_azimuth_rad_[static_cast<std::size_t>(row)] +
-                               2.0 * kPi * measurement_id / columns_);
-  }
+double BeamGeometry::azimuth_of_direction(int row, int measurement_id) const {
   const Eigen::Vector3d d = direction(row, measurement_id);
   return wrap_angle_positive(std::atan2(-d.y(), d.x()));  // clockwise: y is left
 }

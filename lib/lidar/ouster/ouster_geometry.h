@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include "common/angles.h"
 #include "lidar/ouster/ouster_metadata.h"
 #include "lidar/sensor_model.h"
 
@@ -41,6 +42,7 @@ class BeamGeometry {
 
  private:
   Eigen::Vector3d lidar_direction(int row, int measurement_id) const;
+  double azimuth_of_direction(int row, int measurement_id) const;
 
   std::vector<double> cos_encoder_, sin_encoder_;  // per column
   std::vector<double> cos_offset_, sin_offset_;    // per row: theta_a
@@ -62,5 +64,33 @@ class BeamGeometry {
 // "sequence", distance unit 1 mm (8 mm for RNG15_RFL8_NIR8), the given minimum range, the maximum
 // range the profile's range field can hold, no Velodyne packet format.
 SensorModel sensor_model(const Metadata& metadata, double min_range_m);
+
+// point, lidar_direction and azimuth_rad are defined here, not in the .cpp: they run for every pixel
+// (5.2 M a second from a 128 x 2048 x 20 Hz stream).
+
+inline Eigen::Vector3d BeamGeometry::lidar_direction(int row, int measurement_id) const {
+  const auto r = static_cast<std::size_t>(row);
+  const auto m = static_cast<std::size_t>(measurement_id);
+  // cos and sin of theta_e + theta_a by the angle sum rule: no trigonometry per point.
+  const double c = cos_encoder_[m] * cos_offset_[r] - sin_encoder_[m] * sin_offset_[r];
+  const double s = sin_encoder_[m] * cos_offset_[r] + cos_encoder_[m] * sin_offset_[r];
+  return {c * cos_altitude_[r], s * cos_altitude_[r], sin_altitude_[r]};
+}
+
+inline Eigen::Vector3d BeamGeometry::point(int row, int measurement_id, double range_mm) const {
+  const auto m = static_cast<std::size_t>(measurement_id);
+  const Eigen::Vector3d beam_origin(beam_x_mm_ * cos_encoder_[m], beam_x_mm_ * sin_encoder_[m], beam_z_mm_);
+  const Eigen::Vector3d lidar =
+      beam_origin + (range_mm - beam_length_mm_) * lidar_direction(row, measurement_id);
+  return (rotation_ * lidar + translation_mm_) * 1e-3;
+}
+
+inline double BeamGeometry::azimuth_rad(int row, int measurement_id) const {
+  if (row_azimuth_rad_.empty()) {
+    return azimuth_of_direction(row, measurement_id);
+  }
+  return wrap_angle_positive(row_azimuth_rad_[static_cast<std::size_t>(row)] +
+                             2.0 * kPi * measurement_id / columns_);
+}
 
 }  // namespace rsu::lidar::ouster

@@ -18,12 +18,6 @@ constexpr std::size_t kEudpColumnHeader = 12;
 constexpr std::size_t kEudpStatusOffset = 10;
 constexpr std::size_t kMeasurementIdOffset = 8;
 
-constexpr std::uint32_t kRange20Mask = 0x000FFFFFU;
-constexpr std::uint32_t kRange19Mask = 0x0007FFFFU;
-constexpr std::uint32_t kRange15Mask = 0x7FFFU;
-constexpr std::uint32_t kRange15UnitMm = 8;  // RNG15: the SDK shifts the 15-bit range left by 3
-constexpr std::uint16_t kNearIr8Scale = 16;  // RNG15_RFL8_NIR8: the SDK scales its 8-bit near-IR by 16
-
 std::size_t pixel_bytes(UdpProfile profile) {
   return profile == UdpProfile::rng15_rfl8_nir8 ? 4 : 12;
 }
@@ -47,10 +41,6 @@ PacketLayout packet_layout(UdpProfile profile, int pixels_per_column, int column
 
 PacketReader::PacketReader(UdpProfile profile, int pixels_per_column, int columns_per_packet)
     : profile_(profile), layout_(packet_layout(profile, pixels_per_column, columns_per_packet)) {}
-
-std::size_t PacketReader::column_offset(int column) const {
-  return layout_.packet_header_bytes + static_cast<std::size_t>(column) * layout_.column_bytes;
-}
 
 PacketHeader PacketReader::header(std::span<const std::uint8_t> packet) const {
   PacketHeader h;
@@ -79,32 +69,6 @@ ColumnHeader PacketReader::column(std::span<const std::uint8_t> packet, int colu
     c.status = load_le<std::uint16_t>(packet, at + kEudpStatusOffset);
   }
   return c;
-}
-
-Pixel PacketReader::pixel(std::span<const std::uint8_t> packet, int column, int row) const {
-  const std::size_t at = column_offset(column) + layout_.column_header_bytes +
-                         static_cast<std::size_t>(row) * layout_.pixel_bytes;
-  Pixel p;
-  switch (profile_) {
-    case UdpProfile::legacy:
-      p.range_mm = load_le<std::uint32_t>(packet, at) & kRange20Mask;
-      p.reflectivity = load_le<std::uint16_t>(packet, at + 4);
-      p.signal = load_le<std::uint16_t>(packet, at + 6);
-      p.near_ir = load_le<std::uint16_t>(packet, at + 8);
-      break;
-    case UdpProfile::rng19_rfl8_sig16_nir16:
-      p.range_mm = load_le<std::uint32_t>(packet, at) & kRange19Mask;
-      p.reflectivity = packet[at + 4];
-      p.signal = load_le<std::uint16_t>(packet, at + 6);
-      p.near_ir = load_le<std::uint16_t>(packet, at + 8);
-      break;
-    case UdpProfile::rng15_rfl8_nir8:
-      p.range_mm = (load_le<std::uint16_t>(packet, at) & kRange15Mask) * kRange15UnitMm;
-      p.reflectivity = packet[at + 2];
-      p.near_ir = static_cast<std::uint16_t>(packet[at + 3] * kNearIr8Scale);
-      break;
-  }
-  return p;
 }
 
 }  // namespace rsu::lidar::ouster

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <span>
 
+#include "common/byte_order.h"
 #include "lidar/ouster/ouster_metadata.h"
 
 namespace rsu::lidar::ouster {
@@ -72,13 +73,49 @@ class PacketReader {
   const PacketLayout& layout() const { return layout_; }
   PacketHeader header(std::span<const std::uint8_t> packet) const;
   ColumnHeader column(std::span<const std::uint8_t> packet, int column) const;
+  // Defined here, not in the .cpp: the decoder reads every pixel of a 128 x 2048 x 20 Hz stream
+  // (5.2 M a second), and a call per pixel was a third of its time.
   Pixel pixel(std::span<const std::uint8_t> packet, int column, int row) const;
 
  private:
-  std::size_t column_offset(int column) const;
+  std::size_t column_offset(int column) const {
+    return layout_.packet_header_bytes + static_cast<std::size_t>(column) * layout_.column_bytes;
+  }
+
+  static constexpr std::uint32_t kRange20Mask = 0x000FFFFFU;
+  static constexpr std::uint32_t kRange19Mask = 0x0007FFFFU;
+  static constexpr std::uint32_t kRange15Mask = 0x7FFFU;
+  static constexpr std::uint32_t kRange15UnitMm = 8;  // RNG15: the SDK shifts the 15-bit range left by 3
+  static constexpr std::uint16_t kNearIr8Scale = 16;  // RNG15_RFL8_NIR8: the SDK scales its near-IR by 16
 
   UdpProfile profile_;
   PacketLayout layout_;
 };
+
+inline Pixel PacketReader::pixel(std::span<const std::uint8_t> packet, int column, int row) const {
+  const std::size_t at = column_offset(column) + layout_.column_header_bytes +
+                         static_cast<std::size_t>(row) * layout_.pixel_bytes;
+  Pixel p;
+  switch (profile_) {
+    case UdpProfile::legacy:
+      p.range_mm = load_le<std::uint32_t>(packet, at) & kRange20Mask;
+      p.reflectivity = load_le<std::uint16_t>(packet, at + 4);
+      p.signal = load_le<std::uint16_t>(packet, at + 6);
+      p.near_ir = load_le<std::uint16_t>(packet, at + 8);
+      break;
+    case UdpProfile::rng19_rfl8_sig16_nir16:
+      p.range_mm = load_le<std::uint32_t>(packet, at) & kRange19Mask;
+      p.reflectivity = packet[at + 4];
+      p.signal = load_le<std::uint16_t>(packet, at + 6);
+      p.near_ir = load_le<std::uint16_t>(packet, at + 8);
+      break;
+    case UdpProfile::rng15_rfl8_nir8:
+      p.range_mm = (load_le<std::uint16_t>(packet, at) & kRange15Mask) * kRange15UnitMm;
+      p.reflectivity = packet[at + 2];
+      p.near_ir = static_cast<std::uint16_t>(packet[at + 3] * kNearIr8Scale);
+      break;
+  }
+  return p;
+}
 
 }  // namespace rsu::lidar::ouster
