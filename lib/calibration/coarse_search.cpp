@@ -15,25 +15,22 @@ VoxelOccupancy::VoxelOccupancy(const std::vector<Eigen::Vector3f>& map_points, d
     : resolution_m_(resolution_m) {
   voxels_.reserve(map_points.size());
   for (const Eigen::Vector3f& p : map_points)
-    if (has_voxel_key(p.cast<double>(), resolution_m_))
-      voxels_.insert(voxel_key(p.cast<double>(), resolution_m_));
+    if (const std::optional<std::int64_t> key = voxel_key(p.cast<double>(), resolution_m_))
+      voxels_.insert(*key);
 }
 
-bool has_voxel_key(const Eigen::Vector3d& p, double resolution_m) {
-  const double limit = static_cast<double>(kAxisOffset - 1);
-  for (int axis = 0; axis < 3; ++axis) {
-    const double cell = p[axis] / resolution_m;
-    if (!(std::abs(cell) < limit))  // also false for NaN
-      return false;
-  }
-  return true;
-}
-
-std::int64_t voxel_key(const Eigen::Vector3d& p, double resolution_m) {
+std::optional<std::int64_t> voxel_key(const Eigen::Vector3d& p, double resolution_m) {
+  // The mount check asks for every point of every rotation (issue 16: with std::floor a library call per
+  // axis, its largest cost): one division per axis, and floor by truncation, exact within the limit.
+  constexpr double kLimit = static_cast<double>(kAxisOffset - 1);
   std::int64_t k = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    const auto cell = static_cast<std::int64_t>(std::floor(p[axis] / resolution_m)) + kAxisOffset;
-    k = (k << kAxisBits) | (cell & kAxisMask);
+    const double cell = p[axis] / resolution_m;
+    if (!(std::abs(cell) < kLimit))  // also false for NaN
+      return std::nullopt;
+    auto below = static_cast<std::int64_t>(cell);  // towards 0
+    below -= static_cast<double>(below) > cell ? 1 : 0;
+    k = (k << kAxisBits) | ((below + kAxisOffset) & kAxisMask);
   }
   return k;
 }
@@ -41,7 +38,8 @@ std::int64_t voxel_key(const Eigen::Vector3d& p, double resolution_m) {
 bool VoxelOccupancy::occupied(const Eigen::Vector3d& p) const {
   // A point without a key (NaN, beyond the key's range) is never occupied: converting its cell to an
   // integer is undefined (clang's UBSan reports it as float-cast-overflow; GCC's leaves that check out).
-  return has_voxel_key(p, resolution_m_) && voxels_.contains(voxel_key(p, resolution_m_));
+  const std::optional<std::int64_t> key = voxel_key(p, resolution_m_);
+  return key && voxels_.contains(*key);
 }
 
 CoarseMatch search_pose(const std::vector<Eigen::Vector3d>& sensor_points, const VoxelOccupancy& map,

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <unordered_set>
 #include <vector>
 
@@ -15,10 +16,9 @@
 
 namespace rsu::calibration {
 
-// Whether p has a voxel key: finite and within +-1M voxels of the origin on each axis.
-bool has_voxel_key(const Eigen::Vector3d& p, double resolution_m);
-// The voxel of side resolution_m holding p, as one key (21 bits per axis); p must have one (above).
-std::int64_t voxel_key(const Eigen::Vector3d& p, double resolution_m);
+// The voxel of side resolution_m holding p, as one key (21 bits per axis); none unless p is finite and
+// within +-1M voxels of the origin on each axis.
+std::optional<std::int64_t> voxel_key(const Eigen::Vector3d& p, double resolution_m);
 
 // Which voxels of side `resolution_m` hold at least one map point (points without a key, e.g. the NaN
 // of an organized cloud, are left out; such a query is never occupied).

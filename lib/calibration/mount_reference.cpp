@@ -54,9 +54,10 @@ MountReference::MountReference(const std::vector<std::vector<lidar::LidarPoint>>
     for (const auto& frame : reference) {
       for (const lidar::LidarPoint& p : frame) {
         const Eigen::Vector3d q(p.x, p.y, p.z);
-        if (!has_voxel_key(q, size) || q.norm() < config_.min_range_m)
+        const std::optional<std::int64_t> key = voxel_key(q, size);
+        if (!key || q.norm() < config_.min_range_m)
           continue;
-        Scatter& c = cells[voxel_key(q, size)];
+        Scatter& c = cells[*key];
         c.sum += q;
         c.outer += q * q.transpose();
         ++c.n;
@@ -83,9 +84,10 @@ MountReference::MountReference(const std::vector<std::vector<lidar::LidarPoint>>
 
 const MountReference::Plane* MountReference::plane_at(const Eigen::Vector3d& a) const {
   for (int s = 0; s < kScales; ++s) {
-    if (!has_voxel_key(a, voxel_sizes_[s]))
+    const std::optional<std::int64_t> key = voxel_key(a, voxel_sizes_[s]);
+    if (!key)
       return nullptr;
-    const auto it = planes_[s].find(voxel_key(a, voxel_sizes_[s]));
+    const auto it = planes_[s].find(*key);
     if (it != planes_[s].end())
       return &it->second;
   }

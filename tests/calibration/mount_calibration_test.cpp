@@ -6,8 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <optional>
+#include <random>
 
+#include "calibration/coarse_search.h"
 #include "common/angles.h"
 #include "eval/corridor/map_sampling.h"
 #include "sim/lidar_simulator.h"
@@ -125,6 +129,43 @@ TEST(MountCalibration, PointsWithoutAVoxelAreLeftOut) {
   const tools::CalibrationResult r = tools::calibrate_mount(background, map, Pose3{});
   EXPECT_EQ(r.background_points, 1U);
   EXPECT_EQ(r.verdict.verdict, calibration::Verdict::kFailed);
+}
+
+// The voxel key against its definition, computed here with std::floor: the voxel's integer corner on
+// each axis, offset by 2^20, 21 bits each; none for NaN or beyond +-(2^20 - 1) voxels. Points on voxel
+// boundaries (integers, -0), just either side of them, negative and positive, at three voxel sizes.
+TEST(MountCalibration, VoxelKeysAreTheirVoxelsCorners) {
+  const auto by_floor = [](const Eigen::Vector3d& p, double size) -> std::optional<std::int64_t> {
+    std::int64_t k = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double cell = p[axis] / size;
+      if (!(std::abs(cell) < static_cast<double>((1 << 20) - 1)))
+        return std::nullopt;
+      k = (k << 21) | ((static_cast<std::int64_t>(std::floor(cell)) + (1 << 20)) & ((1 << 21) - 1));
+    }
+    return k;
+  };
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> metres(-300.0, 300.0);
+  std::uniform_int_distribution<int> voxels(-2000, 2000);
+  int checked = 0;
+  for (const double size : {0.5, 0.1, 2.0}) {
+    for (int i = 0; i < 100'000; ++i) {
+      Eigen::Vector3d p(metres(rng), metres(rng), metres(rng));
+      if (i % 2 == 0) {  // on a voxel boundary, or the next double either side of it
+        const double edge = voxels(rng) * size;
+        p.y() = i % 6 == 0 ? edge : std::nextafter(edge, i % 6 == 2 ? -1e9 : 1e9);
+      }
+      ASSERT_EQ(calibration::voxel_key(p, size), by_floor(p, size)) << p.transpose() << " at " << size;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 300'000);
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(-0.0, 0.0, -1e-300), Eigen::Vector3d(-0.5, 0.5, -0.25)})
+    EXPECT_EQ(calibration::voxel_key(p, 0.5), by_floor(p, 0.5)) << p.transpose();
+  EXPECT_FALSE(calibration::voxel_key(Eigen::Vector3d(std::nan(""), 0, 0), 0.5));
+  EXPECT_FALSE(calibration::voxel_key(Eigen::Vector3d(0, 0, 0.5 * ((1 << 20) - 1)), 0.5));
+  EXPECT_TRUE(calibration::voxel_key(Eigen::Vector3d(0, 0, 0.5 * ((1 << 20) - 2)), 0.5));
 }
 
 }  // namespace

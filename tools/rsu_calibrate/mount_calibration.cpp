@@ -26,10 +26,10 @@ std::vector<Eigen::Vector3d> thin_out(const std::vector<Eigen::Vector3d>& points
   std::unordered_set<std::int64_t> taken;
   std::vector<Eigen::Vector3d> out;
   for (const Eigen::Vector3d& p : points) {
-    if (!calibration::has_voxel_key(p, cell_m) || p.norm() < min_range_m)
+    const std::optional<std::int64_t> key = calibration::voxel_key(p, cell_m);
+    if (!key || p.norm() < min_range_m)
       continue;
-    const std::int64_t key = calibration::voxel_key(p, cell_m);
-    if (taken.insert(key).second)
+    if (taken.insert(*key).second)
       out.push_back(p);
   }
   return out;
