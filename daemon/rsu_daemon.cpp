@@ -523,12 +523,14 @@ void RsuDaemon::send_corrections(const std::vector<core::OutgoingCorrection>& co
   if (dds_)
     dds_->publish(corrections);
   for (const core::OutgoingCorrection& c : corrections) {
+    // Stamped as it is handed to the socket: a stamp after the send could come after the vehicle's
+    // receipt whenever rsud is descheduled in between (the metrics test failed so on a loaded machine).
+    const TimeNs sent = clock_now();
     if (!send_to_vehicle(c.destination, c.bytes, "correction_send")) {
       ++correction_sends_failed_;
       continue;
     }
     ++corrections_sent_;
-    const TimeNs sent = clock_now();
     correction_latency_seconds_.observe(to_seconds(sent - c.correction.sweep_time));
     if (stepped_packet_) {  // released by a live packet's step: the latency's three parts
       correction_sweep_wait_seconds_.observe(to_seconds(stepped_packet_->arrival - c.correction.sweep_time));
@@ -884,7 +886,8 @@ void RsuDaemon::write_metrics() {
        "clustering, fits and corrections included",
        &lidar_step_seconds_},
       {"correction_latency_seconds",
-       "From the time the LiDAR swept the vehicle to the correction's send, on the run's clock",
+       "From the time the LiDAR swept the vehicle to the correction's send (handed to the socket), on the "
+       "run's clock",
        &correction_latency_seconds_},
       {"correction_sweep_wait_seconds",
        "Of a correction released by a live LiDAR packet's step: from the time the LiDAR swept the vehicle "
@@ -896,7 +899,7 @@ void RsuDaemon::write_metrics() {
        &correction_socket_wait_seconds_},
       {"correction_step_seconds",
        "Of a correction released by a live LiDAR packet's step: from rsud's read of that packet to the "
-       "correction's send",
+       "correction's send (handed to the socket)",
        &correction_step_seconds_},
       {"lidar_socket_wait_seconds",
        "Per live LiDAR packet: its wait in rsud's socket, from its arrival (the kernel's stamp) to rsud's "

@@ -48,7 +48,7 @@ inline double wrap_angle_positive(double a) {
   a = std::fmod(a, kTwoPi);
   if (a < 0.0) {
     a += kTwoPi;
-    return a < kTwoPi ? a : 0.0;  // a within half an ulp of 2 pi below 0 rounds up to 2 pi
+    return a < kTwoPi ? a : 0.0;  // a + 2 pi rounds to 2 pi for a just below 0 (above -4.4e-16)
   }
   return a;
 }
