@@ -20,8 +20,8 @@ VoxelOccupancy::VoxelOccupancy(const std::vector<Eigen::Vector3f>& map_points, d
 }
 
 std::optional<std::int64_t> voxel_key(const Eigen::Vector3d& p, double resolution_m) {
-  // The mount check asks for every point of every rotation (issue 16: with std::floor a library call per
-  // axis, its largest cost): one division per axis, and floor by truncation, exact within the limit.
+  // The mount check asks for every point of every rotation, at each voxel size (issue 16): one division
+  // per axis (a test for a key, then the key, took two), and floor by truncation, exact within the limit.
   constexpr double kLimit = static_cast<double>(kAxisOffset - 1);
   std::int64_t k = 0;
   for (int axis = 0; axis < 3; ++axis) {
