@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "common/angles.h"
+#include "common/rounding.h"
 
 namespace rsu::perception {
 
@@ -115,7 +116,7 @@ void SweepClusterer::add(const lidar::LidarPoint& p, bool foreground) {
   // Unwrap against where this laser should point by now: robust to lost packets shorter than half a
   // turn.
   const double expected = sweep_ + offset + radians_per_ns_ * static_cast<double>(p.time_ns - last_time_);
-  const double u = a + kTwoPi * std::round((expected - a) / kTwoPi);
+  const double u = a + kTwoPi * round_half_away((expected - a) / kTwoPi);
   sweep_ = std::max(sweep_, u - offset);
   last_time_ = p.time_ns;
   if (!foreground) {

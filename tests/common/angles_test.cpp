@@ -83,6 +83,43 @@ TEST(Angles, BothWrapsAreTheLibraryCallsBitForBitOverAMillionAngles) {
   EXPECT_EQ(mismatches, 0);
 }
 
+// Angles turns away (a frame assembler's unwrapped azimuth grows a turn per rotation: 864,000 a day at
+// 10 Hz), where wrap_angle computes the remainder itself: whole and half turns (where the nearest number of
+// turns changes) up to beyond 2^25 rad, and 3 doubles either side of each; a million random angles.
+TEST(Angles, WrapAngleIsRemaindersBitForBitTurnsAway) {
+  std::vector<double> centres;
+  for (double n = 1.0; n < 1e8; n = n < 200.0 ? n + 1.0 : std::floor(n * 1.37)) {
+    centres.push_back(n * 2.0 * kPi);
+    centres.push_back((n + 0.5) * 2.0 * kPi);
+  }
+  centres.push_back(0x1p25);
+  int checked = 0, mismatches = 0;
+  for (double c : centres) {
+    for (double sign : {1.0, -1.0}) {
+      double up = sign * c, down = sign * c;
+      mismatches += !same(rsu::wrap_angle(up), remainder_wrap(up));
+      for (int i = 0; i < 3; ++i) {
+        up = std::nextafter(up, std::numeric_limits<double>::infinity());
+        down = std::nextafter(down, -std::numeric_limits<double>::infinity());
+        mismatches += !same(rsu::wrap_angle(up), remainder_wrap(up));
+        mismatches += !same(rsu::wrap_angle(down), remainder_wrap(down));
+        checked += 2;
+      }
+    }
+  }
+  std::mt19937_64 rng(13);
+  std::uniform_int_distribution<int> turns(-6'000'000, 6'000'000);
+  std::uniform_real_distribution<double> within(-kPi, kPi);
+  std::uniform_real_distribution<double> anywhere(-0x1p26, 0x1p26);
+  for (int i = 0; i < 1'000'000; ++i) {
+    const double a = i % 2 == 0 ? turns(rng) * 2.0 * kPi + within(rng) : anywhere(rng);
+    mismatches += !same(rsu::wrap_angle(a), remainder_wrap(a));
+    ++checked;
+  }
+  EXPECT_GT(checked, 1'000'000);
+  EXPECT_EQ(mismatches, 0);
+}
+
 TEST(Angles, WrapsLandInTheirRanges) {
   for (double a : edges()) {
     if (!std::isfinite(a)) {
