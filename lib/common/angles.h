@@ -32,13 +32,13 @@ inline constexpr double kTwoPiHi =
 inline constexpr double kTwoPiLo = 2.0 * kPi - kTwoPiHi;
 
 // std::remainder(a, 2 pi), bit for bit, for angles turns away (a frame assembler's unwrapped azimuth
-// grows a turn per rotation), 4x quicker than the library call. With n the nearest whole number of turns,
-// a - n hi is exact (Sterbenz: for |n| >= 1 it is within a factor 2 of a) and so one rounding of
-// (a - n hi) - n lo gives the exact remainder. n is a / 2 pi (by a multiplication) made whole by adding
-// and subtracting 1.5 * 2^52, with no division and no branch (a division and a branchy round made it
-// slower than the library call): it is the nearest for certain when the result lies more than the
-// computation's few 1e-15 inside (-pi, pi), as any other n leaves at least pi; otherwise, and beyond
-// 2^25 rad, the library call.
+// grows a turn per rotation), 3.4-3.8x quicker than the library call (BM_WrapAngleTurnsAway). With n the
+// nearest whole number of turns, a - n hi is exact (Sterbenz: for |n| >= 1 it is within a factor 2 of a)
+// and so one rounding of (a - n hi) - n lo gives the exact remainder. n is a / 2 pi (by a multiplication)
+// made whole by adding and subtracting 1.5 * 2^52, with no division and no branch (a division and a
+// branchy round made it slower than the library call): it is the nearest for certain when the result
+// lies more than the computation's few 1e-15 inside (-pi, pi), as any other n leaves at least pi;
+// otherwise, and beyond 2^25 rad, the library call.
 inline double remainder_two_pi(double a) {
   if (std::abs(a) < 0x1p25) {
     constexpr double kWhole = 0x1.8p52;  // x + kWhole - kWhole is x rounded to a whole number (|x| < 2^51)
