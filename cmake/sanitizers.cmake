@@ -9,6 +9,11 @@ endif()
 if(RSU_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
   add_link_options(-fsanitize=address,undefined)
+  # Third-party headers without UBSan (their ASan instrumentation stays): cmake/ubsan_ignorelist.txt says
+  # why and what it saves. GCC has no such list; the ASan tree is clang's (scripts/build.sh).
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    add_compile_options(-fsanitize-ignorelist=${CMAKE_CURRENT_LIST_DIR}/ubsan_ignorelist.txt)
+  endif()
   # Eigen 3.4 stops trusting malloc's 16-byte alignment when it sees __SANITIZE_ADDRESS__ and then frees
   # its heap blocks with its own "handmade" scheme, while the prebuilt (uninstrumented) PCL allocates
   # them with plain malloc: a PCL object built there and freed in our code (NDT's voxel leaves) is a
