@@ -1,11 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // The ASan+UBSan tree's proof that its sanitizers fire where the project needs them, now that
 // cmake/ubsan_ignorelist.txt leaves UBSan out of the third-party headers. Each mode commits one error;
-// its test (tests/structure/CMakeLists.txt) passes only if the sanitizer reports it:
-//   signed-overflow   a signed integer overflow in our code (UBSan)
-//   misaligned-load   a 4-byte load from an odd address in our code, as a careless packet parser would
-//   (UBSan) overflow-in-std   a heap read past a vector's end inside libstdc++'s std::accumulate (ASan, in a
-//   header)
+// its test (tests/structure/CMakeLists.txt) passes only if the sanitizer reports it.
+//   signed-overflow: a signed integer overflow in our code (UBSan).
+//   misaligned-load: a 4-byte load from an odd address in our code, as a careless parser would (UBSan).
+//   overflow-in-std: a heap read past a vector's end inside libstdc++'s std::accumulate (ASan, a header).
 // The operands come from the command line, so that no compiler can fold the error away.
 #include <cstdint>
 #include <cstdio>
