@@ -1,5 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
-# Project-wide warning flags, applied per target with rsu_warnings(target).
+# Project-wide warning flags, applied per target with rsu_warnings(target), which also gives the target
+# the shared precompiled header (cmake/precompiled_headers.cmake).
+include(${CMAKE_CURRENT_LIST_DIR}/precompiled_headers.cmake)
 function(rsu_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
                                            -Wold-style-cast -Wcast-align -Woverloaded-virtual
@@ -12,4 +14,5 @@ function(rsu_warnings target)
   if(RSU_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()
+  rsu_register_for_precompiled_headers(${target})
 endfunction()

@@ -6,9 +6,10 @@
 # asan    -> build-asan/ (clang, RelWithDebInfo at -O1 with line tables, AddressSanitizer +
 #                         UndefinedBehaviorSanitizer, no benchmarks; with the libFuzzer harnesses of fuzz/,
 #                         which scripts/fuzz.sh runs: one sanitized tree for the tests and the fuzzers)
-# tsan    -> build-tsan/ (RelWithDebInfo at -O1 -g1 with ThreadSanitizer, no benchmarks; only the targets of the
-#                         tests labelled `threads`, which is all scripts/test.sh runs under TSan; the
-#                         simulator and fleet driving them come from build/: build release first)
+# tsan    -> build-tsan/ (clang, RelWithDebInfo at -O1 with line tables, ThreadSanitizer, no benchmarks; only
+#                         the targets of the tests labelled `threads`, which is all scripts/test.sh runs
+#                         under TSan; the simulator and fleet driving them come from build/: build release
+#                         first)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kind=${1:-release}
@@ -23,13 +24,20 @@ launcher=()
 if command -v ccache >/dev/null 2>&1; then
   launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 fi
-# The sanitizer builds compile at -O1 with line tables only: GCC with ASan+UBSan at -O2 -g took 5-7x a
-# Release compile (PCL's NDT: 137 s vs 19 s for one file), at -O1 -g1 2.3-2.8x (49 s): the sanitizers'
-# own recommendation, and the stack traces keep their lines. GCC's -Wmaybe-uninitialized guesses from
-# what its optimiser saw, and TSan's instrumentation at -O1 makes it guess wrong inside Eigen's assignment
-# of a std::optional's payload (vehicle_client/cli); the Release build keeps the warning as an error.
-sanitizer_cflags="-O1 -g1 -DNDEBUG -Wno-maybe-uninitialized"
-sanitizer_flags=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$sanitizer_cflags" -DCMAKE_C_FLAGS_RELWITHDEBINFO="$sanitizer_cflags")
+# The sanitizer trees are clang's, at -O1 with line tables only: the sanitizers' own recommendation, and the
+# stack traces keep their lines. GCC with ASan+UBSan at -O2 -g took 5-7x a Release compile (PCL's NDT:
+# 137 s vs 19 s for one file), at -O1 -g1 2.3-2.8x (49 s). Clang also shares one precompiled header among
+# the libraries, daemon and tools (cmake/precompiled_headers.cmake). Warnings are errors in the Release
+# build (GCC); clang's own (-Wdouble-promotion on float spans) stay warnings in these trees.
+clang_cflags="-O1 -gline-tables-only -DNDEBUG"
+clang_flags=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$clang_cflags" -DCMAKE_C_FLAGS_RELWITHDEBINFO="$clang_cflags")
+# A tree configured by GCC before (this script did so for build-asan/ until 2026-11-30, for build-tsan/
+# until 2026-12-02) is started afresh: CMake does not switch a configured tree's compiler.
+start_afresh_unless_clang() {
+  if [ -f "$1/CMakeCache.txt" ] && ! grep -q '^CMAKE_CXX_COMPILER:.*clang++' "$1/CMakeCache.txt"; then
+    rm -rf "$1"
+  fi
+}
 case "$kind" in
   release)
     cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DRSU_WERROR=ON "${launcher[@]}" >/dev/null
@@ -39,23 +47,19 @@ case "$kind" in
     # clang, not GCC: the fuzz harnesses need it (libFuzzer), and one tree for both saves a build. In CI
     # runs up to 810e31d (2 cores) GCC's ASan+UBSan tree took 741-827 s and the separate clang fuzz tree
     # ~210 s more; on fresh clones since, this tree, harnesses included, 411-479 s. Its tests took
-    # 279-463 s against GCC's 236-248 s (README, Known shortfalls). Warnings are errors in the Release
-    # build (GCC); clang's own (-Wdouble-promotion on float spans) stay warnings.
-    clang_cflags="-O1 -gline-tables-only -DNDEBUG"
-    # A tree configured by GCC before (this script did until 2026-11-30) is started afresh: CMake does
-    # not switch a configured tree's compiler.
-    if [ -f build-asan/CMakeCache.txt ] && ! grep -q '^CMAKE_CXX_COMPILER:.*clang++' build-asan/CMakeCache.txt; then
-      rm -rf build-asan
-    fi
+    # 279-463 s against GCC's 236-248 s (README, Known shortfalls).
+    start_afresh_unless_clang build-asan
     CC=clang CXX=clang++ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE=ON \
-      -DRSU_FUZZ=ON -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$clang_cflags" -DCMAKE_C_FLAGS_RELWITHDEBINFO="$clang_cflags" \
-      -DRSU_BUILD_BENCHMARKS=OFF "${launcher[@]}" >/dev/null
+      -DRSU_FUZZ=ON "${clang_flags[@]}" -DRSU_BUILD_BENCHMARKS=OFF "${launcher[@]}" >/dev/null
     cmake --build build-asan -j "$jobs" "${targets[@]}"
     ;;
   tsan)
-    # The live tests' drivers (rsu-sim, rsu-fleet) come from the Release build (tests/CMakeLists.txt).
-    cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE_THREAD=ON \
-      "${sanitizer_flags[@]}" -DRSU_BUILD_BENCHMARKS=OFF -DRSU_WERROR=ON -DRSU_TEST_TOOLS_DIR="$PWD/build" "${launcher[@]}" >/dev/null
+    # clang, as build-asan/: with the shared precompiled header this tree built in 188 s against GCC's 295 s
+    # (2 cores, from scratch, 2026-12-02). The live tests' drivers (rsu-sim, rsu-fleet) come from the
+    # Release build (tests/CMakeLists.txt).
+    start_afresh_unless_clang build-tsan
+    CC=clang CXX=clang++ cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE_THREAD=ON \
+      "${clang_flags[@]}" -DRSU_BUILD_BENCHMARKS=OFF -DRSU_TEST_TOOLS_DIR="$PWD/build" "${launcher[@]}" >/dev/null
     if [ ${#targets[@]} -eq 0 ]; then
       targets=(--target rsu_threaded_tests)
     fi

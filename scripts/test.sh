@@ -27,7 +27,8 @@
 #               labelled `experiment` (a whole experiment's computation, e.g. NDT over a drive: 11 s in
 #               Release, 100 s under ASan, 43 s since the ignorelist; the fix covariance's honesty over
 #               the pilot's cells, on both cores; their parts run under ASan in the shorter tests)
-#   TSan        only the tests labelled `threads` (tests/CMakeLists.txt): the vehicle client (io
+#   TSan        (clang, since 2026-12-02: 188 s to build against GCC's 295 s, scripts/build.sh) only
+#               the tests labelled `threads` (tests/CMakeLists.txt): the vehicle client (io
 #               thread), the pilot's workers, the DDS wrapper (Cyclone's threads), and rsud as a
 #               process (integration tests, DDS peers); not those also labelled `realtime` (fault,
 #               mis-association, handover, DDS participant: they assert real-time service, which a

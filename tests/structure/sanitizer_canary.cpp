@@ -1,15 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
-// The ASan+UBSan tree's proof that its sanitizers fire where the project needs them, now that
-// cmake/ubsan_ignorelist.txt leaves UBSan out of the third-party headers. Each mode commits one error;
-// its test (tests/structure/CMakeLists.txt) passes only if the sanitizer reports it.
+// The sanitizer trees' proof that their sanitizers fire where the project needs them, now that
+// cmake/ubsan_ignorelist.txt leaves UBSan out of the third-party headers and both trees share precompiled
+// headers (cmake/precompiled_headers.cmake). Each mode commits one error; its test
+// (tests/structure/CMakeLists.txt) passes only if the sanitizer reports it.
 //   signed-overflow: a signed integer overflow in our code (UBSan).
 //   misaligned-load: a 4-byte load from an odd address in our code, as a careless parser would (UBSan).
 //   overflow-in-std: a heap read past a vector's end inside libstdc++'s std::accumulate (ASan, a header).
+//   data-race:       two threads add to one counter without synchronisation (TSan).
 // The operands come from the command line, so that no compiler can fold the error away.
 #include <cstdint>
 #include <cstdio>
 #include <numeric>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -31,11 +34,25 @@ int overflow_in_std(std::size_t extra) {
   return std::accumulate(values.begin(), values.begin() + 4 + static_cast<std::ptrdiff_t>(extra), 0);
 }
 
+int data_race(std::size_t rounds) {
+  int counter = 0;
+  const auto add = [&counter, rounds] {
+    for (std::size_t i = 0; i < rounds; ++i) {
+      ++counter;
+    }
+  };
+  std::thread other(add);
+  add();
+  other.join();
+  return counter;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc != 2) {
-    std::fprintf(stderr, "usage: sanitizer_canary signed-overflow|misaligned-load|overflow-in-std\n");
+    std::fprintf(stderr,
+                 "usage: sanitizer_canary signed-overflow|misaligned-load|overflow-in-std|data-race\n");
     return 2;
   }
   const std::string_view mode = argv[1];
@@ -48,6 +65,8 @@ int main(int argc, char** argv) {
     result = misaligned_load(one);
   } else if (mode == "overflow-in-std") {
     result = overflow_in_std(one);
+  } else if (mode == "data-race") {
+    result = data_race(1000 * one);
   } else {
     std::fprintf(stderr, "unknown mode %s\n", argv[1]);
     return 2;
