@@ -1,12 +1,12 @@
 # SPDX-License-Identifier: Apache-2.0
-# With clang (the ASan+UBSan tree, scripts/build.sh), one precompiled header for the libraries, daemon
-# and tools: Eigen and the standard headers most of their sources include. The test binaries have their
-# own (gtest, at -O0: tests/CMakeLists.txt), with either compiler.
+# With clang (the ASan+UBSan and TSan trees, scripts/build.sh), one precompiled header for the
+# libraries, daemon and tools: Eigen and the standard headers most of their sources include. The test
+# binaries have their own (gtest, at -O0: tests/CMakeLists.txt), with either compiler.
 #
 # Measured on the ten lib/ libraries (113 sources, 2 cores, from scratch): clang with ASan+UBSan at -O1
 # 203 -> 147 s; GCC at -O3 (Release) 173 -> 153 s, and there GCC 12 then reports its known false
 # positives inside std::string (-Warray-bounds, -Wstringop-overflow) at two of our lines, which -Werror
-# turns into errors. So the GCC trees keep their sources' own includes.
+# turns into errors. So a GCC tree (Release) keeps its sources' own includes.
 #
 # A precompiled header is valid only for sources compiled with the same options: GCC and clang reject
 # one built without -fPIC for a -fPIC source, clang one built without the fuzzer's instrumentation

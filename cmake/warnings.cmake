@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
-# Project-wide warning flags, applied per target with rsu_warnings(target), which also gives the target
-# the shared precompiled header (cmake/precompiled_headers.cmake).
+# Project-wide warning flags, applied per target with rsu_warnings(target), which also registers the
+# target for the shared precompiled headers of the clang trees (cmake/precompiled_headers.cmake).
 include(${CMAKE_CURRENT_LIST_DIR}/precompiled_headers.cmake)
 function(rsu_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
