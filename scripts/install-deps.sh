@@ -34,9 +34,5 @@ if [ "$(id -u)" -ne 0 ]; then SUDO=sudo; else SUDO=; fi
 echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
-# dpkg syncs every file it unpacks to disk before renaming it into place: for the ~500 packages a
-# fresh machine needs (52 000 files) that costs up to a minute here (0.7 ms per synced file on this
-# disk). Skipped: what it guards against, files left empty by a power loss during the install, is
-# repaired by reinstalling the package (apt-get install --reinstall); a build machine can afford that.
-$SUDO apt-get install -y -qq --no-install-recommends -o Dpkg::Options::=--force-unsafe-io "${missing[@]}" >/dev/null
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 echo "install-deps: done"
