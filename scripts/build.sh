@@ -26,8 +26,8 @@ if command -v ccache >/dev/null 2>&1; then
 fi
 # The sanitizer trees are clang's, at -O1 with line tables only: the sanitizers' own recommendation, and the
 # stack traces keep their lines. GCC with ASan+UBSan at -O2 -g took 5-7x a Release compile (PCL's NDT:
-# 137 s vs 19 s for one file), at -O1 -g1 2.3-2.8x (49 s). Clang also shares one precompiled header among
-# the libraries, daemon and tools (cmake/precompiled_headers.cmake). Warnings are errors in the Release
+# 137 s vs 19 s for one file), at -O1 -g1 2.3-2.8x (49 s). With clang the libraries, daemon and tools also
+# share precompiled headers (cmake/precompiled_headers.cmake). Warnings are errors in the Release
 # build (GCC); clang's own (-Wdouble-promotion on float spans) stay warnings in these trees.
 clang_cflags="-O1 -gline-tables-only -DNDEBUG"
 clang_flags=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$clang_cflags" -DCMAKE_C_FLAGS_RELWITHDEBINFO="$clang_cflags")
