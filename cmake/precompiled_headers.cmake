@@ -45,7 +45,7 @@ function(rsu_apply_precompiled_headers)
     get_target_property(options ${target} COMPILE_OPTIONS)
     get_target_property(pic ${target} POSITION_INDEPENDENT_CODE)
     get_target_property(type ${target} TYPE)
-    if(type STREQUAL "SHARED_LIBRARY" OR type STREQUAL "MODULE_LIBRARY")
+    if(type STREQUAL "SHARED_LIBRARY")  # CMake compiles those with -fPIC unasked
       set(pic ON)
     endif()
     if(NOT pic)
