@@ -27,8 +27,9 @@ fi
 # The sanitizer trees are clang's, at -O1 with line tables only: the sanitizers' own recommendation, and the
 # stack traces keep their lines. GCC with ASan+UBSan at -O2 -g took 5-7x a Release compile (PCL's NDT:
 # 137 s vs 19 s for one file), at -O1 -g1 2.3-2.8x (49 s). With clang the libraries, daemon and tools also
-# share precompiled headers (cmake/precompiled_headers.cmake). Warnings are errors in the Release
-# build (GCC); clang's own (-Wdouble-promotion on float spans) stay warnings in these trees.
+# share precompiled headers (cmake/precompiled_headers.cmake). Warnings are errors in every tree: clang's
+# -Wdouble-promotion flags every implicit float -> double (GCC's only those in arithmetic), so the sources
+# widen with a cast or `.cast<double>()`.
 clang_cflags="-O1 -gline-tables-only -DNDEBUG"
 clang_flags=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$clang_cflags" -DCMAKE_C_FLAGS_RELWITHDEBINFO="$clang_cflags")
 # A tree configured by GCC before (this script did so for build-asan/ until 2026-11-30, for build-tsan/
@@ -50,7 +51,7 @@ case "$kind" in
     # 279-463 s against GCC's 236-248 s (README, Known shortfalls).
     start_afresh_unless_clang build-asan
     CC=clang CXX=clang++ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE=ON \
-      -DRSU_FUZZ=ON "${clang_flags[@]}" -DRSU_BUILD_BENCHMARKS=OFF "${launcher[@]}" >/dev/null
+      -DRSU_WERROR=ON -DRSU_FUZZ=ON "${clang_flags[@]}" -DRSU_BUILD_BENCHMARKS=OFF "${launcher[@]}" >/dev/null
     cmake --build build-asan -j "$jobs" "${targets[@]}"
     ;;
   tsan)
@@ -59,7 +60,7 @@ case "$kind" in
     # Release build (tests/CMakeLists.txt).
     start_afresh_unless_clang build-tsan
     CC=clang CXX=clang++ cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRSU_SANITIZE_THREAD=ON \
-      "${clang_flags[@]}" -DRSU_BUILD_BENCHMARKS=OFF -DRSU_TEST_TOOLS_DIR="$PWD/build" "${launcher[@]}" >/dev/null
+      -DRSU_WERROR=ON "${clang_flags[@]}" -DRSU_BUILD_BENCHMARKS=OFF -DRSU_TEST_TOOLS_DIR="$PWD/build" "${launcher[@]}" >/dev/null
     if [ ${#targets[@]} -eq 0 ]; then
       targets=(--target rsu_threaded_tests)
     fi

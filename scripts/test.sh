@@ -26,7 +26,8 @@
 #               106 s, left out for the budget); nor those
 #               labelled `experiment` (a whole experiment's computation, e.g. NDT over a drive: 11 s in
 #               Release, 100 s under ASan, 43 s since the ignorelist; the fix covariance's honesty over
-#               the pilot's cells, on both cores; their parts run under ASan in the shorter tests)
+#               the pilot's cells, on both cores; their parts run under ASan in the shorter tests),
+#               nor three long computations named where the pass runs (below)
 #   TSan        (clang, since 2026-12-02: 188 s to build against GCC's 295 s, scripts/build.sh) only
 #               the tests labelled `threads` (tests/CMakeLists.txt): the vehicle client (io
 #               thread), the pilot's workers, the DDS wrapper (Cyclone's threads), and rsud as a
@@ -73,9 +74,13 @@ if [ "${1:-}" != "--quick" ]; then
   scripts/build.sh asan
   end "ASan+UBSan build"
   begin "ASan+UBSan tests"
-  # Leak checking stays on; halt_on_error makes any report a test failure.
+  # Leak checking stays on; halt_on_error makes any report a test failure. Three long computations are
+  # left out: the pilot's distance sweep (as under TSan) and two of the mount calibration's four searches
+  # over a simulated street, 20-31 s each under ASan, 74 s of this pass's ~500 s of test time (fresh
+  # clone of 6bcc6b5); the calibration's other two searches (18 and 14 s) and the pilot's other cells run.
   ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE "throughput|experiment|realtime"
+    ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE "throughput|experiment|realtime" \
+      -E '^(Pilot\.PointCountFallsWithDistance|MountCalibration\.(FeaturelessStreetIsAmbiguousNotConfident|CorridorFromTwoMetresAndTwelveDegreesOff))$'
   end "ASan+UBSan tests"
 
   begin "TSan build"

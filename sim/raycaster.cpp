@@ -385,8 +385,8 @@ struct Raycaster::Impl {
 
   void finish_static_hit(const RTCHit& h, float tfar, const Eigen::Vector3d& direction, RayHit& out) const {
     const SurfaceClass c = class_of_geometry[h.geomID];
-    out.range = tfar;
-    out.normal = facing_normal(Eigen::Vector3d(h.Ng_x, h.Ng_y, h.Ng_z), direction);
+    out.range = static_cast<double>(tfar);
+    out.normal = facing_normal(Eigen::Vector3f(h.Ng_x, h.Ng_y, h.Ng_z).cast<double>(), direction);
     out.surface = c;
     out.reflectivity = reflectivity[class_index(c)];
     out.vehicle_id = 0;
@@ -400,7 +400,7 @@ struct Raycaster::Impl {
 
   // What the BVH missed before the ground (or at its range: a building's foot) is the ground.
   void finish_ground_hit(float ground, const Eigen::Vector3d& direction, RayHit& out) const {
-    out.range = ground;
+    out.range = static_cast<double>(ground);
     out.normal = facing_normal(Eigen::Vector3d::UnitZ(), direction);
     out.surface = SurfaceClass::kGround;
     out.reflectivity = reflectivity[class_index(SurfaceClass::kGround)];
@@ -467,9 +467,9 @@ struct Raycaster::Impl {
     set_ray(rh, origin, direction, to_tfar(limit));
     rtcIntersect1(v.bvh.get(), &context, &rh);
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && static_cast<double>(rh.ray.tfar) < limit) {
-      out.range = rh.ray.tfar;
-      out.normal =
-          facing_normal(rotation * Eigen::Vector3d(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z), ray.direction);
+      out.range = static_cast<double>(rh.ray.tfar);
+      out.normal = facing_normal(
+          rotation * Eigen::Vector3f(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z).cast<double>(), ray.direction);
       out.surface = SurfaceClass::kVehicle;
       out.reflectivity = reflectivity[class_index(SurfaceClass::kVehicle)];
       out.vehicle_id = v.id;

@@ -60,7 +60,7 @@ void BM_BaselineBackgroundTest(benchmark::State& state, int model) {
     std::vector<lidar::LidarPoint> map = frame;
     const Eigen::Isometry3d t = f.mount.to_isometry();
     for (lidar::LidarPoint& p : map) {
-      const Eigen::Vector3d q = t * Eigen::Vector3d(p.x, p.y, p.z);
+      const Eigen::Vector3d q = t * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
       p.x = static_cast<float>(q.x());
       p.y = static_cast<float>(q.y());
       p.z = static_cast<float>(q.z());

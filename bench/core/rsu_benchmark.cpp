@@ -459,7 +459,7 @@ void BM_SweepReleaseWait(benchmark::State& state) {
     vehicle.emplace_back();
     for (std::size_t i = 0; i < f.frame.points.size(); ++i) {
       lidar::LidarPoint p = f.frame.points[i];
-      const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+      const Eigen::Vector3d m = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
       p.x = static_cast<float>(m.x());
       p.y = static_cast<float>(m.y());
       p.z = static_cast<float>(m.z());

@@ -141,7 +141,8 @@ std::vector<LidarPoint> concatenated_background(const rsu::bench::CorridorFrames
 
 void BM_BackgroundReferenceGrid(benchmark::State& state, int model) {
   const auto& f = frames(model);
-  const ReferenceFrameBackground model_bg(concatenated_background(f), {.match_radius_m = kMatchRadius});
+  const ReferenceFrameBackground model_bg(concatenated_background(f),
+                                          {.match_radius_m = static_cast<double>(kMatchRadius)});
   const GroundHeightFilter ground;
   for (auto _ : state) {
     benchmark::DoNotOptimize(select_foreground(f.frame, [&](const LidarPoint& p) {

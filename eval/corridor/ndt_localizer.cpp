@@ -139,11 +139,11 @@ NdtResult NdtLocalizer::align(const std::vector<lidar::LidarPoint>& scan, const 
   auto cropped = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
   cropped->reserve(scan.size());
   for (const lidar::LidarPoint& p : scan) {
-    const double px = p.x, py = p.y;
+    const double px = static_cast<double>(p.x), py = static_cast<double>(p.y);
     const double r2 = px * px + py * py;
     if (r2 < config_.self_filter_radius_m * config_.self_filter_radius_m)
       continue;
-    const Eigen::Vector3d v = sensor_to_vehicle * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d v = sensor_to_vehicle * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     if (std::abs(v.x()) > config_.crop_range_m || std::abs(v.y()) > config_.crop_range_m)
       continue;
     cropped->emplace_back(static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z()));
@@ -190,7 +190,8 @@ NdtResult NdtLocalizer::align(const std::vector<lidar::LidarPoint>& scan, const 
   const HorizontalHold hold = horizontal_hold(hessian);
   result.degeneracy = hold.degeneracy;
   result.weak_axis_rad = hold.weak_axis_rad;
-  result.pose = Pose2{t(0, 3), t(1, 3), std::atan2(t(1, 0), t(0, 0))};
+  const Eigen::Matrix4d td = t.cast<double>();
+  result.pose = Pose2{td(0, 3), td(1, 3), std::atan2(td(1, 0), td(0, 0))};
   result.fixed_covariance.diagonal() << config_.output_sigma_xy_m * config_.output_sigma_xy_m,
       config_.output_sigma_xy_m * config_.output_sigma_xy_m,
       config_.output_sigma_yaw_rad * config_.output_sigma_yaw_rad;

@@ -44,7 +44,7 @@ std::vector<Hit> frame_hits(const sim::SimulatedFrame& frame, const Eigen::Isome
     if (surface == sim::SurfaceClass::kNone || surface == sim::SurfaceClass::kGround)
       continue;
     const lidar::LidarPoint& p = frame.frame.points[i];
-    const Eigen::Vector3d xyz = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d xyz = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     const bool vehicle = surface == sim::SurfaceClass::kVehicle;
     if (vehicle || xyz.z() >= min_static_z)
       hits.push_back({xyz, p.time_ns, vehicle ? frame.truth[i].vehicle_id : 0U});

@@ -34,7 +34,8 @@ void deskew(std::vector<lidar::LidarPoint>& points, TimeNs t_ref, double speed, 
     motion.linear() = Eigen::AngleAxisd(dyaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     motion.translation() =
         Eigen::Vector3d(speed * dt * std::cos(dyaw / 2), speed * dt * std::sin(dyaw / 2), 0.0);
-    const Eigen::Vector3d q = vehicle_to_sensor * motion * sensor_to_vehicle * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d q =
+        vehicle_to_sensor * motion * sensor_to_vehicle * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     p.x = static_cast<float>(q.x());
     p.y = static_cast<float>(q.y());
     p.z = static_cast<float>(q.z());

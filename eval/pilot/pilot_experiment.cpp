@@ -98,7 +98,7 @@ std::vector<Eigen::Vector3d> vehicle_points(const sim::SimulatedFrame& frame, co
   std::vector<lidar::LidarPoint> map_points;
   map_points.reserve(frame.frame.points.size());
   for (const lidar::LidarPoint& p : frame.frame.points) {
-    const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d m = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     lidar::LidarPoint q = p;
     q.x = static_cast<float>(m.x());
     q.y = static_cast<float>(m.y());

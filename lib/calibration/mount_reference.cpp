@@ -53,7 +53,7 @@ MountReference::MountReference(const std::vector<std::vector<lidar::LidarPoint>>
     std::unordered_map<std::int64_t, Scatter> cells;
     for (const auto& frame : reference) {
       for (const lidar::LidarPoint& p : frame) {
-        const Eigen::Vector3d q(p.x, p.y, p.z);
+        const Eigen::Vector3d q = Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
         const std::optional<std::int64_t> key = voxel_key(q, size);
         if (!key || q.norm() < config_.min_range_m)
           continue;
@@ -118,7 +118,7 @@ std::vector<PlaneMatch> MountReference::match(const std::vector<Eigen::Vector3d>
     const double range = beam.norm();
     const double cos_incidence = std::abs(n.dot(beam)) / range;
     const double sin2 = 1.0 - cos_incidence * cos_incidence;
-    const double thickness = plane.thickness_m;
+    const double thickness = static_cast<double>(plane.thickness_m);
     const double sigma = std::sqrt(
         config_.range_sigma_m * config_.range_sigma_m * cos_incidence * cos_incidence +
         range * range * config_.angle_sigma_rad * config_.angle_sigma_rad * sin2 + thickness * thickness);
@@ -160,7 +160,7 @@ MountDrift MountReference::estimate(std::span<const lidar::LidarPoint> rotation,
       std::max<std::size_t>(1, rotation.size() / std::max<std::size_t>(1, config_.sample_points));
   for (std::size_t i = 0; i < rotation.size(); i += stride) {
     const lidar::LidarPoint& p = rotation[i];
-    const Eigen::Vector3d q(p.x, p.y, p.z);
+    const Eigen::Vector3d q = Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     if (q.allFinite() && q.norm() >= config_.min_range_m)
       points.push_back(q);
   }

@@ -14,6 +14,13 @@ double cross(double ox, double oy, double ax, double ay, double bx, double by) {
   return (ax - ox) * (by - oy) - (ay - oy) * (bx - ox);
 }
 
+// The same for the points o, a and b of the coordinate spans.
+double cross(std::span<const float> x, std::span<const float> y, std::size_t o, std::size_t a,
+             std::size_t b) {
+  const auto at = [](std::span<const float> c, std::size_t i) { return static_cast<double>(c[i]); };
+  return cross(at(x, o), at(y, o), at(x, a), at(y, a), at(x, b), at(y, b));
+}
+
 // The points that may be hull vertices: all but those strictly inside the octagon of the extreme points
 // along the directions 180, 225, ..., 135 deg. As the direction turns counter-clockwise its extreme
 // point walks the hull counter-clockwise, so these eight (repeats removed) are a convex polygon in order.
@@ -55,7 +62,7 @@ std::vector<std::size_t> outside_octagon(std::span<const float> x, std::span<con
     for (std::size_t k = 0; k < polygon.size() && inside; ++k) {
       const std::size_t a = polygon[k];
       const std::size_t b = polygon[(k + 1) % polygon.size()];
-      inside = cross(x[a], y[a], x[b], y[b], x[i], y[i]) > 0.0;
+      inside = cross(x, y, a, b, i) > 0.0;
     }
     if (!inside)
       kept.push_back(i);
@@ -77,9 +84,7 @@ std::vector<std::size_t> convex_hull_vertices(std::span<const float> x, std::spa
   // Lower chain left to right, then upper chain right to left; each drops points that do not turn left.
   std::vector<std::size_t> hull(2 * candidates.size());
   std::size_t k = 0;
-  auto turns_left = [&](std::size_t o, std::size_t a, std::size_t b) {
-    return cross(x[o], y[o], x[a], y[a], x[b], y[b]) > 0.0;
-  };
+  auto turns_left = [&](std::size_t o, std::size_t a, std::size_t b) { return cross(x, y, o, a, b) > 0.0; };
   for (const std::size_t i : candidates) {
     while (k >= 2 && !turns_left(hull[k - 2], hull[k - 1], i))
       --k;

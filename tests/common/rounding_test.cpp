@@ -13,14 +13,14 @@
 
 namespace {
 
-bool same(double x, double y) {
+bool same_bits(double x, double y) {
   return (std::isnan(x) && std::isnan(y)) ||
          std::bit_cast<std::uint64_t>(x) == std::bit_cast<std::uint64_t>(y);
 }
 
 // Whole numbers and halves (where rounding turns) from 0 to 2^54 and the 3 doubles either side of each,
 // both signs; zeros, infinities, NaN, the smallest doubles.
-std::vector<double> edges() {
+std::vector<double> rounding_edges() {
   std::vector<double> centres{0.5, 1.5, 2.5, 1e6 + 0.5, 0x1p51 + 0.5, 0x1p52, 0x1p52 + 1.0, 0x1p53, 0x1p54};
   for (int k = 0; k <= 40; ++k) {
     centres.push_back(k);
@@ -55,10 +55,10 @@ std::vector<double> edges() {
 }
 
 TEST(Rounding, RoundHalfAwayIsStdRoundBitForBitAtTheEdges) {
-  const std::vector<double> xs = edges();
+  const std::vector<double> xs = rounding_edges();
   ASSERT_GT(xs.size(), 1000u);
   for (double x : xs) {
-    EXPECT_TRUE(same(rsu::round_half_away(x), std::round(x))) << std::hexfloat << x;
+    EXPECT_TRUE(same_bits(rsu::round_half_away(x), std::round(x))) << std::hexfloat << x;
   }
   // The classic trap of floor(x + 0.5): the double below a half.
   EXPECT_EQ(rsu::round_half_away(0.49999999999999994), 0.0);
@@ -72,7 +72,7 @@ TEST(Rounding, RoundHalfAwayIsStdRoundBitForBitOverAMillionNumbers) {
   int mismatches = 0;
   for (int i = 0; i < 1'000'000; ++i) {
     const double x = i % 2 == 0 ? small(rng) : (i % 4 == 1 ? -1.0 : 1.0) * std::exp2(exponent(rng));
-    mismatches += !same(rsu::round_half_away(x), std::round(x));
+    mismatches += !same_bits(rsu::round_half_away(x), std::round(x));
   }
   EXPECT_EQ(mismatches, 0);
 }

@@ -165,7 +165,7 @@ TEST(PeerAnnouncement, VehicleAnnouncingToOneRsuIsCorrectedByBothAcrossTheHandov
   const Pose3 east_mount{.x = 30.0, .y = -6.0, .z = 2.0};
   constexpr double kSpeed = 10.0;
   constexpr double kX0 = -10.0;
-  constexpr int kEmptyRotations = 5;
+  constexpr int kRotationsWithoutVehicles = 5;
   const TimeNs t0 = 700 * kNsPerMs;  // the drive starts after the background rotations
   const TimeNs t1 = t0 + 5 * kNsPerSecond;
   // The truth, on a straight lane along +x at y = 0.
@@ -182,9 +182,9 @@ TEST(PeerAnnouncement, VehicleAnnouncingToOneRsuIsCorrectedByBothAcrossTheHandov
   RsuCore west(west_cfg);
   RsuCore east(east_cfg);
   testing::SimStream west_lidar(scene, {vehicle}, lidar::make_vlp16(), west_mount, sim::NoiseModel{},
-                                kEmptyRotations);
+                                kRotationsWithoutVehicles);
   testing::SimStream east_lidar(scene, {vehicle}, lidar::make_vlp16(), east_mount, sim::NoiseModel{},
-                                kEmptyRotations);
+                                kRotationsWithoutVehicles);
 
   const std::string host = "192.0.2.50";
   std::uint32_t sequence = 0;

@@ -8,6 +8,7 @@
 #include <variant>
 #include <vector>
 
+#include "../v2i/test_keys.h"
 #include "core/rsu_core.h"
 #include "sim_stream.h"
 #include "v2i/message_authenticator.h"
@@ -23,12 +24,6 @@ using testing::static_vehicle;
 
 constexpr TimeNs kNow = 5 * kNsPerSecond;
 constexpr std::uint64_t kRsuId = 77;
-
-v2i::security::SigningKey key_from(std::uint8_t fill) {
-  v2i::security::Seed seed{};
-  seed.fill(fill);
-  return v2i::security::SigningKey(seed);
-}
 
 struct Keys {
   v2i::security::SigningKey rsu = key_from(1);

@@ -16,14 +16,14 @@
 namespace rsu::daemon {
 namespace {
 
-DaemonConfig parse(const std::string& lidar_body) {
+DaemonConfig parse_lidar(const std::string& lidar_body) {
   return parse_config("rsu_id: 1\nlidar:\n  model: vlp32c\n  mount: {x: 0, y: 0, z: 2}\n" + lidar_body,
                       "/etc/rsud/rsud.yaml");
 }
 
-std::string refusal(const std::string& lidar_body) {
+std::string lidar_refusal(const std::string& lidar_body) {
   try {
-    parse(lidar_body);
+    parse_lidar(lidar_body);
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -31,7 +31,7 @@ std::string refusal(const std::string& lidar_body) {
 }
 
 TEST(LidarConfig, DefaultsAreTheSensorsOwn) {
-  const DaemonConfig c = parse("  input: {udp: {}}\n");
+  const DaemonConfig c = parse_lidar("  input: {udp: {}}\n");
   const auto& in = std::get<UdpInput>(c.input);
   EXPECT_EQ(in.port, 2368);  // the Velodyne data port (an Ouster's: 0, its metadata's, rsud asks the decoder)
   EXPECT_EQ(in.auxiliary_port, 0);
@@ -41,11 +41,11 @@ TEST(LidarConfig, DefaultsAreTheSensorsOwn) {
   EXPECT_EQ(c.core.sensor_options.rotation_start_azimuth_deg, 0.0);
   EXPECT_TRUE(c.sensor_files.calibration.empty());
   // velodyne_udp is the same input under its older name.
-  EXPECT_EQ(std::get<UdpInput>(parse("  input: {velodyne_udp: {port: 2368}}\n").input).port, 2368);
+  EXPECT_EQ(std::get<UdpInput>(parse_lidar("  input: {velodyne_udp: {port: 2368}}\n").input).port, 2368);
 }
 
 TEST(LidarConfig, ReadsEveryKey) {
-  const DaemonConfig c = parse(
+  const DaemonConfig c = parse_lidar(
       "  calibration: calib/VLP32.yaml\n"
       "  returns: strongest\n"
       "  scan_phase_deg: 180\n"
@@ -64,7 +64,7 @@ TEST(LidarConfig, ReadsEveryKey) {
   EXPECT_TRUE(in.loop);
   EXPECT_EQ(in.port, 2369);
   EXPECT_EQ(in.auxiliary_port, 8309);
-  const DaemonConfig udp = parse(
+  const DaemonConfig udp = parse_lidar(
       "  input: {udp: {port: 2370, auxiliary_port: 8308, reorder_packets: 3, receive_buffer_bytes: "
       "1048576}}\n");
   EXPECT_EQ(std::get<UdpInput>(udp.input).auxiliary_port, 8308);
@@ -73,26 +73,27 @@ TEST(LidarConfig, ReadsEveryKey) {
 }
 
 TEST(LidarConfig, ErrorsNameFileLineAndField) {
-  EXPECT_NE(refusal("  returns: dual\n  input: {udp: {}}\n")
+  EXPECT_NE(lidar_refusal("  returns: dual\n  input: {udp: {}}\n")
                 .find("rsud.yaml:5: lidar.returns: expected both, strongest or last"),
             std::string::npos);
-  EXPECT_NE(refusal("  time_source: gps\n  input: {udp: {}}\n")
+  EXPECT_NE(lidar_refusal("  time_source: gps\n  input: {udp: {}}\n")
                 .find("lidar.time_source: expected sensor or host_receive"),
             std::string::npos);
-  EXPECT_NE(refusal("  scan_phase_deg: 360\n  input: {udp: {}}\n")
+  EXPECT_NE(lidar_refusal("  scan_phase_deg: 360\n  input: {udp: {}}\n")
                 .find("lidar.scan_phase_deg: must be within [0, 360)"),
             std::string::npos);
-  EXPECT_NE(
-      refusal("  clock_tolerance_ms: 0\n  input: {udp: {}}\n").find("lidar.clock_tolerance_ms: must be > 0"),
-      std::string::npos);
-  EXPECT_NE(refusal("  input: {pcap: {file: a.pcap, pace: fast}}\n")
+  EXPECT_NE(lidar_refusal("  clock_tolerance_ms: 0\n  input: {udp: {}}\n")
+                .find("lidar.clock_tolerance_ms: must be > 0"),
+            std::string::npos);
+  EXPECT_NE(lidar_refusal("  input: {pcap: {file: a.pcap, pace: fast}}\n")
                 .find("lidar.input.pcap.pace: expected realtime or max"),
             std::string::npos);
-  EXPECT_NE(
-      refusal("  input: {pcap: {pace: max}}\n").find("lidar.input.pcap: missing required field \"file\""),
-      std::string::npos);
-  EXPECT_NE(refusal("  input: {pcap: {file: a.pcap}, udp: {}}\n").find("exactly one of"), std::string::npos);
-  EXPECT_NE(refusal("  input: {udp: {receive_buffer_bytes: 4096}}\n")
+  EXPECT_NE(lidar_refusal("  input: {pcap: {pace: max}}\n")
+                .find("lidar.input.pcap: missing required field \"file\""),
+            std::string::npos);
+  EXPECT_NE(lidar_refusal("  input: {pcap: {file: a.pcap}, udp: {}}\n").find("exactly one of"),
+            std::string::npos);
+  EXPECT_NE(lidar_refusal("  input: {udp: {receive_buffer_bytes: 4096}}\n")
                 .find("lidar.input.udp.receive_buffer_bytes: must be at least 65536 bytes"),
             std::string::npos);
 }
@@ -127,10 +128,10 @@ TEST(LidarConfig, CalibrationFileIsReadIntoTheDecodersTables) {
 // perception.footprint_track (issue 12): on by default, off when the operator says so; not a boolean: refused
 // with the field named.
 TEST(LidarConfig, FootprintTrackIsOnUnlessTurnedOff) {
-  EXPECT_TRUE(parse("  input: {udp: {}}\n").core.footprint_track.enabled);
+  EXPECT_TRUE(parse_lidar("  input: {udp: {}}\n").core.footprint_track.enabled);
   EXPECT_FALSE(
-      parse("  input: {udp: {}}\nperception: {footprint_track: false}\n").core.footprint_track.enabled);
-  EXPECT_NE(refusal("  input: {udp: {}}\nperception: {footprint_track: sometimes}\n")
+      parse_lidar("  input: {udp: {}}\nperception: {footprint_track: false}\n").core.footprint_track.enabled);
+  EXPECT_NE(lidar_refusal("  input: {udp: {}}\nperception: {footprint_track: sometimes}\n")
                 .find("perception.footprint_track"),
             std::string::npos);
 }
@@ -138,28 +139,28 @@ TEST(LidarConfig, FootprintTrackIsOnUnlessTurnedOff) {
 // perception.prepare_thread (issue 16, latency): the fits and fixes prepared on the event loop unless
 // turned on; the mount check's thread is a key of its own.
 TEST(LidarConfig, PrepareThreadIsOffUnlessTurnedOn) {
-  EXPECT_FALSE(parse("  input: {udp: {}}\n").prepare_thread);
-  const DaemonConfig on = parse("  input: {udp: {}}\nperception: {prepare_thread: true}\n");
+  EXPECT_FALSE(parse_lidar("  input: {udp: {}}\n").prepare_thread);
+  const DaemonConfig on = parse_lidar("  input: {udp: {}}\nperception: {prepare_thread: true}\n");
   EXPECT_TRUE(on.prepare_thread);
   EXPECT_TRUE(on.mount_check_thread);
-  EXPECT_NE(
-      refusal("  input: {udp: {}}\nperception: {prepare_thread: 2}\n").find("perception.prepare_thread"),
-      std::string::npos);
+  EXPECT_NE(lidar_refusal("  input: {udp: {}}\nperception: {prepare_thread: 2}\n")
+                .find("perception.prepare_thread"),
+            std::string::npos);
 }
 
 // perception.joint_release_range_gap_m (issue 16, latency): the clusterer's default unless given; a
 // negative or non-numeric gap is refused with the field named.
 TEST(LidarConfig, JointReleaseRangeGapIsReadAndChecked) {
-  EXPECT_EQ(parse("  input: {udp: {}}\n").core.sweep.joint_release_range_gap_m,
+  EXPECT_EQ(parse_lidar("  input: {udp: {}}\n").core.sweep.joint_release_range_gap_m,
             perception::SweepConfig{}.joint_release_range_gap_m);
-  EXPECT_EQ(parse("  input: {udp: {}}\nperception: {joint_release_range_gap_m: 2.5}\n")
+  EXPECT_EQ(parse_lidar("  input: {udp: {}}\nperception: {joint_release_range_gap_m: 2.5}\n")
                 .core.sweep.joint_release_range_gap_m,
             2.5);
   for (const char* bad : {"-1", "far"}) {
-    EXPECT_NE(
-        refusal(std::string("  input: {udp: {}}\nperception: {joint_release_range_gap_m: ") + bad + "}\n")
-            .find("perception.joint_release_range_gap_m"),
-        std::string::npos)
+    EXPECT_NE(lidar_refusal(std::string("  input: {udp: {}}\nperception: {joint_release_range_gap_m: ") +
+                            bad + "}\n")
+                  .find("perception.joint_release_range_gap_m"),
+              std::string::npos)
         << bad;
   }
 }
@@ -169,14 +170,16 @@ TEST(LidarConfig, JointReleaseRangeGapIsReadAndChecked) {
 // refused with the field named.
 TEST(LidarConfig, MaxPositionSigmaIsReadAndChecked) {
   const double fallback = perception::CorrectionConfig{}.max_position_sigma_m;
-  EXPECT_EQ(parse("  input: {udp: {}}\n").core.perception.fix.correction.max_position_sigma_m, fallback);
-  EXPECT_EQ(parse("  input: {udp: {}}\nperception: {max_position_sigma_m: 0.5}\n")
+  EXPECT_EQ(parse_lidar("  input: {udp: {}}\n").core.perception.fix.correction.max_position_sigma_m,
+            fallback);
+  EXPECT_EQ(parse_lidar("  input: {udp: {}}\nperception: {max_position_sigma_m: 0.5}\n")
                 .core.perception.fix.correction.max_position_sigma_m,
             0.5);
   for (const char* bad : {"0", "-1", "11", "far"}) {
-    EXPECT_NE(refusal(std::string("  input: {udp: {}}\nperception: {max_position_sigma_m: ") + bad + "}\n")
-                  .find("perception.max_position_sigma_m"),
-              std::string::npos)
+    EXPECT_NE(
+        lidar_refusal(std::string("  input: {udp: {}}\nperception: {max_position_sigma_m: ") + bad + "}\n")
+            .find("perception.max_position_sigma_m"),
+        std::string::npos)
         << bad;
   }
   std::ifstream shipped(RSU_SOURCE_DIR "/deploy/rsud.yaml");

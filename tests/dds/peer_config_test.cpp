@@ -10,7 +10,7 @@
 namespace rsu::daemon {
 namespace {
 
-DaemonConfig parse(const std::string& dds_section) {
+DaemonConfig parse_dds(const std::string& dds_section) {
   return parse_config(
       "rsu_id: 1\n"
       "lidar:\n"
@@ -21,9 +21,9 @@ DaemonConfig parse(const std::string& dds_section) {
       "/etc/rsud/rsud.yaml");
 }
 
-std::string refusal(const std::string& dds_section) {
+std::string dds_refusal(const std::string& dds_section) {
   try {
-    parse(dds_section);
+    parse_dds(dds_section);
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -31,7 +31,7 @@ std::string refusal(const std::string& dds_section) {
 }
 
 TEST(PeerConfig, OffByDefaultBestEffortAndTheCoreLimits) {
-  const DaemonConfig c = parse("dds: {enabled: true}\n");
+  const DaemonConfig c = parse_dds("dds: {enabled: true}\n");
   EXPECT_FALSE(c.dds.peers.enabled);
   EXPECT_EQ(c.dds.peers.topic, "rsu/peer_announcements");
   EXPECT_EQ(c.dds.peers.qos.reliability, dds::Reliability::kBestEffort);
@@ -41,7 +41,7 @@ TEST(PeerConfig, OffByDefaultBestEffortAndTheCoreLimits) {
 }
 
 TEST(PeerConfig, ReadsEveryKeyIntoTheBusAndTheCore) {
-  const DaemonConfig c = parse(
+  const DaemonConfig c = parse_dds(
       "dds:\n"
       "  enabled: true\n"
       "  peers:\n"
@@ -61,31 +61,33 @@ TEST(PeerConfig, ReadsEveryKeyIntoTheBusAndTheCore) {
 }
 
 TEST(PeerConfig, ErrorsNameFileLineAndField) {
-  EXPECT_EQ(refusal("dds:\n  peers: {enabled: true}\n"),
+  EXPECT_EQ(dds_refusal("dds:\n  peers: {enabled: true}\n"),
             "/etc/rsud/rsud.yaml:7: dds.peers.enabled: needs the DDS participant: set dds.enabled: true");
-  EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {enabled: true, topci: x}\n")
+  EXPECT_NE(dds_refusal("dds:\n  enabled: true\n  peers: {enabled: true, topci: x}\n")
                 .find("/etc/rsud/rsud.yaml:8: dds.peers.topci: unknown field"),
             std::string::npos);
-  EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {topic: \"a b\"}\n")
+  EXPECT_NE(dds_refusal("dds:\n  enabled: true\n  peers: {topic: \"a b\"}\n")
                 .find("dds.peers.topic: \"a b\" is not a ROS"),
             std::string::npos);
-  EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {burst: 0.5}\n").find("dds.peers.burst: must be >= 1"),
+  EXPECT_NE(
+      dds_refusal("dds:\n  enabled: true\n  peers: {burst: 0.5}\n").find("dds.peers.burst: must be >= 1"),
+      std::string::npos);
+  EXPECT_NE(dds_refusal("dds:\n  enabled: true\n  peers: {max_sources: 0}\n")
+                .find("dds.peers.max_sources: must be"),
             std::string::npos);
   EXPECT_NE(
-      refusal("dds:\n  enabled: true\n  peers: {max_sources: 0}\n").find("dds.peers.max_sources: must be"),
+      dds_refusal("dds:\n  enabled: true\n  peers: {qos: {history_depth: many}}\n").find("dds.peers.qos"),
       std::string::npos);
-  EXPECT_NE(refusal("dds:\n  enabled: true\n  peers: {qos: {history_depth: many}}\n").find("dds.peers.qos"),
-            std::string::npos);
 }
 
 TEST(V2iReplyToConfig, PoliciesAndTheReplacedKeyNamed) {
-  EXPECT_EQ(parse("").core.reply_to, core::ReplyToPolicy::kMatchAddressAndPort);
-  EXPECT_EQ(parse("v2i: {reply_to: match_address}\n").core.reply_to, core::ReplyToPolicy::kMatchAddress);
-  EXPECT_EQ(parse("v2i: {reply_to: use_source}\n").core.reply_to, core::ReplyToPolicy::kUseSource);
-  EXPECT_NE(refusal("v2i: {reply_to: anywhere}\n").find("v2i.reply_to: expected match_address_and_port"),
+  EXPECT_EQ(parse_dds("").core.reply_to, core::ReplyToPolicy::kMatchAddressAndPort);
+  EXPECT_EQ(parse_dds("v2i: {reply_to: match_address}\n").core.reply_to, core::ReplyToPolicy::kMatchAddress);
+  EXPECT_EQ(parse_dds("v2i: {reply_to: use_source}\n").core.reply_to, core::ReplyToPolicy::kUseSource);
+  EXPECT_NE(dds_refusal("v2i: {reply_to: anywhere}\n").find("v2i.reply_to: expected match_address_and_port"),
             std::string::npos);
   // A configuration written before v2i.reply_to existed is told what to write instead.
-  const std::string old_key = refusal("v2i:\n  require_reply_to_source_address: true\n");
+  const std::string old_key = dds_refusal("v2i:\n  require_reply_to_source_address: true\n");
   EXPECT_NE(old_key.find("/etc/rsud/rsud.yaml:7: v2i.require_reply_to_source_address: replaced by reply_to"),
             std::string::npos)
       << old_key;
@@ -95,12 +97,12 @@ TEST(V2iReplyToConfig, PoliciesAndTheReplacedKeyNamed) {
 // v2i.refusal_notices and v2i.withheld_notices: the documented defaults (deploy/rsud.yaml), every key,
 // and a rate or interval that is not positive refused with its place.
 TEST(V2iNoticesConfig, DefaultsEveryKeyAndLocatedErrors) {
-  const DaemonConfig defaults = parse("");
+  const DaemonConfig defaults = parse_dds("");
   EXPECT_TRUE(defaults.core.withheld_notices.enabled);
   EXPECT_EQ(defaults.core.withheld_notices.per_vehicle_interval_s, 1.0);
   EXPECT_EQ(defaults.core.withheld_notices.rate_per_s, 200.0);
   EXPECT_EQ(defaults.core.refusal_notices.rate_per_s, 50.0);
-  const DaemonConfig c = parse(
+  const DaemonConfig c = parse_dds(
       "v2i:\n"
       "  withheld_notices: {enabled: false, per_vehicle_interval_s: 2.5, rate_per_s: 20}\n"
       "  refusal_notices: {rate_per_s: 5}\n");
@@ -109,14 +111,14 @@ TEST(V2iNoticesConfig, DefaultsEveryKeyAndLocatedErrors) {
   EXPECT_EQ(c.core.withheld_notices.rate_per_s, 20.0);
   EXPECT_EQ(c.core.refusal_notices.rate_per_s, 5.0);
   EXPECT_TRUE(c.core.refusal_notices.enabled);
-  EXPECT_NE(refusal("v2i:\n  withheld_notices: {rate_per_s: 0}\n")
+  EXPECT_NE(dds_refusal("v2i:\n  withheld_notices: {rate_per_s: 0}\n")
                 .find("/etc/rsud/rsud.yaml:7: v2i.withheld_notices.rate_per_s"),
             std::string::npos);
-  EXPECT_NE(refusal("v2i:\n  withheld_notices: {per_vehicle_interval_s: -1}\n")
+  EXPECT_NE(dds_refusal("v2i:\n  withheld_notices: {per_vehicle_interval_s: -1}\n")
                 .find("v2i.withheld_notices.per_vehicle_interval_s"),
             std::string::npos);
   EXPECT_NE(
-      refusal("v2i:\n  withheld_notices: {every: 1}\n").find("v2i.withheld_notices.every: unknown field"),
+      dds_refusal("v2i:\n  withheld_notices: {every: 1}\n").find("v2i.withheld_notices.every: unknown field"),
       std::string::npos);
 }
 

@@ -7,12 +7,11 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "common/angles.h"
 #include "published_tables.h"
 
 namespace rsu::lidar {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // Signed smallest difference a - b in degrees.
 double angle_diff_deg(double a_deg, double b_deg) {
@@ -154,7 +153,7 @@ TEST(LidarFiringSchedule, FiringAzimuthFollowsTheRotor) {
         const TimeNs pair_time_ns = vlp32c ? (f.laser / 2) * 2'304 : 0;  // the pair's firing, in the block
         const TimeNs azimuth_time = f.time_ns + pair_time_ns;            // VLP-32C: twice into the block
         const double expected = true_encoder_deg(start, t0, azimuth_time) - rot_correction;
-        EXPECT_NEAR(angle_diff_deg(f.azimuth_rad / kDeg, expected), 0.0, 0.0175 + 1e-9)
+        EXPECT_NEAR(angle_diff_deg(rad_to_deg(f.azimuth_rad), expected), 0.0, 0.0175 + 1e-9)
             << model.name << " packet " << k << " channel " << f.channel;
       }
     }
@@ -178,10 +177,10 @@ TEST(LidarFiringSchedule, InterpolationRuleIncludingLastBlockAndWrap) {
     const int diff = (next_diff + 36000) % 36000;
     const double dt_us = (f.channel / 16) * 55.296 + (f.channel % 16) * 2.304;
     const double expected = az[b] / 100.0 + diff / 100.0 * dt_us / 110.592;
-    EXPECT_NEAR(angle_diff_deg(f.azimuth_rad / kDeg, expected), 0.0, 1e-9) << "block " << b;
+    EXPECT_NEAR(angle_diff_deg(rad_to_deg(f.azimuth_rad), expected), 0.0, 1e-9) << "block " << b;
   }
   // Block 11 reuses block 10's difference (0.41 deg): its last firing, 108.288 us into the block.
-  EXPECT_NEAR(firings.back().azimuth_rad / kDeg, 2.60 + 0.41 * (55.296 + 15 * 2.304) / 110.592, 1e-9);
+  EXPECT_NEAR(rad_to_deg(firings.back().azimuth_rad), 2.60 + 0.41 * (55.296 + 15 * 2.304) / 110.592, 1e-9);
 }
 
 TEST(LidarFiringSchedule, GenericModelMapsChannelsToLasers) {

@@ -10,13 +10,12 @@
 #include <random>
 #include <stdexcept>
 
+#include "common/angles.h"
 #include "lidar/velodyne_decoder.h"
 #include "packet_stream.h"
 
 namespace rsu::lidar {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 struct Segment {
   TimeNs t0 = 0;
@@ -31,7 +30,7 @@ struct Segment {
 // angle) tells which turn the beam's wrapped azimuth belongs to.
 std::int64_t rotation_of(const Segment& s, double cut_deg, TimeNs t, double azimuth_rad) {
   const double rotor = s.start_deg + 3600.0 * static_cast<double>(t - s.t0) * 1e-9;
-  const double az = azimuth_rad / kDeg;
+  const double az = rad_to_deg(azimuth_rad);
   const double unwrapped = az + 360.0 * std::round((rotor - az) / 360.0);
   return static_cast<std::int64_t>(std::floor((unwrapped - cut_deg) / 360.0));
 }
@@ -95,7 +94,7 @@ void expect_frames_match(const std::vector<LidarFrame>& frames, std::size_t firs
     TimeNs lo = frame.points.front().time_ns;
     TimeNs hi = lo;
     for (const LidarPoint& p : frame.points) {
-      ASSERT_EQ(rotation_of(s, cut_deg, p.time_ns, p.azimuth_rad), r);
+      ASSERT_EQ(rotation_of(s, cut_deg, p.time_ns, static_cast<double>(p.azimuth_rad)), r);
       lo = std::min(lo, p.time_ns);
       hi = std::max(hi, p.time_ns);
     }

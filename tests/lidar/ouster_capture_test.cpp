@@ -24,6 +24,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "common/angles.h"
 #include "common/byte_order.h"
 #include "io/yaml_field.h"
 #include "lidar/ouster/ouster_decoder.h"
@@ -33,8 +34,6 @@
 
 namespace rsu::lidar::ouster {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 struct Capture {
   const char* pcap;
@@ -56,7 +55,7 @@ const Capture kCaptures[] = {
      "OS-2-128-U1_v2.3.0_1024x10_digest.json", 1, 10},
 };
 
-std::string data_path(const std::string& name) {
+std::string ouster_data_path(const std::string& name) {
   return ::rsu::lidar::test::real_data_path("ouster/" + name);
 }
 
@@ -65,7 +64,7 @@ std::vector<UdpDatagram> datagrams_of(const Capture& c) {
 }
 
 Metadata metadata_of(const Capture& c) {
-  return parse_metadata(io::read_text_file(data_path(c.metadata)), c.metadata);
+  return parse_metadata(io::read_text_file(ouster_data_path(c.metadata)), c.metadata);
 }
 
 // One decoded frame and, from the raw bytes, what it must hold.
@@ -193,7 +192,7 @@ TEST(OusterCapture, RangeImageEqualsTheSdkDecode) {
         }
       }
     }
-    const YAML::Node digest = io::parse_yaml(io::read_text_file(data_path(c.digest)), c.digest);
+    const YAML::Node digest = io::parse_yaml(io::read_text_file(ouster_data_path(c.digest)), c.digest);
     const YAML::Node frames = digest["scans"] ? digest["scans"] : digest["frames"];
     ASSERT_EQ(frames.size(), 1U);
     EXPECT_EQ(md5_hex(image), frames[0]["RANGE"].as<std::string>());
@@ -216,7 +215,7 @@ void check_frame_geometry(const Metadata& m, const Frame& f) {
   for (const LidarPoint& p : f.points) {
     const int column = f.time_column.at(static_cast<std::uint64_t>(p.time_ns));  // time is a column's
     const double range = f.column_ranges.at(column).at(p.ring) * 1e-3;
-    const Eigen::Vector3d v = Eigen::Vector3d(p.x, p.y, p.z) - origin;
+    const Eigen::Vector3d v = Eigen::Vector3f(p.x, p.y, p.z).cast<double>() - origin;
     const double dist = v.norm();
     nearest = std::min(nearest, dist);
     // The range is measured from |beam| behind the beam origin, itself |beam| from the lidar origin.
@@ -287,14 +286,14 @@ std::map<int, std::vector<double>> ring_profiles(const Metadata& m, const Frame&
   std::map<int, std::vector<double>> out;
   const int w = m.columns_per_frame;
   for (const LidarPoint& p : f.points) {
-    double azimuth = p.azimuth_rad;
+    double azimuth = static_cast<double>(p.azimuth_rad);
     if (flip) {
       azimuth -= 2 * m.beam_azimuth_deg[p.ring] * kPi / 180;
     }
     const int bin = static_cast<int>(std::lround(azimuth / (2 * kPi) * w)) % w;
     auto& profile = out[p.ring];
     profile.resize(static_cast<std::size_t>(w), 0.0);
-    profile[static_cast<std::size_t>((bin + w) % w)] = Eigen::Vector3d(p.x, p.y, p.z).norm();
+    profile[static_cast<std::size_t>((bin + w) % w)] = Eigen::Vector3f(p.x, p.y, p.z).cast<double>().norm();
   }
   return out;
 }
@@ -374,7 +373,7 @@ std::string summary(const Capture& c, const Decoded& d) {
     for (const LidarPoint& p : f.points) {
       auto& [n, sum] = rings[p.ring];
       ++n;
-      sum += Eigen::Vector3d(p.x, p.y, p.z).norm();
+      sum += Eigen::Vector3f(p.x, p.y, p.z).cast<double>().norm();
     }
     for (const auto& [ring, r] : rings) {
       out << "  ring " << ring << ": " << r.first << " points, mean distance " << fixed(r.second / r.first, 3)
@@ -383,7 +382,7 @@ std::string summary(const Capture& c, const Decoded& d) {
     const std::size_t step = f.points.size() / 25 + 1;
     for (std::size_t i = 0; i < f.points.size(); i += step) {
       const LidarPoint& p = f.points[i];
-      const Eigen::Vector3d mm = Eigen::Vector3d(p.x, p.y, p.z) * 1e3;
+      const Eigen::Vector3d mm = Eigen::Vector3f(p.x, p.y, p.z).cast<double>() * 1e3;
       out << "  point " << i << ": ring " << p.ring << " t " << p.time_ns << " azimuth "
           << fixed(static_cast<double>(p.azimuth_rad) * 180 / kPi, 2) << " deg, xyz " << fixed(mm.x(), 0)
           << " " << fixed(mm.y(), 0) << " " << fixed(mm.z(), 0) << " mm, intensity " << p.intensity << "\n";

@@ -13,6 +13,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "common/angles.h"
 #include "io/yaml_field.h"
 #include "tests/lidar/ouster_test_packets.h"
 #include "tests/lidar/real_data.h"
@@ -22,7 +23,6 @@ namespace {
 
 using test::PacketBuilder;
 
-constexpr double kPi = std::numbers::pi;
 constexpr std::uint64_t kT0 = 5'000'000'000ULL;
 constexpr std::uint64_t kDt = 97'656;  // ns per column at 1024 x 10 Hz
 

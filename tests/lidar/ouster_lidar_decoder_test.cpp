@@ -16,7 +16,7 @@
 namespace rsu::lidar::ouster {
 namespace {
 
-constexpr std::uint64_t kT0 = 5'000'000'000ULL;
+constexpr std::uint64_t kStartNs = 5'000'000'000ULL;
 
 std::string metadata_text(const std::string& name) {
   return io::read_text_file(::rsu::lidar::test::real_data_path("ouster/" + name));
@@ -161,7 +161,7 @@ TEST(OusterLidarDecoder, NoticesSaidOnce) {
 
   const Metadata m = parse_metadata(metadata_text("OS-1-128_v2.3.0_1024x10.json"), "lb.json");
   OusterLidarDecoder d(m, "lb.json");
-  test::PacketBuilder p(m, 1, 0, kT0, 97'656);
+  test::PacketBuilder p(m, 1, 0, kStartNs, 97'656);
   test::put(p.bytes(), 4, 12345, 3);  // another initialization
   std::vector<LidarPoint> out;
   for (int i = 0; i < 3; ++i) {
@@ -191,20 +191,20 @@ TEST(OusterLidarDecoder, AzimuthWindow) {
   OusterLidarDecoder d(m, "w.json");
   std::vector<LidarPoint> out;
   constexpr std::uint64_t kColumn = 97'656;
-  test::PacketBuilder outside(m, 1, 0, kT0, kColumn);
+  test::PacketBuilder outside(m, 1, 0, kStartNs, kColumn);
   for (int c = 0; c < 16; ++c) {
     outside.set_invalid(c);
   }
   const PacketOutcome none = d.decode(outside.bytes(), 0, out);
   EXPECT_EQ(none.kind, PacketKind::auxiliary);
   EXPECT_EQ(none.reason, "no_valid_column");
-  test::PacketBuilder last(m, 1, 192, kT0 + 192 * kColumn, kColumn);
+  test::PacketBuilder last(m, 1, 192, kStartNs + 192 * kColumn, kColumn);
   for (int c = 8; c < 16; ++c) {
     last.set_invalid(c);  // 200..207 outside
   }
   const PacketOutcome end = d.decode(last.bytes(), 0, out);
   ASSERT_TRUE(end.is_data());
-  EXPECT_EQ(end.first_ns, static_cast<TimeNs>(kT0 + 192 * kColumn));
+  EXPECT_EQ(end.first_ns, static_cast<TimeNs>(kStartNs + 192 * kColumn));
   // Column 199 is the last; column 100 of the next turn is 925 columns later.
   EXPECT_NEAR(static_cast<double>(end.next_ns - end.first_ns), (7 + 925) * 1e9 / 10240, 1000.0);
   bool seen_no_valid = false;

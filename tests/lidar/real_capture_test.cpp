@@ -19,7 +19,7 @@
 namespace rsu::lidar {
 namespace {
 
-double range_of(const LidarPoint& p) {
+double range_m(const LidarPoint& p) {
   const Eigen::Vector3d v(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
   return v.norm();
 }
@@ -37,7 +37,7 @@ std::vector<LidarPoint> decode_capture(const SensorModel& model, const std::stri
   }
   std::vector<LidarPoint> kept;
   for (const LidarPoint& p : all) {
-    const double r = range_of(p);
+    const double r = range_m(p);
     if (r > min_range && r < max_range)
       kept.push_back(p);
   }

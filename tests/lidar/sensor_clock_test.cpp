@@ -10,7 +10,7 @@
 namespace rsu::lidar {
 namespace {
 
-constexpr TimeNs kPeriod = 663'552;  // a VLP-32C packet
+constexpr TimeNs kPacketPeriod = 663'552;  // a VLP-32C packet
 
 TEST(SensorClock, EstimateIsTheOffsetPlusTheSmallestDelay) {
   SensorClock clock;
@@ -19,7 +19,7 @@ TEST(SensorClock, EstimateIsTheOffsetPlusTheSmallestDelay) {
   std::mt19937_64 rng(1);
   std::uniform_int_distribution<TimeNs> delay(200'000, 3'000'000);  // 0.2 to 3 ms transit and queueing
   for (int k = 0; k < 2000; ++k) {
-    const TimeNs sensor_end = 1'000 * kNsPerSecond + k * kPeriod;
+    const TimeNs sensor_end = 1'000 * kNsPerSecond + k * kPacketPeriod;
     clock.observe(sensor_end, sensor_end + offset + delay(rng));
   }
   ASSERT_TRUE(clock.offset_ns().has_value());
@@ -32,20 +32,20 @@ TEST(SensorClock, EstimateIsTheOffsetPlusTheSmallestDelay) {
 TEST(SensorClock, LagIsNotOffsetButDriftIs) {
   SensorClock clock;
   TimeNs sensor_end = 0;
-  for (int k = 0; k < 100; ++k, sensor_end += kPeriod)
+  for (int k = 0; k < 100; ++k, sensor_end += kPacketPeriod)
     clock.observe(sensor_end, sensor_end + 1'000'000);
-  for (int k = 0; k < 300; ++k, sensor_end += kPeriod)  // 0.2 s of firings, the lag growing to 150 ms
+  for (int k = 0; k < 300; ++k, sensor_end += kPacketPeriod)  // 0.2 s of firings, the lag growing to 150 ms
     clock.observe(sensor_end, sensor_end + 1'000'000 + k * 500'000);
   EXPECT_LE(*clock.offset_ns(), 1'000'000 + 40'000);  // at most 100 ppm of the 0.35 s that passed
   EXPECT_GT(clock.last_raw_ns() - *clock.offset_ns(), 140 * kNsPerMs);
   // The sensor's clock runs 50 ppm slow for 100 s: the estimate follows the growing offset.
   SensorClock drifting;
   for (int k = 0; k < 150'000; ++k) {
-    const TimeNs host = k * kPeriod;
+    const TimeNs host = k * kPacketPeriod;
     const TimeNs sensor = host - static_cast<TimeNs>(static_cast<double>(host) * 50e-6);
     drifting.observe(sensor, host + 1'000'000);
   }
-  const TimeNs drift = static_cast<TimeNs>(static_cast<double>(149'999 * kPeriod) * 50e-6);  // ~5 ms
+  const TimeNs drift = static_cast<TimeNs>(static_cast<double>(149'999 * kPacketPeriod) * 50e-6);  // ~5 ms
   EXPECT_NEAR(static_cast<double>(*drifting.offset_ns()), static_cast<double>(drift + 1'000'000), 100'000.0);
 }
 
@@ -57,10 +57,11 @@ TEST(SensorClock, StampingOffsetSlewsWithoutJumps) {
   clock.observe(sensor_end, sensor_end + 20 * kNsPerMs);  // the first packet waited 20 ms
   TimeNs previous_stamp = sensor_end + clock.stamping_offset_ns();
   for (int k = 1; k < 4000; ++k) {
-    sensor_end += kPeriod;
+    sensor_end += kPacketPeriod;
     clock.observe(sensor_end, sensor_end + kNsPerMs);  // the rest 1 ms
     const TimeNs stamp = sensor_end + clock.stamping_offset_ns();
-    ASSERT_GE(stamp - previous_stamp, static_cast<TimeNs>(0.99 * static_cast<double>(kPeriod)) - 1) << k;
+    ASSERT_GE(stamp - previous_stamp, static_cast<TimeNs>(0.99 * static_cast<double>(kPacketPeriod)) - 1)
+        << k;
     previous_stamp = stamp;
   }
   EXPECT_EQ(*clock.offset_ns(), kNsPerMs);
@@ -70,12 +71,12 @@ TEST(SensorClock, StampingOffsetSlewsWithoutJumps) {
 TEST(SensorClock, AClockStepStartsAfresh) {
   SensorClock clock;
   clock.observe(10 * kNsPerSecond, 10 * kNsPerSecond + kNsPerMs);
-  clock.observe(10 * kNsPerSecond + kPeriod, 10 * kNsPerSecond + kPeriod + kNsPerMs);
+  clock.observe(10 * kNsPerSecond + kPacketPeriod, 10 * kNsPerSecond + kPacketPeriod + kNsPerMs);
   // The sensor's clock set back by an hour: a new offset, not a lag of an hour.
-  clock.observe(10 * kNsPerSecond - 3600 * kNsPerSecond, 10 * kNsPerSecond + 2 * kPeriod + kNsPerMs);
+  clock.observe(10 * kNsPerSecond - 3600 * kNsPerSecond, 10 * kNsPerSecond + 2 * kPacketPeriod + kNsPerMs);
   EXPECT_EQ(clock.steps(), 1U);
   EXPECT_NEAR(static_cast<double>(*clock.offset_ns()),
-              static_cast<double>(3600 * kNsPerSecond + 2 * kPeriod + kNsPerMs), 1.0);
+              static_cast<double>(3600 * kNsPerSecond + 2 * kPacketPeriod + kNsPerMs), 1.0);
   EXPECT_THROW(SensorClock(SensorClockConfig{.max_drift = -1.0}), std::invalid_argument);
 }
 

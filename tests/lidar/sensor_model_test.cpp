@@ -7,20 +7,19 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "common/angles.h"
 #include "published_tables.h"
 
 namespace rsu::lidar {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
 // Elevation asin(z) and clockwise azimuth atan2(-y, x) of the beam must be the published angles.
 void expect_beam_angles(const SensorModel& m, std::size_t laser, double elevation_deg) {
   for (const double az_deg : {0.0, 37.5, 90.0, 179.9, 270.0, 359.0}) {
-    const Eigen::Vector3d d = m.beam_direction(laser, az_deg * kDeg);
+    const Eigen::Vector3d d = m.beam_direction(laser, deg_to_rad(az_deg));
     EXPECT_NEAR(d.norm(), 1.0, 1e-12);
-    EXPECT_NEAR(std::asin(d.z()) / kDeg, elevation_deg, 1e-9) << "laser " << laser;
-    double measured_az = std::atan2(-d.y(), d.x()) / kDeg;
+    EXPECT_NEAR(rad_to_deg(std::asin(d.z())), elevation_deg, 1e-9) << "laser " << laser;
+    double measured_az = rad_to_deg(std::atan2(-d.y(), d.x()));
     if (measured_az < 0) {
       measured_az += 360.0;
     }
@@ -69,10 +68,10 @@ TEST(LidarSensorModel, Vlp32cMatchesPublishedTables) {
 TEST(LidarSensorModel, BeamDirectionIsClockwiseFromForward) {
   const SensorModel m = make_vlp16();
   // Laser 1 is +1 deg. Azimuth 90 deg (clockwise seen from above) points to the right: -y.
-  const Eigen::Vector3d right = m.beam_direction(1, 90.0 * kDeg);
+  const Eigen::Vector3d right = m.beam_direction(1, deg_to_rad(90.0));
   EXPECT_NEAR(right.x(), 0.0, 1e-12);
-  EXPECT_NEAR(right.y(), -std::cos(kDeg), 1e-12);
-  EXPECT_NEAR(right.z(), std::sin(kDeg), 1e-12);
+  EXPECT_NEAR(right.y(), -std::cos(deg_to_rad(1.0)), 1e-12);
+  EXPECT_NEAR(right.z(), std::sin(deg_to_rad(1.0)), 1e-12);
   EXPECT_THROW((void)m.beam_direction(16, 0.0), std::out_of_range);
 }
 

@@ -12,13 +12,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/angles.h"
 #include "packet_stream.h"
 #include "published_tables.h"
 
 namespace rsu::lidar {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr TimeNs kHour = 3600 * kNsPerSecond;
 
 std::uint16_t le16(const std::array<std::uint8_t, kPacketBytes>& b, std::size_t at) {
@@ -104,11 +104,11 @@ void check_round_trip(const SensorModel& model) {
       EXPECT_FLOAT_EQ(p.azimuth_rad, static_cast<float>(f.azimuth_rad));
       EXPECT_EQ(p.intensity, packet.returns.reflectivity[static_cast<std::size_t>(f.block)]
                                                         [static_cast<std::size_t>(f.channel)]);
-      const double x = p.x, y = p.y, z = p.z;
+      const double x = static_cast<double>(p.x), y = static_cast<double>(p.y), z = static_cast<double>(p.z);
       const double range = std::sqrt(x * x + y * y + z * z);
       EXPECT_NEAR(range, packet.true_range_m[i], model.distance_unit_m / 2 + 2e-5 * range);
       // Direction from the test's own table: elevation w, clockwise azimuth a.
-      const double w = elevation_deg(model, f.laser) * kDeg;
+      const double w = deg_to_rad(elevation_deg(model, f.laser));
       const double a = f.azimuth_rad;
       EXPECT_NEAR(x, range * std::cos(w) * std::cos(a), 1e-5 * range + 1e-6);
       EXPECT_NEAR(y, -range * std::cos(w) * std::sin(a), 1e-5 * range + 1e-6);

@@ -680,7 +680,7 @@ void check_exact_against_offline(const lidar::SensorModel& model, const std::vec
   std::vector<bool> foreground;
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
     lidar::LidarPoint p = frame.frame.points[i];
-    const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d m = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     p.x = static_cast<float>(m.x());
     p.y = static_cast<float>(m.y());
     p.z = static_cast<float>(m.z());

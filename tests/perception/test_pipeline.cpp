@@ -20,14 +20,14 @@ namespace {
 
 using test::TrueBox;
 
-struct Street {
+struct BusyStreet {
   test::Scene3d empty;
   test::Scene3d busy;
   test::Lidar3d lidar = test::small_lidar(16);
   // Both vehicles show an L. (Seen end-on from 2 m, a box's roof returns land metres behind its front
   // face, beyond the clustering tolerance, and form a cluster of their own; the Algorithm 1 test below
   // has that case.)
-  Street() { busy.vehicles = {{{12.0, 3.0}, 1.0, 4.89, 1.92}, {{-6.0, -15.0}, 0.3, 4.5, 1.8}}; }
+  BusyStreet() { busy.vehicles = {{{12.0, 3.0}, 1.0, 4.89, 1.92}, {{-6.0, -15.0}, 0.3, 4.5, 1.8}}; }
 };
 
 const TrueBox* nearest_vehicle(const test::Scene3d& scene, const Eigen::Vector2d& p) {
@@ -86,7 +86,7 @@ void expect_finds_and_corrects_vehicles(const PerceptionPipeline& pipeline, cons
 }
 
 TEST(PerceptionPipeline, RangeImageBackground) {
-  Street s;
+  BusyStreet s;
   std::mt19937_64 rng(1);
   PerceptionPipeline pipeline({}, test::geometry_of(s.lidar));
   for (const double phase : {0.1, 0.4, 0.7, 0.9})
@@ -96,7 +96,7 @@ TEST(PerceptionPipeline, RangeImageBackground) {
 }
 
 TEST(PerceptionPipeline, ReferenceFrameBackground) {
-  Street s;
+  BusyStreet s;
   std::mt19937_64 rng(2);
   PerceptionConfig config;
   config.background = BackgroundMethod::reference_frame;
@@ -108,7 +108,7 @@ TEST(PerceptionPipeline, ReferenceFrameBackground) {
 }
 
 TEST(PerceptionPipeline, GroundHeightInAnEmptySceneLikeThePilot) {
-  Street s;
+  BusyStreet s;
   s.busy.wall_radius = 1000.0;  // nothing but ground and vehicles within range
   std::mt19937_64 rng(3);
   PerceptionConfig config;
@@ -143,7 +143,7 @@ PointSet coordinates(const Points& points) {
 // PCD frame), and the clusters of the obviously right reference clustering (breadth-first, brute
 // force) of the same foreground.
 TEST(PerceptionPipeline, ObjectsAreTheClustersRsudAndTheReferenceFind) {
-  Street s;
+  BusyStreet s;
   std::mt19937_64 rng(4);
   PerceptionConfig config;
   config.background = BackgroundMethod::reference_frame;
@@ -176,7 +176,7 @@ TEST(PerceptionPipeline, ObjectsAreTheClustersRsudAndTheReferenceFind) {
 }
 
 TEST(PerceptionPipeline, Algorithm1IsSelectable) {
-  Street s;
+  BusyStreet s;
   s.busy.vehicles = {{{15.0, 0.0}, 0.0, 4.89, 1.92}};  // seen from straight ahead: the front only
   s.busy.wall_radius = 1000.0;
   std::mt19937_64 rng(5);
@@ -199,7 +199,7 @@ TEST(PerceptionPipeline, Algorithm1IsSelectable) {
 }
 
 TEST(PerceptionPipeline, BadFramesAreCountedNotCrashed) {
-  Street s;
+  BusyStreet s;
   std::mt19937_64 rng(6);
   PerceptionPipeline pipeline({}, test::geometry_of(s.lidar));
   pipeline.add_background_frame(test::points_of(test::scan_3d(s.empty, s.lidar, 0.5, rng)));

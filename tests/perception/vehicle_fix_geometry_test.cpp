@@ -149,7 +149,7 @@ Sweep sweep_of(const lidar::SensorModel& model, const Pose3& mount, const sim::V
   const Eigen::Isometry3d to_map = mount.to_isometry();
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
     const lidar::LidarPoint& p = frame.frame.points[i];
-    const Eigen::Vector3d m = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d m = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     if (m.z() < kGroundFilterM)
       continue;
     // The vehicle's own returns are its points; any other object's are what may hide part of it (rsud

@@ -6,18 +6,13 @@
 #include <cmath>
 #include <variant>
 
+#include "../v2i/test_keys.h"
 #include "tools/rsu_relay/correction_tamper.h"
 #include "v2i/message_authenticator.h"
 #include "v2i/wire_codec.h"
 
 namespace rsu::tools {
 namespace {
-
-v2i::security::SigningKey key_from(std::uint8_t fill) {
-  v2i::security::Seed seed{};
-  seed.fill(fill);
-  return v2i::security::SigningKey(seed);
-}
 
 constexpr TimeNs kStart = 1'700'000'000 * kNsPerSecond;
 

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/angles.h"
 #include "geometry_checks.h"
 #include "lidar/ouster/ouster_decoder.h"
 #include "lidar/velodyne_decoder.h"
@@ -19,8 +20,6 @@
 namespace rsu::sim {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 NoiseModel no_noise() {
   NoiseModel n;
   n.range_sigma_m = 0.0;
@@ -28,7 +27,7 @@ NoiseModel no_noise() {
   return n;
 }
 
-Scene ground_only() {
+Scene flat_ground() {
   Scene s;
   s.ground.half_extent_m = 250.0;
   return s;
@@ -45,14 +44,14 @@ Building wall_at_8m() {
 }
 
 Eigen::Vector3d xyz(const lidar::LidarPoint& p) {
-  return {p.x, p.y, p.z};
+  return Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
 }
 
 // A VLP-16 2 m above an empty ground plane: each downward ring draws a circle of radius
 // 2 / tan(|elevation|), if that is within the 100 m maximum range; no other ring returns.
 TEST(SimLidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
   const lidar::SensorModel model = lidar::make_vlp16();
-  const Raycaster rc(ground_only());
+  const Raycaster rc(flat_ground());
   const LidarSimulator sim(model, Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), rc);
   const SimulatedFrame f = sim.simulate_frame(0);
   // 0.1 s / 55.296 us = 1808.4 firing sequences of 16 lasers.
@@ -74,7 +73,8 @@ TEST(SimLidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
     ASSERT_LT(w, 0.0) << "an upward ring returned";
     const double horizontal = 2.0 / std::tan(-w);
     // Quantisation: range to within half a distance unit (1 mm), plus float rounding.
-    EXPECT_NEAR(std::hypot(double{p.x}, double{p.y}), horizontal, 1e-3 + 1e-5 * horizontal);
+    EXPECT_NEAR(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), horizontal,
+                1e-3 + 1e-5 * horizontal);
     EXPECT_NEAR(p.z, -2.0, 1e-3);
     EXPECT_EQ(f.truth[i].surface, SurfaceClass::kGround);
     // Lambertian intensity: incidence cosine on a horizontal plane is sin|elevation|.
@@ -95,7 +95,7 @@ TEST(SimLidarSimulator, Vlp16EmptyGroundRingsAtTheExpectedDistances) {
 }
 
 TEST(SimLidarSimulator, SameSeedSameFrameDifferentSeedDifferentFrame) {
-  Scene scene = ground_only();
+  Scene scene = flat_ground();
   Vehicle v;
   v.id = 3;
   v.trajectory = StaticPose{{9.0, 4.0, 1.0}};
@@ -130,7 +130,7 @@ TEST(SimLidarSimulator, SameSeedSameFrameDifferentSeedDifferentFrame) {
 // the configured sigma (plus the quantisation's unit^2 / 12).
 TEST(SimLidarSimulator, RangeNoiseHasTheConfiguredSigma) {
   const lidar::SensorModel model = lidar::make_vlp16();
-  const Raycaster rc(ground_only());
+  const Raycaster rc(flat_ground());
   NoiseModel noise;
   noise.range_sigma_m = 0.02;
   noise.angle_sigma_rad = 0.001;
@@ -153,7 +153,10 @@ TEST(SimLidarSimulator, RangeNoiseHasTheConfiguredSigma) {
   int off_circle = 0;
   for (const lidar::LidarPoint& p : f.frame.points) {
     const double w = model.elevation_deg.at(p.ring) * kPi / 180.0;
-    off_circle += std::abs(std::hypot(double{p.x}, double{p.y}) - 2.0 / std::tan(-w)) > 0.05 ? 1 : 0;
+    off_circle +=
+        std::abs(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)) - 2.0 / std::tan(-w)) > 0.05
+            ? 1
+            : 0;
   }
   EXPECT_GT(off_circle, 100);
 }
@@ -162,7 +165,7 @@ TEST(SimLidarSimulator, RangeNoiseHasTheConfiguredSigma) {
 // (distance computed here by brute force), within the distance quantum, when noise is off; within
 // a few sigma when it is on.
 TEST(SimLidarSimulator, VehiclePointsLieOnTheMeshSurface) {
-  Scene scene = ground_only();
+  Scene scene = flat_ground();
   Vehicle v;
   v.id = 9;
   v.trajectory = StaticPose{{7.0, -5.0, 0.6}};
@@ -199,7 +202,7 @@ TEST(SimLidarSimulator, VehiclePointsLieOnTheMeshSurface) {
 // A vehicle driving away at 30 m/s, seen from behind at belt height: the flat part of its rear face
 // is at x(t) - length / 2 at each point's own firing time t, so points fired later are farther.
 TEST(SimLidarSimulator, MovingVehicleIsSeenWhereItIsAtEachPointsTime) {
-  Scene scene = ground_only();
+  Scene scene = flat_ground();
   Vehicle v;
   v.id = 1;
   const double speed = 30.0;
@@ -219,9 +222,9 @@ TEST(SimLidarSimulator, MovingVehicleIsSeenWhereItIsAtEachPointsTime) {
     if (f.truth[i].surface != SurfaceClass::kVehicle) {
       continue;
     }
-    const double z = double{p.z} + 0.9;
+    const double z = static_cast<double>(p.z) + 0.9;
     // Flat rear face: between the arch tops and the belt line, clear of the rounded corners.
-    if (z < 0.82 || z > 0.98 || std::abs(double{p.y}) > 0.5 * s.width - s.corner_radius - 0.05) {
+    if (z < 0.82 || z > 0.98 || std::abs(static_cast<double>(p.y)) > 0.5 * s.width - s.corner_radius - 0.05) {
       continue;
     }
     const double expected_x = x0 + speed * to_seconds(p.time_ns) - 0.5 * s.length;
@@ -237,7 +240,7 @@ TEST(SimLidarSimulator, MovingVehicleIsSeenWhereItIsAtEachPointsTime) {
 
 // What the simulator calls a point is what a decoder rebuilds from the simulator's packets.
 TEST(SimLidarSimulator, FramePointsEqualDecodedPackets) {
-  Scene scene = ground_only();
+  Scene scene = flat_ground();
   Vehicle v;
   v.id = 5;
   v.trajectory = StaticPose{{3.0, 6.0, 2.0}};
@@ -292,7 +295,7 @@ TEST(SimLidarSimulator, Vlp32cPacketsDecodeToPointsOnTheCalibratedBeams) {
   constexpr std::array<double, 32> kRotCorrectionDeg = {
       -1.4, 4.2, -1.4, 1.4, -1.4, 1.4, -4.2, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 1.4,
       -1.4, 4.2, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4, -1.4, 1.4, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4};
-  Scene scene = ground_only();
+  Scene scene = flat_ground();
   scene.buildings.push_back(wall_at_8m());  // in front of the LiDAR
   const Raycaster rc(scene);
   const Pose3 mount{0.0, 0.0, 2.0, 0.0, 0.0, 0.0};
@@ -346,7 +349,7 @@ TEST(SimLidarSimulator, Vlp32cPacketsDecodeToPointsOnTheCalibratedBeams) {
 // metadata the simulator writes, in each profile: every packet accepted, whole frames, and every point
 // on the surface its ray hit (the ground plane, or the wall's face at 8 m), placed by the mount.
 TEST(SimOusterSimulator, PacketsDecodeToPointsOnTheSceneInEachProfile) {
-  Scene scene = ground_only();
+  Scene scene = flat_ground();
   scene.buildings.push_back(wall_at_8m());
   const Raycaster rc(scene);
   const Pose3 mount{1.0, -2.0, 2.0, 0.0, 0.0, 0.3};
@@ -375,7 +378,7 @@ TEST(SimOusterSimulator, PacketsDecodeToPointsOnTheSceneInEachProfile) {
       ASSERT_EQ(decoder.decode(bytes, points), lidar::ouster::PacketResult::accepted) << k;
       EXPECT_EQ(decoder.last_packet().first_time_ns, sim.packet_time_ns(k) + 1'000'000'000);
       for (const lidar::LidarPoint& p : points) {
-        const Eigen::Vector3d x = to_map * Eigen::Vector3d(p.x, p.y, p.z);
+        const Eigen::Vector3d x = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
         if (std::abs(x.z()) < tolerance)
           ++on_ground;
         else if (std::abs(x.head<2>().dot(normal) - 8.0) < tolerance)
@@ -397,7 +400,7 @@ TEST(SimOusterSimulator, PacketsDecodeToPointsOnTheSceneInEachProfile) {
 // Sector simulation casts only the firings in the window, and those come out exactly as in the full
 // frame (noise is keyed by firing, not by draw order).
 TEST(SimLidarSimulator, SectorMatchesTheFullFrameInsideTheWindow) {
-  Scene scene = ground_only();
+  Scene scene = flat_ground();
   Vehicle v;
   v.trajectory = StaticPose{{6.0, -6.0, 0.0}};
   scene.vehicles.push_back(v);
@@ -410,7 +413,7 @@ TEST(SimLidarSimulator, SectorMatchesTheFullFrameInsideTheWindow) {
     EXPECT_GT(part.counts.outside_sector, part.counts.firings / 2);
     std::vector<lidar::LidarPoint> expected;
     for (const lidar::LidarPoint& p : full.frame.points) {
-      const double a = p.azimuth_rad;
+      const double a = static_cast<double>(p.azimuth_rad);
       const bool inside = sector.begin_rad <= sector.end_rad ? (a >= sector.begin_rad && a <= sector.end_rad)
                                                              : (a >= sector.begin_rad || a <= sector.end_rad);
       if (inside) {
@@ -427,7 +430,7 @@ TEST(SimLidarSimulator, SectorMatchesTheFullFrameInsideTheWindow) {
 }
 
 TEST(SimLidarSimulator, PacketsOutsideTheSectorReportNoReturn) {
-  const Raycaster rc(ground_only());
+  const Raycaster rc(flat_ground());
   const LidarSimulator sim(lidar::make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), rc);
   // Packet 0 spans azimuths 0 .. 2.4 deg: a sector elsewhere leaves it empty.
   const lidar::PacketReturns empty = sim.simulate_packet(0, AzimuthSector{1.0, 2.0});
@@ -444,7 +447,7 @@ TEST(SimLidarSimulator, PacketsOutsideTheSectorReportNoReturn) {
 }
 
 TEST(SimLidarSimulator, BadConfigurationThrows) {
-  const Raycaster rc(ground_only());
+  const Raycaster rc(flat_ground());
   NoiseModel negative;
   negative.range_sigma_m = -1.0;
   EXPECT_THROW(LidarSimulator(lidar::make_vlp16(), Pose3{}, negative, rc), std::invalid_argument);
@@ -459,7 +462,7 @@ TEST(SimLidarSimulator, BadConfigurationThrows) {
 }
 
 TEST(SimLidarSimulator, OwnsItsRaycasterWhenBuiltFromAScene) {
-  const LidarSimulator sim(lidar::make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), ground_only());
+  const LidarSimulator sim(lidar::make_vlp16(), Pose3{0, 0, 2.0, 0, 0, 0}, no_noise(), flat_ground());
   EXPECT_GT(sim.simulate_frame(0).frame.points.size(), 12000U);
 }
 

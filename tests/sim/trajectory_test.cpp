@@ -13,8 +13,6 @@
 namespace rsu::sim {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 // Angle difference folded into [0, pi], computed here with atan2 (not the library's wrap_angle).
 double angle_gap(double a, double b) {
   return std::abs(std::atan2(std::sin(a - b), std::cos(a - b)));

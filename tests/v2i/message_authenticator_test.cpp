@@ -12,6 +12,7 @@
 
 #include "proto/v2i.pb.h"
 #include "test_announcement.h"
+#include "test_keys.h"
 #include "v2i/message_signer.h"
 
 namespace rsu::v2i {
@@ -19,15 +20,9 @@ namespace {
 
 using security::SigningKey;
 
-constexpr TimeNs kNow = 1'700'000'000 * kNsPerSecond;
+constexpr TimeNs kAuthNow = 1'700'000'000 * kNsPerSecond;
 constexpr std::uint64_t kVehicle = 7;
 constexpr std::uint64_t kRsu = 1;
-
-SigningKey key_from(std::uint8_t fill) {
-  security::Seed seed{};
-  seed.fill(fill);
-  return SigningKey(seed);
-}
 
 struct Keys {
   SigningKey rsu = key_from(1);
@@ -46,7 +41,7 @@ Correction correction_from(std::uint64_t rsu_id) {
   Correction c;
   c.rsu_id = rsu_id;
   c.vehicle_id = kVehicle;
-  c.sweep_time = kNow - 50 * kNsPerMs;
+  c.sweep_time = kAuthNow - 50 * kNsPerMs;
   return c;
 }
 
@@ -63,10 +58,10 @@ std::vector<std::uint8_t> tamper(const std::vector<std::uint8_t>& bytes, Change 
 
 class MessageAuthenticatorTest : public ::testing::Test {
  protected:
-  AuthVerdict verdict(const std::vector<std::uint8_t>& bytes, TimeNs now = kNow) {
+  AuthVerdict verdict(const std::vector<std::uint8_t>& bytes, TimeNs now = kAuthNow) {
     return auth_.authenticate(bytes, now).verdict;
   }
-  std::vector<std::uint8_t> announcement(const SigningKey* key, std::uint32_t seq, TimeNs t = kNow,
+  std::vector<std::uint8_t> announcement(const SigningKey* key, std::uint32_t seq, TimeNs t = kAuthNow,
                                          std::uint64_t vehicle = kVehicle) {
     return encode_v2i_message(testing::make_announcement(vehicle, seq, t), {t, seq}, key);
   }
@@ -76,27 +71,27 @@ class MessageAuthenticatorTest : public ::testing::Test {
 };
 
 TEST_F(MessageAuthenticatorTest, GenuineMessagesAreAcceptedWithTheirContent) {
-  const AuthenticatedMessage a = auth_.authenticate(announcement(&keys_.car, 10), kNow);
+  const AuthenticatedMessage a = auth_.authenticate(announcement(&keys_.car, 10), kAuthNow);
   ASSERT_EQ(a.verdict, AuthVerdict::kAccepted);
   EXPECT_TRUE(a.accepted());
   EXPECT_EQ(a.signer, keys_.car.key_id());
   EXPECT_EQ(a.message.header.sequence, 10U);
   EXPECT_EQ(std::get<VehicleAnnouncement>(a.message.body).vehicle_id, kVehicle);
   MessageSigner rsu(keys_.rsu);
-  EXPECT_EQ(verdict(rsu.encode(correction_from(kRsu), kNow)), AuthVerdict::kAccepted);
+  EXPECT_EQ(verdict(rsu.encode(correction_from(kRsu), kAuthNow)), AuthVerdict::kAccepted);
   RsuAdvertisement ad;
   ad.rsu_id = kRsu;
-  EXPECT_EQ(verdict(rsu.encode(ad, kNow)), AuthVerdict::kAccepted);
+  EXPECT_EQ(verdict(rsu.encode(ad, kAuthNow)), AuthVerdict::kAccepted);
 }
 
 TEST_F(MessageAuthenticatorTest, EveryRefusalHasItsReason) {
   const std::vector<std::uint8_t> good = announcement(&keys_.car, 10);
-  struct Case {
+  struct RefusalCase {
     const char* what;
     std::vector<std::uint8_t> bytes;
     AuthVerdict expected;
   };
-  const std::vector<Case> cases = {
+  const std::vector<RefusalCase> cases = {
       {"garbage", {0xFF, 0xFF}, AuthVerdict::kMalformed},
       {"version 1", {0x08, 0x01, 0x12, 0x02, 0x08, 0x07}, AuthVerdict::kMalformed},
       {"unsigned", announcement(nullptr, 11), AuthVerdict::kUnsigned},
@@ -117,15 +112,16 @@ TEST_F(MessageAuthenticatorTest, EveryRefusalHasItsReason) {
               [&](auto& m) { m.set_signer_key_id(keys_.rsu.key_id().data(), keys_.rsu.key_id().size()); }),
        AuthVerdict::kBadSignature},
       {"RSU key announcing", announcement(&keys_.rsu, 13), AuthVerdict::kWrongRole},
-      {"vehicle key correcting", encode_v2i_message(correction_from(kRsu), {kNow, 14}, &keys_.car),
+      {"vehicle key correcting", encode_v2i_message(correction_from(kRsu), {kAuthNow, 14}, &keys_.car),
        AuthVerdict::kWrongRole},
-      {"another vehicle's id", announcement(&keys_.car, 15, kNow, kVehicle + 1), AuthVerdict::kWrongSubject},
-      {"another RSU's id", encode_v2i_message(correction_from(kRsu + 1), {kNow, 16}, &keys_.rsu),
+      {"another vehicle's id", announcement(&keys_.car, 15, kAuthNow, kVehicle + 1),
        AuthVerdict::kWrongSubject},
-      {"stale", announcement(&keys_.car, 17, kNow - 1001 * kNsPerMs), AuthVerdict::kStale},
-      {"future", announcement(&keys_.car, 18, kNow + 1001 * kNsPerMs), AuthVerdict::kFuture},
+      {"another RSU's id", encode_v2i_message(correction_from(kRsu + 1), {kAuthNow, 16}, &keys_.rsu),
+       AuthVerdict::kWrongSubject},
+      {"stale", announcement(&keys_.car, 17, kAuthNow - 1001 * kNsPerMs), AuthVerdict::kStale},
+      {"future", announcement(&keys_.car, 18, kAuthNow + 1001 * kNsPerMs), AuthVerdict::kFuture},
   };
-  for (const Case& c : cases) {
+  for (const RefusalCase& c : cases) {
     EXPECT_EQ(verdict(c.bytes), c.expected) << c.what;
   }
   // None of the refusals above touched the car's window: the genuine message is still fresh, once.
@@ -157,8 +153,8 @@ TEST_F(MessageAuthenticatorTest, WindowRefusalsComeBeforeTheSignature) {
   const std::vector<std::uint8_t> good = announcement(&keys_.car, 20);
   ASSERT_EQ(verdict(good), AuthVerdict::kAccepted);
   EXPECT_EQ(auth_.signatures_verified(), 1U);
-  EXPECT_EQ(verdict(forge(announcement(&keys_.car, 21, kNow - 1001 * kNsPerMs))), AuthVerdict::kStale);
-  EXPECT_EQ(verdict(forge(announcement(&keys_.car, 22, kNow + 1001 * kNsPerMs))), AuthVerdict::kFuture);
+  EXPECT_EQ(verdict(forge(announcement(&keys_.car, 21, kAuthNow - 1001 * kNsPerMs))), AuthVerdict::kStale);
+  EXPECT_EQ(verdict(forge(announcement(&keys_.car, 22, kAuthNow + 1001 * kNsPerMs))), AuthVerdict::kFuture);
   EXPECT_EQ(verdict(forge(good)), AuthVerdict::kDuplicate);
   EXPECT_EQ(verdict(good), AuthVerdict::kDuplicate);
   EXPECT_EQ(auth_.signatures_verified(), 1U);  // none of these four was verified
@@ -172,18 +168,18 @@ TEST_F(MessageAuthenticatorTest, WindowRefusalsComeBeforeTheSignature) {
   EXPECT_EQ(auth_.refused_before_signature(), 5U);
   // Checked ahead (rsud's receiver thread) within the receiver's time window: a stale or future message
   // is not verified there either, and authenticate() refuses it by its time.
-  const TimeWindow window{kNow, 1000 * kNsPerMs, 1000 * kNsPerMs};
-  const std::vector<std::uint8_t> stale = announcement(&keys_.car, 30, kNow - 1001 * kNsPerMs);
-  const std::vector<std::uint8_t> future = announcement(&keys_.car, 31, kNow + 1001 * kNsPerMs);
-  const std::vector<std::uint8_t> fresh = announcement(&keys_.car, 32, kNow - 999 * kNsPerMs);
+  const TimeWindow window{kAuthNow, 1000 * kNsPerMs, 1000 * kNsPerMs};
+  const std::vector<std::uint8_t> stale = announcement(&keys_.car, 30, kAuthNow - 1001 * kNsPerMs);
+  const std::vector<std::uint8_t> future = announcement(&keys_.car, 31, kAuthNow + 1001 * kNsPerMs);
+  const std::vector<std::uint8_t> fresh = announcement(&keys_.car, 32, kAuthNow - 999 * kNsPerMs);
   EXPECT_FALSE(check_signature_ahead(stale, keys_.trust(), window));
   EXPECT_FALSE(check_signature_ahead(future, keys_.trust(), window));
   EXPECT_TRUE(check_signature_ahead(stale, keys_.trust()));  // no window: checked
   const auto fresh_check = check_signature_ahead(fresh, keys_.trust(), window);
   ASSERT_TRUE(fresh_check);
   EXPECT_TRUE(fresh_check->valid);
-  EXPECT_EQ(auth_.authenticate(stale, kNow, nullptr).verdict, AuthVerdict::kStale);
-  EXPECT_EQ(auth_.authenticate(fresh, kNow, &*fresh_check).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(auth_.authenticate(stale, kAuthNow, nullptr).verdict, AuthVerdict::kStale);
+  EXPECT_EQ(auth_.authenticate(fresh, kAuthNow, &*fresh_check).verdict, AuthVerdict::kAccepted);
   EXPECT_EQ(auth_.signatures_verified(), 3U);  // as before this block: the fresh one was checked ahead
   EXPECT_EQ(auth_.signatures_checked_ahead(), 1U);
 }
@@ -197,10 +193,10 @@ TEST(VerificationRadius, AnAnnouncementBeyondItIsDroppedUnverifiedAndLeavesNoTra
   MessageAuthenticator auth({.mode = SecurityMode::kSigned, .replay = {}, .verify_within = radius},
                             keys.trust());
   const auto at = [&](double x, double y, std::uint32_t seq, const SigningKey* key) {
-    VehicleAnnouncement a = testing::make_announcement(kVehicle, seq, kNow);
+    VehicleAnnouncement a = testing::make_announcement(kVehicle, seq, kAuthNow);
     a.pose.x = x;
     a.pose.y = y;
-    return encode_v2i_message(a, {kNow, seq}, key);
+    return encode_v2i_message(a, {kAuthNow, seq}, key);
   };
   const auto forge = [](const std::vector<std::uint8_t>& bytes) {
     return tamper(bytes, [](auto& m) { m.mutable_signature()->front() ^= 1; });
@@ -209,44 +205,51 @@ TEST(VerificationRadius, AnAnnouncementBeyondItIsDroppedUnverifiedAndLeavesNoTra
   for (int k = 0; k < 8; ++k) {
     const double a = k * 0.785398;
     const auto s = static_cast<std::uint32_t>(100 + 10 * k);
+    EXPECT_EQ(auth.authenticate(forge(at(10 + 100.01 * std::cos(a), -5 + 100.01 * std::sin(a), s, &keys.car)),
+                                kAuthNow)
+                  .verdict,
+              AuthVerdict::kNotNeeded)
+        << k;
     EXPECT_EQ(
-        auth.authenticate(forge(at(10 + 100.01 * std::cos(a), -5 + 100.01 * std::sin(a), s, &keys.car)), kNow)
+        auth.authenticate(at(10 + 250 * std::cos(a), -5 + 250 * std::sin(a), s + 1, &keys.car), kAuthNow)
             .verdict,
         AuthVerdict::kNotNeeded)
         << k;
     EXPECT_EQ(
-        auth.authenticate(at(10 + 250 * std::cos(a), -5 + 250 * std::sin(a), s + 1, &keys.car), kNow).verdict,
-        AuthVerdict::kNotNeeded)
-        << k;
-    EXPECT_EQ(auth.authenticate(
-                      forge(at(10 + 99.99 * std::cos(a), -5 + 99.99 * std::sin(a), s + 2, &keys.car)), kNow)
-                  .verdict,
-              AuthVerdict::kBadSignature)
+        auth.authenticate(forge(at(10 + 99.99 * std::cos(a), -5 + 99.99 * std::sin(a), s + 2, &keys.car)),
+                          kAuthNow)
+            .verdict,
+        AuthVerdict::kBadSignature)
         << k;
   }
   EXPECT_EQ(auth.signatures_verified(), 8U);  // only the eight within the radius
   EXPECT_EQ(auth.counts().count(AuthVerdict::kNotNeeded), 16U);
   // Nothing was recorded: the genuine announcements with the dropped sequence numbers are fresh, once.
-  EXPECT_EQ(auth.authenticate(at(10, -5, 100, &keys.car), kNow).verdict, AuthVerdict::kAccepted);
-  EXPECT_EQ(auth.authenticate(at(10, -5, 101, &keys.car), kNow).verdict, AuthVerdict::kAccepted);
-  EXPECT_EQ(auth.authenticate(at(10, -5, 101, &keys.car), kNow).verdict, AuthVerdict::kDuplicate);
+  EXPECT_EQ(auth.authenticate(at(10, -5, 100, &keys.car), kAuthNow).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(auth.authenticate(at(10, -5, 101, &keys.car), kAuthNow).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(auth.authenticate(at(10, -5, 101, &keys.car), kAuthNow).verdict, AuthVerdict::kDuplicate);
   // A pose that is not finite is verified (validation refuses it later, by its reason).
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(auth.authenticate(forge(at(nan, 0, 200, &keys.car)), kNow).verdict, AuthVerdict::kBadSignature);
-  EXPECT_EQ(auth.authenticate(forge(at(inf, 0, 201, &keys.car)), kNow).verdict, AuthVerdict::kBadSignature);
-  EXPECT_EQ(auth.authenticate(forge(at(0, -inf, 202, &keys.car)), kNow).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth.authenticate(forge(at(nan, 0, 200, &keys.car)), kAuthNow).verdict,
+            AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth.authenticate(forge(at(inf, 0, 201, &keys.car)), kAuthNow).verdict,
+            AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth.authenticate(forge(at(0, -inf, 202, &keys.car)), kAuthNow).verdict,
+            AuthVerdict::kBadSignature);
   // Unsigned, unknown signers and the windows refuse first, by their own reasons.
-  EXPECT_EQ(auth.authenticate(at(500, 0, 300, nullptr), kNow).verdict, AuthVerdict::kUnsigned);
-  EXPECT_EQ(auth.authenticate(at(500, 0, 301, &keys.stranger), kNow).verdict, AuthVerdict::kUnknownSigner);
-  EXPECT_EQ(auth.authenticate(at(500, 0, 101, &keys.car), kNow).verdict, AuthVerdict::kDuplicate);
+  EXPECT_EQ(auth.authenticate(at(500, 0, 300, nullptr), kAuthNow).verdict, AuthVerdict::kUnsigned);
+  EXPECT_EQ(auth.authenticate(at(500, 0, 301, &keys.stranger), kAuthNow).verdict,
+            AuthVerdict::kUnknownSigner);
+  EXPECT_EQ(auth.authenticate(at(500, 0, 101, &keys.car), kAuthNow).verdict, AuthVerdict::kDuplicate);
   // Other messages are verified wherever they say anything is.
   MessageSigner rsu(keys.rsu);
   Correction far = correction_from(kRsu);
   far.pose = {900.0, 900.0, 0.0};
-  EXPECT_EQ(auth.authenticate(forge(rsu.encode(far, kNow)), kNow).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth.authenticate(forge(rsu.encode(far, kAuthNow)), kAuthNow).verdict,
+            AuthVerdict::kBadSignature);
   // Checked ahead (rsud's receiver thread): not verified there either.
-  const TimeWindow window{kNow, 1000 * kNsPerMs, 1000 * kNsPerMs};
+  const TimeWindow window{kAuthNow, 1000 * kNsPerMs, 1000 * kNsPerMs};
   EXPECT_FALSE(check_signature_ahead(at(10, 96, 400, &keys.car), keys.trust(), window, radius));
   const auto near = check_signature_ahead(at(10, 94, 401, &keys.car), keys.trust(), window, radius);
   ASSERT_TRUE(near);
@@ -254,7 +257,7 @@ TEST(VerificationRadius, AnAnnouncementBeyondItIsDroppedUnverifiedAndLeavesNoTra
   EXPECT_TRUE(check_signature_ahead(at(10, 96, 402, &keys.car), keys.trust(), window));  // no radius
   // Without a radius (the library's default) everything is verified.
   MessageAuthenticator everything(SecurityConfig{}, keys.trust());
-  EXPECT_EQ(everything.authenticate(forge(at(10, 5000, 500, &keys.car)), kNow).verdict,
+  EXPECT_EQ(everything.authenticate(forge(at(10, 5000, 500, &keys.car)), kAuthNow).verdict,
             AuthVerdict::kBadSignature);
   EXPECT_EQ(everything.counts().count(AuthVerdict::kNotNeeded), 0U);
 }
@@ -270,7 +273,7 @@ TEST_F(MessageAuthenticatorTest, SignedGarbageIsMalformedNotAccepted) {
   std::string bytes;
   ASSERT_TRUE(m.SerializeToString(&bytes));
   const AuthenticatedMessage a =
-      auth_.authenticate(std::vector<std::uint8_t>(bytes.begin(), bytes.end()), kNow);
+      auth_.authenticate(std::vector<std::uint8_t>(bytes.begin(), bytes.end()), kAuthNow);
   EXPECT_EQ(a.verdict, AuthVerdict::kMalformed);
   EXPECT_EQ(a.message.status, DecodeStatus::kParseError);
 }
@@ -293,19 +296,20 @@ TEST_F(MessageAuthenticatorTest, ForwardedOriginalBytesVerifyOnce) {
   const std::vector<std::uint8_t> sent = announcement(&keys_.car, 5);
   const std::vector<std::uint8_t> relayed(sent.begin(), sent.end());
   MessageAuthenticator peer(SecurityConfig{}, keys_.trust());
-  EXPECT_EQ(peer.authenticate(relayed, kNow + 3 * kNsPerMs).verdict, AuthVerdict::kAccepted);
-  EXPECT_EQ(peer.authenticate(sent, kNow + 4 * kNsPerMs).verdict, AuthVerdict::kDuplicate);
+  EXPECT_EQ(peer.authenticate(relayed, kAuthNow + 3 * kNsPerMs).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(peer.authenticate(sent, kAuthNow + 4 * kNsPerMs).verdict, AuthVerdict::kDuplicate);
 }
 
 TEST_F(MessageAuthenticatorTest, InsecureModeTakesWellFormedMessagesUnchecked) {
   MessageAuthenticator insecure(
       SecurityConfig{.mode = SecurityMode::kInsecure, .replay = {}, .verify_within = {}}, {});
-  const std::vector<std::uint8_t> unsigned_bytes = announcement(nullptr, 1, kNow - 60 * kNsPerSecond);
-  EXPECT_EQ(insecure.authenticate(unsigned_bytes, kNow).verdict, AuthVerdict::kAcceptedUnverified);
-  EXPECT_EQ(insecure.authenticate(unsigned_bytes, kNow).verdict, AuthVerdict::kAcceptedUnverified);
-  EXPECT_EQ(insecure.authenticate(announcement(&keys_.stranger, 1), kNow).verdict,
+  const std::vector<std::uint8_t> unsigned_bytes = announcement(nullptr, 1, kAuthNow - 60 * kNsPerSecond);
+  EXPECT_EQ(insecure.authenticate(unsigned_bytes, kAuthNow).verdict, AuthVerdict::kAcceptedUnverified);
+  EXPECT_EQ(insecure.authenticate(unsigned_bytes, kAuthNow).verdict, AuthVerdict::kAcceptedUnverified);
+  EXPECT_EQ(insecure.authenticate(announcement(&keys_.stranger, 1), kAuthNow).verdict,
             AuthVerdict::kAcceptedUnverified);
-  EXPECT_EQ(insecure.authenticate(std::vector<std::uint8_t>{0xFF}, kNow).verdict, AuthVerdict::kMalformed);
+  EXPECT_EQ(insecure.authenticate(std::vector<std::uint8_t>{0xFF}, kAuthNow).verdict,
+            AuthVerdict::kMalformed);
   EXPECT_EQ(insecure.counts().count(AuthVerdict::kAcceptedUnverified), 3U);
 }
 
@@ -341,8 +345,8 @@ TEST_F(MessageAuthenticatorTest, SignaturesCheckedAheadGiveTheSameVerdicts) {
   EXPECT_FALSE(check_signature_ahead(announcement(&keys_.stranger, 3), trust));
   EXPECT_FALSE(check_signature_ahead(std::vector<std::uint8_t>{0xFF, 0x01}, trust));
 
-  EXPECT_EQ(auth_.authenticate(good, kNow, &*good_check).verdict, AuthVerdict::kAccepted);
-  EXPECT_EQ(auth_.authenticate(forged, kNow, &*forged_check).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth_.authenticate(good, kAuthNow, &*good_check).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(auth_.authenticate(forged, kAuthNow, &*forged_check).verdict, AuthVerdict::kBadSignature);
   EXPECT_EQ(auth_.signatures_checked_ahead(), 2U);
   EXPECT_EQ(auth_.signatures_verified(), 0U);
   // A check that claims validity for bytes it was not made on is not believed against another key:
@@ -350,27 +354,27 @@ TEST_F(MessageAuthenticatorTest, SignaturesCheckedAheadGiveTheSameVerdicts) {
   SignatureCheck against_old_key = *forged_check;
   against_old_key.public_key = keys_.stranger.public_key();
   against_old_key.valid = true;
-  EXPECT_EQ(auth_.authenticate(forged, kNow, &against_old_key).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(auth_.authenticate(forged, kAuthNow, &against_old_key).verdict, AuthVerdict::kBadSignature);
   EXPECT_EQ(auth_.signatures_verified(), 1U);
   // The same bytes checked inline by a fresh receiver: the same verdicts.
   MessageAuthenticator inline_auth(SecurityConfig{}, keys_.trust());
-  EXPECT_EQ(inline_auth.authenticate(good, kNow).verdict, AuthVerdict::kAccepted);
-  EXPECT_EQ(inline_auth.authenticate(forged, kNow).verdict, AuthVerdict::kBadSignature);
+  EXPECT_EQ(inline_auth.authenticate(good, kAuthNow).verdict, AuthVerdict::kAccepted);
+  EXPECT_EQ(inline_auth.authenticate(forged, kAuthNow).verdict, AuthVerdict::kBadSignature);
   EXPECT_EQ(inline_auth.signatures_verified(), 2U);
 }
 
 TEST(MessageSigner, CountsItsSequenceAndStampsTheTime) {
   MessageSigner signer(key_from(4), 0xFFFFFFFFU);
-  const DecodedMessage a = decode_v2i_message(signer.encode(correction_from(kRsu), kNow));
-  const DecodedMessage b = decode_v2i_message(signer.encode(correction_from(kRsu), kNow + 1));
+  const DecodedMessage a = decode_v2i_message(signer.encode(correction_from(kRsu), kAuthNow));
+  const DecodedMessage b = decode_v2i_message(signer.encode(correction_from(kRsu), kAuthNow + 1));
   EXPECT_EQ(a.header.sequence, 0xFFFFFFFFU);
   EXPECT_EQ(b.header.sequence, 0U);
-  EXPECT_EQ(b.header.generation_time, kNow + 1);
+  EXPECT_EQ(b.header.generation_time, kAuthNow + 1);
   EXPECT_TRUE(signer.signs());
   MessageSigner unsigned_signer(std::nullopt);
   EXPECT_FALSE(unsigned_signer.signs());
   EXPECT_TRUE(
-      decode_envelope(unsigned_signer.encode(correction_from(kRsu), kNow)).envelope.signature.empty());
+      decode_envelope(unsigned_signer.encode(correction_from(kRsu), kAuthNow)).envelope.signature.empty());
 }
 
 }  // namespace

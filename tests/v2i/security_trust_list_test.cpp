@@ -4,16 +4,11 @@
 
 #include <string>
 
+#include "test_keys.h"
 #include "v2i/security/trust_list.h"
 
 namespace rsu::v2i::security {
 namespace {
-
-SigningKey key_from(std::uint8_t fill) {
-  Seed seed{};
-  seed.fill(fill);
-  return SigningKey(seed);
-}
 
 std::string error_of(std::string_view text) {
   try {

@@ -12,7 +12,7 @@ namespace {
 
 using testing::make_announcement;
 
-constexpr TimeNs kT0 = 1'000 * kNsPerSecond;
+constexpr TimeNs kRegistryT0 = 1'000 * kNsPerSecond;
 constexpr TimeNs kTick = 100 * kNsPerMs;  // announcements at 10 Hz
 
 VehicleRegistryConfig roomy_config() {
@@ -32,19 +32,20 @@ TEST(SequenceNumbers, SerialArithmeticHandlesWrap) {
 
 TEST(VehicleRegistry, AddsUpdatesAndRejectsOldSequences) {
   VehicleRegistry registry(roomy_config());
-  EXPECT_EQ(registry.upsert(make_announcement(7, 10, kT0), "192.0.2.1", kT0), UpsertOutcome::kAdded);
-  EXPECT_EQ(registry.upsert(make_announcement(7, 11, kT0 + kTick), "192.0.2.1", kT0 + kTick),
+  EXPECT_EQ(registry.upsert(make_announcement(7, 10, kRegistryT0), "192.0.2.1", kRegistryT0),
+            UpsertOutcome::kAdded);
+  EXPECT_EQ(registry.upsert(make_announcement(7, 11, kRegistryT0 + kTick), "192.0.2.1", kRegistryT0 + kTick),
             UpsertOutcome::kUpdated);
-  EXPECT_EQ(registry.upsert(make_announcement(7, 11, kT0 + kTick), "192.0.2.1", kT0 + kTick),
+  EXPECT_EQ(registry.upsert(make_announcement(7, 11, kRegistryT0 + kTick), "192.0.2.1", kRegistryT0 + kTick),
             UpsertOutcome::kDuplicateSequence);
-  EXPECT_EQ(registry.upsert(make_announcement(7, 9, kT0 + kTick), "192.0.2.1", kT0 + kTick),
+  EXPECT_EQ(registry.upsert(make_announcement(7, 9, kRegistryT0 + kTick), "192.0.2.1", kRegistryT0 + kTick),
             UpsertOutcome::kStaleSequence);
-  const RegisteredVehicle* v = registry.find(7, kT0 + kTick);
+  const RegisteredVehicle* v = registry.find(7, kRegistryT0 + kTick);
   ASSERT_NE(v, nullptr);
   EXPECT_EQ(v->announcement.sequence, 11U);
   EXPECT_EQ(v->announcements, 2U);
-  EXPECT_EQ(v->first_heard, kT0);
-  EXPECT_EQ(v->last_heard, kT0 + kTick);
+  EXPECT_EQ(v->first_heard, kRegistryT0);
+  EXPECT_EQ(v->last_heard, kRegistryT0 + kTick);
   EXPECT_EQ(registry.stats().outcomes.count(UpsertOutcome::kDuplicateSequence), 1U);
   EXPECT_EQ(registry.stats().outcomes.count(UpsertOutcome::kStaleSequence), 1U);
   EXPECT_EQ(registry.stats().outcomes.total(), 4U);
@@ -52,18 +53,20 @@ TEST(VehicleRegistry, AddsUpdatesAndRejectsOldSequences) {
 
 TEST(VehicleRegistry, SequenceMayWrap) {
   VehicleRegistry registry(roomy_config());
-  EXPECT_EQ(registry.upsert(make_announcement(7, 0xFFFFFFFFU, kT0), "s", kT0), UpsertOutcome::kAdded);
-  EXPECT_EQ(registry.upsert(make_announcement(7, 0, kT0 + kTick), "s", kT0 + kTick), UpsertOutcome::kUpdated);
+  EXPECT_EQ(registry.upsert(make_announcement(7, 0xFFFFFFFFU, kRegistryT0), "s", kRegistryT0),
+            UpsertOutcome::kAdded);
+  EXPECT_EQ(registry.upsert(make_announcement(7, 0, kRegistryT0 + kTick), "s", kRegistryT0 + kTick),
+            UpsertOutcome::kUpdated);
 }
 
 TEST(VehicleRegistry, ExpiresAfterTheSilenceTimeout) {
   VehicleRegistryConfig config = roomy_config();
   config.silence_timeout = 2 * kNsPerSecond;
   VehicleRegistry registry(config);
-  registry.upsert(make_announcement(7, 1, kT0), "s7", kT0);
-  registry.upsert(make_announcement(8, 1, kT0 + kNsPerSecond), "s8", kT0 + kNsPerSecond);
+  registry.upsert(make_announcement(7, 1, kRegistryT0), "s7", kRegistryT0);
+  registry.upsert(make_announcement(8, 1, kRegistryT0 + kNsPerSecond), "s8", kRegistryT0 + kNsPerSecond);
 
-  const TimeNs edge = kT0 + 2 * kNsPerSecond;
+  const TimeNs edge = kRegistryT0 + 2 * kNsPerSecond;
   EXPECT_NE(registry.find(7, edge), nullptr);      // exactly the timeout: still there
   EXPECT_EQ(registry.find(7, edge + 1), nullptr);  // one ns later: silent
   EXPECT_NE(registry.find(8, edge + 1), nullptr);
@@ -80,8 +83,8 @@ TEST(VehicleRegistry, ExpiresAfterTheSilenceTimeout) {
 
 TEST(VehicleRegistry, SilentEntryIsReplacedEvenBeforeExpire) {
   VehicleRegistry registry(roomy_config());
-  registry.upsert(make_announcement(7, 500, kT0), "s", kT0);
-  const TimeNs later = kT0 + 3 * kNsPerSecond;
+  registry.upsert(make_announcement(7, 500, kRegistryT0), "s", kRegistryT0);
+  const TimeNs later = kRegistryT0 + 3 * kNsPerSecond;
   EXPECT_EQ(registry.upsert(make_announcement(7, 1, later), "s", later), UpsertOutcome::kAdded);
 }
 
@@ -90,15 +93,17 @@ TEST(VehicleRegistry, RefusesNewVehiclesWhenFull) {
   config.capacity = 3;
   VehicleRegistry registry(config);
   for (std::uint64_t id = 1; id <= 3; ++id) {
-    EXPECT_EQ(registry.upsert(make_announcement(id, 1, kT0), std::to_string(id), kT0), UpsertOutcome::kAdded);
+    EXPECT_EQ(registry.upsert(make_announcement(id, 1, kRegistryT0), std::to_string(id), kRegistryT0),
+              UpsertOutcome::kAdded);
   }
-  EXPECT_EQ(registry.upsert(make_announcement(4, 1, kT0), "s4", kT0), UpsertOutcome::kRegistryFull);
+  EXPECT_EQ(registry.upsert(make_announcement(4, 1, kRegistryT0), "s4", kRegistryT0),
+            UpsertOutcome::kRegistryFull);
   // Known vehicles still update while full.
-  EXPECT_EQ(registry.upsert(make_announcement(2, 2, kT0 + kTick), "s2", kT0 + kTick),
+  EXPECT_EQ(registry.upsert(make_announcement(2, 2, kRegistryT0 + kTick), "s2", kRegistryT0 + kTick),
             UpsertOutcome::kUpdated);
   EXPECT_EQ(registry.stats().outcomes.count(UpsertOutcome::kRegistryFull), 1U);
   // Once vehicles 1 and 3 fall silent, their places are free.
-  const TimeNs later = kT0 + 2 * kNsPerSecond + kTick / 2;
+  const TimeNs later = kRegistryT0 + 2 * kNsPerSecond + kTick / 2;
   EXPECT_EQ(registry.upsert(make_announcement(4, 1, later), "s4", later), UpsertOutcome::kAdded);
   EXPECT_EQ(registry.size(), 2U);
 }
@@ -109,35 +114,39 @@ TEST(VehicleRegistry, RateLimitsPerSource) {
   VehicleRegistry registry(config);
   std::uint32_t seq = 0;
   for (int i = 0; i < 10; ++i) {
-    EXPECT_TRUE(is_accepted(registry.upsert(make_announcement(7, ++seq, kT0), "192.0.2.1", kT0)));
+    EXPECT_TRUE(
+        is_accepted(registry.upsert(make_announcement(7, ++seq, kRegistryT0), "192.0.2.1", kRegistryT0)));
   }
-  EXPECT_EQ(registry.upsert(make_announcement(7, ++seq, kT0), "192.0.2.1", kT0), UpsertOutcome::kRateLimited);
+  EXPECT_EQ(registry.upsert(make_announcement(7, ++seq, kRegistryT0), "192.0.2.1", kRegistryT0),
+            UpsertOutcome::kRateLimited);
   // Another host is not affected.
-  EXPECT_EQ(registry.upsert(make_announcement(8, 1, kT0), "192.0.2.2", kT0), UpsertOutcome::kAdded);
+  EXPECT_EQ(registry.upsert(make_announcement(8, 1, kRegistryT0), "192.0.2.2", kRegistryT0),
+            UpsertOutcome::kAdded);
   // 20 tokens/s: one more after 50 ms.
-  EXPECT_EQ(
-      registry.upsert(make_announcement(7, ++seq, kT0 + 49 * kNsPerMs), "192.0.2.1", kT0 + 49 * kNsPerMs),
-      UpsertOutcome::kRateLimited);
-  EXPECT_EQ(
-      registry.upsert(make_announcement(7, ++seq, kT0 + 50 * kNsPerMs), "192.0.2.1", kT0 + 50 * kNsPerMs),
-      UpsertOutcome::kUpdated);
+  EXPECT_EQ(registry.upsert(make_announcement(7, ++seq, kRegistryT0 + 49 * kNsPerMs), "192.0.2.1",
+                            kRegistryT0 + 49 * kNsPerMs),
+            UpsertOutcome::kRateLimited);
+  EXPECT_EQ(registry.upsert(make_announcement(7, ++seq, kRegistryT0 + 50 * kNsPerMs), "192.0.2.1",
+                            kRegistryT0 + 50 * kNsPerMs),
+            UpsertOutcome::kUpdated);
   EXPECT_EQ(registry.stats().outcomes.count(UpsertOutcome::kRateLimited), 2U);
 }
 
 TEST(VehicleRegistry, SizeAndSourceChangesAreAcceptedAndCounted) {
   VehicleRegistry registry(roomy_config());
-  registry.upsert(make_announcement(7, 1, kT0), "192.0.2.1", kT0);
-  VehicleAnnouncement towing = make_announcement(7, 2, kT0 + kTick);
+  registry.upsert(make_announcement(7, 1, kRegistryT0), "192.0.2.1", kRegistryT0);
+  VehicleAnnouncement towing = make_announcement(7, 2, kRegistryT0 + kTick);
   towing.size.length_m = 9.5;  // hitched a trailer
-  EXPECT_EQ(registry.upsert(towing, "192.0.2.1", kT0 + kTick), UpsertOutcome::kUpdatedSizeChanged);
-  EXPECT_EQ(registry.find(7, kT0 + kTick)->announcement.size.length_m, 9.5);
-  VehicleAnnouncement tiny_change = make_announcement(7, 3, kT0 + 2 * kTick);
+  EXPECT_EQ(registry.upsert(towing, "192.0.2.1", kRegistryT0 + kTick), UpsertOutcome::kUpdatedSizeChanged);
+  EXPECT_EQ(registry.find(7, kRegistryT0 + kTick)->announcement.size.length_m, 9.5);
+  VehicleAnnouncement tiny_change = make_announcement(7, 3, kRegistryT0 + 2 * kTick);
   tiny_change.size.length_m = 9.505;  // within the 1 cm tolerance
-  EXPECT_EQ(registry.upsert(tiny_change, "192.0.2.1", kT0 + 2 * kTick), UpsertOutcome::kUpdated);
+  EXPECT_EQ(registry.upsert(tiny_change, "192.0.2.1", kRegistryT0 + 2 * kTick), UpsertOutcome::kUpdated);
 
-  EXPECT_EQ(registry.upsert(make_announcement(7, 4, kT0 + 3 * kTick), "198.51.100.9", kT0 + 3 * kTick),
+  EXPECT_EQ(registry.upsert(make_announcement(7, 4, kRegistryT0 + 3 * kTick), "198.51.100.9",
+                            kRegistryT0 + 3 * kTick),
             UpsertOutcome::kUpdatedSizeChanged);  // back to 4.89 m, from a new address
-  EXPECT_EQ(registry.find(7, kT0 + 3 * kTick)->source, "198.51.100.9");
+  EXPECT_EQ(registry.find(7, kRegistryT0 + 3 * kTick)->source, "198.51.100.9");
   EXPECT_EQ(registry.stats().source_changes, 1U);
   EXPECT_EQ(registry.stats().outcomes.count(UpsertOutcome::kUpdatedSizeChanged), 2U);
 }
@@ -145,9 +154,9 @@ TEST(VehicleRegistry, SizeAndSourceChangesAreAcceptedAndCounted) {
 TEST(VehicleRegistry, ActiveIsOrderedById) {
   VehicleRegistry registry(roomy_config());
   for (const std::uint64_t id : {42U, 7U, 19U}) {
-    registry.upsert(make_announcement(id, 1, kT0), "s", kT0);
+    registry.upsert(make_announcement(id, 1, kRegistryT0), "s", kRegistryT0);
   }
-  const auto active = registry.active(kT0);
+  const auto active = registry.active(kRegistryT0);
   ASSERT_EQ(active.size(), 3U);
   EXPECT_EQ(active[0]->announcement.vehicle_id, 7U);
   EXPECT_EQ(active[1]->announcement.vehicle_id, 19U);

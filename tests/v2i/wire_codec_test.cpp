@@ -18,7 +18,7 @@
 namespace rsu::v2i {
 namespace {
 
-constexpr TimeNs kNow = 1'700'000'000 * kNsPerSecond;
+constexpr TimeNs kCodecNow = 1'700'000'000 * kNsPerSecond;
 
 std::vector<std::uint8_t> serialise(const v2::SignedV2iMessage& m) {
   std::string s;
@@ -35,7 +35,7 @@ std::vector<std::uint8_t> wrap(const v2::V2iPayload& payload) {
 }
 
 TEST(WireCodec, AnnouncementRoundTripKeepsEveryField) {
-  const VehicleAnnouncement in = testing::make_announcement(0x1234567890ULL, 4'000'000'000U, kNow - 123);
+  const VehicleAnnouncement in = testing::make_announcement(0x1234567890ULL, 4'000'000'000U, kCodecNow - 123);
   const std::vector<std::uint8_t> bytes = encode_v2i_message(in);
   ASSERT_FALSE(bytes.empty());
   EXPECT_LE(bytes.size(), kMaxDatagramBytes);
@@ -64,7 +64,7 @@ TEST(WireCodec, AnnouncementRoundTripKeepsEveryField) {
 }
 
 TEST(WireCodec, AbsentMotionStaysAbsentAndZeroStaysPresent) {
-  VehicleAnnouncement in = testing::make_announcement(3, 1, kNow);
+  VehicleAnnouncement in = testing::make_announcement(3, 1, kCodecNow);
   in.speed_mps.reset();
   in.yaw_rate_rps = 0.0;  // known to be zero: must not turn into "unknown"
   const DecodedMessage out = decode_v2i_message(encode_v2i_message(in));
@@ -80,7 +80,7 @@ TEST(WireCodec, CorrectionRoundTrip) {
   in.rsu_id = 42;
   in.vehicle_id = 7;
   in.sequence = 99;
-  in.sweep_time = kNow + 5'000'123;
+  in.sweep_time = kCodecNow + 5'000'123;
   in.pose = {10.25, -4.5, -2.9};
   in.pose_covariance << 0.0025, 0.0001, 0.0, 0.0001, 0.003, 0.0, 0.0, 0.0, 0.0004;
   in.quality = {312, 2, 17.5, YawResolution::kPrior, 0.87};
@@ -188,7 +188,7 @@ FixWithheld withheld_notice() {
   n.rsu_id = 3;
   n.vehicle_id = 7;
   n.announcement_sequence = 4'000'000'001U;
-  n.sweep_time = kNow - 37;
+  n.sweep_time = kCodecNow - 37;
   n.reason = FixWithheldReason::kPositionUnbounded;
   n.position_sigma_m = 0.731;
   n.max_position_sigma_m = 0.1;
@@ -204,7 +204,7 @@ TEST(WireCodec, FixWithheldRoundTripKeepsEveryField) {
   EXPECT_EQ(back.rsu_id, 3U);
   EXPECT_EQ(back.vehicle_id, 7U);
   EXPECT_EQ(back.announcement_sequence, 4'000'000'001U);
-  EXPECT_EQ(back.sweep_time, kNow - 37);
+  EXPECT_EQ(back.sweep_time, kCodecNow - 37);
   EXPECT_EQ(back.reason, FixWithheldReason::kPositionUnbounded);
   EXPECT_EQ(back.position_sigma_m, 0.731);
   EXPECT_EQ(back.max_position_sigma_m, 0.1);
@@ -277,7 +277,7 @@ TEST(WireCodec, EmptyAndOversizedInputsAreRefused) {
   EXPECT_EQ(decode_v2i_message({}).status, DecodeStatus::kEmpty);
   const std::vector<std::uint8_t> big(kMaxDatagramBytes + 1, 0x08);
   EXPECT_EQ(decode_v2i_message(big).status, DecodeStatus::kTooLarge);
-  VehicleAnnouncement huge = testing::make_announcement(3, 1, kNow);
+  VehicleAnnouncement huge = testing::make_announcement(3, 1, kCodecNow);
   huge.reply_to.address.assign(2000, '1');
   EXPECT_TRUE(encode_v2i_message(huge).empty());
 }
@@ -291,7 +291,7 @@ TEST(WireCodec, GarbageBytesAreAParseError) {
 }
 
 TEST(WireCodec, TruncatedMessagesNeverDecodeAsOk) {
-  const std::vector<std::uint8_t> bytes = encode_v2i_message(testing::make_announcement(3, 1, kNow));
+  const std::vector<std::uint8_t> bytes = encode_v2i_message(testing::make_announcement(3, 1, kCodecNow));
   ASSERT_GT(bytes.size(), 20U);
   // Version (2 bytes), then the payload as one length-delimited field: cutting into it must fail the
   // parse; cutting before it leaves an envelope without a payload, which has no body.
@@ -348,7 +348,7 @@ TEST(WireCodec, OtherVersionsAreUnsupported) {
   const std::vector<std::uint8_t> v1 = {0x08, 0x01, 0x12, 0x02, 0x08, 0x03};
   EXPECT_EQ(decode_v2i_message(v1).status, DecodeStatus::kUnsupportedVersion);
   for (const std::uint32_t version : {0U, 1U, 3U, 7U}) {
-    VehicleAnnouncement a = testing::make_announcement(3, 1, kNow);
+    VehicleAnnouncement a = testing::make_announcement(3, 1, kCodecNow);
     a.protocol_version = version;
     EXPECT_EQ(decode_v2i_message(encode_v2i_message(a)).status, DecodeStatus::kUnsupportedVersion) << version;
   }
@@ -359,7 +359,7 @@ TEST(WireCodec, HeaderAndSignatureAreCarried) {
   seed.fill(9);
   const security::SigningKey key(seed);
   const Correction c;
-  const std::vector<std::uint8_t> bytes = encode_v2i_message(c, {kNow + 5, 0xFFFFFFFEU}, &key);
+  const std::vector<std::uint8_t> bytes = encode_v2i_message(c, {kCodecNow + 5, 0xFFFFFFFEU}, &key);
   const DecodedEnvelope e = decode_envelope(bytes);
   ASSERT_EQ(e.status, DecodeStatus::kOk);
   EXPECT_EQ(e.envelope.signer_key_id, std::string(key.key_id().begin(), key.key_id().end()));
@@ -374,7 +374,7 @@ TEST(WireCodec, HeaderAndSignatureAreCarried) {
                                            e.envelope.signature.size())));
   const DecodedMessage m = decode_payload(e.envelope);
   ASSERT_EQ(m.status, DecodeStatus::kOk);
-  EXPECT_EQ(m.header.generation_time, kNow + 5);
+  EXPECT_EQ(m.header.generation_time, kCodecNow + 5);
   EXPECT_EQ(m.header.sequence, 0xFFFFFFFEU);
   // Unsigned: both fields empty.
   const DecodedEnvelope u = decode_envelope(encode_v2i_message(c));
@@ -383,11 +383,11 @@ TEST(WireCodec, HeaderAndSignatureAreCarried) {
 
 TEST(WireCodec, FieldDefectsPassDecodingAndAreCaughtByValidation) {
   // Invalid UTF-8 in the address parses (the field is bytes) and is refused by validation.
-  VehicleAnnouncement bad_address = testing::make_announcement(3, 1, kNow);
+  VehicleAnnouncement bad_address = testing::make_announcement(3, 1, kCodecNow);
   bad_address.reply_to.address = "\xC3\x28\xFF";
   const DecodedMessage b = decode_v2i_message(encode_v2i_message(bad_address));
   ASSERT_EQ(b.status, DecodeStatus::kOk);
-  EXPECT_EQ(validate_announcement(std::get<VehicleAnnouncement>(b.body), kNow),
+  EXPECT_EQ(validate_announcement(std::get<VehicleAnnouncement>(b.body), kCodecNow),
             AnnouncementReason::kReplyAddressInvalid);
 }
 

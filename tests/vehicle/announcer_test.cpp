@@ -10,6 +10,7 @@
 #include <limits>
 #include <variant>
 
+#include "../v2i/test_keys.h"
 #include "v2i/message_authenticator.h"
 #include "v2i/wire_codec.h"
 
@@ -18,12 +19,6 @@ namespace {
 
 constexpr std::uint64_t kVehicleId = 31;
 constexpr TimeNs kStart = 1'700'000'000 * kNsPerSecond;
-
-v2i::security::SigningKey key_from(std::uint8_t fill) {
-  v2i::security::Seed seed{};
-  seed.fill(fill);
-  return v2i::security::SigningKey(seed);
-}
 
 AnnouncerConfig config() {
   AnnouncerConfig c;

@@ -5,17 +5,18 @@
 
 #include <gtest/gtest.h>
 
+#include "../v2i/test_keys.h"
 #include "v2i/message_signer.h"
 #include "v2i/wire_codec.h"
 
 namespace rsu::vehicle {
 namespace {
 
-constexpr std::uint64_t kVehicleId = 99;
+constexpr std::uint64_t kFilteredVehicle = 99;
 constexpr TimeNs kNow = 1'700'000'000 * kNsPerSecond;
 
 CorrectionFilterConfig insecure(std::size_t max_tracked_rsus) {
-  return {kVehicleId,
+  return {kFilteredVehicle,
           max_tracked_rsus,
           {.mode = v2i::SecurityMode::kInsecure, .replay = {}, .verify_within = {}},
           {}};
@@ -24,7 +25,7 @@ CorrectionFilterConfig insecure(std::size_t max_tracked_rsus) {
 v2i::Correction correction(std::uint64_t rsu_id, std::uint32_t sequence, TimeNs sweep_time) {
   v2i::Correction c;
   c.rsu_id = rsu_id;
-  c.vehicle_id = kVehicleId;
+  c.vehicle_id = kFilteredVehicle;
   c.sequence = sequence;
   c.sweep_time = sweep_time;
   c.pose = {1.0, 2.0, 0.5};
@@ -35,12 +36,6 @@ v2i::Correction correction(std::uint64_t rsu_id, std::uint32_t sequence, TimeNs 
 // Unsigned.
 std::vector<std::uint8_t> datagram(std::uint64_t rsu_id, std::uint32_t sequence, TimeNs sweep_time) {
   return v2i::encode_v2i_message(correction(rsu_id, sequence, sweep_time));
-}
-
-v2i::security::SigningKey key_from(std::uint8_t fill) {
-  v2i::security::Seed seed{};
-  seed.fill(fill);
-  return v2i::security::SigningKey(seed);
 }
 
 TEST(CorrectionFilter, OrderIsKeptPerRsu) {
@@ -106,7 +101,7 @@ TEST(CorrectionFilter, TruncatedBytesAreGarbage) {
 TEST(CorrectionFilter, SignedModeTakesOnlyGenuineFreshCorrections) {
   const v2i::security::SigningKey rsu_key = key_from(1);
   const v2i::security::SigningKey forger = key_from(2);
-  CorrectionFilterConfig config{kVehicleId, 64, {}, {}};
+  CorrectionFilterConfig config{kFilteredVehicle, 64, {}, {}};
   config.trust_list.add({rsu_key.public_key(), v2i::security::SignerRole::kRsu, {1}});
   CorrectionFilter filter(config);
   v2i::MessageSigner rsu(rsu_key);
@@ -141,7 +136,7 @@ TEST(CorrectionFilter, SignedModeTakesOnlyGenuineFreshCorrections) {
 // RSU withholds its fixes, and why), never taken for a correction; a forged one is not believed.
 TEST(CorrectionFilter, AdvertisementSayingFixesAreWithheldIsKeptNotFused) {
   const v2i::security::SigningKey rsu_key = key_from(1);
-  CorrectionFilterConfig config{kVehicleId, 64, {}, {}};
+  CorrectionFilterConfig config{kFilteredVehicle, 64, {}, {}};
   config.trust_list.add({rsu_key.public_key(), v2i::security::SignerRole::kRsu, {1}});
   CorrectionFilter filter(config);
   v2i::MessageSigner rsu(rsu_key);
@@ -166,14 +161,14 @@ TEST(CorrectionFilter, AdvertisementSayingFixesAreWithheldIsKeptNotFused) {
 TEST(CorrectionFilter, FixWithheldNoticeIsKeptOnlyWhenGenuineAndOurs) {
   const v2i::security::SigningKey rsu_key = key_from(1);
   const v2i::security::SigningKey car_key = key_from(3);
-  CorrectionFilterConfig config{kVehicleId, 64, {}, {}};
+  CorrectionFilterConfig config{kFilteredVehicle, 64, {}, {}};
   config.trust_list.add({rsu_key.public_key(), v2i::security::SignerRole::kRsu, {1}});
-  config.trust_list.add({car_key.public_key(), v2i::security::SignerRole::kVehicle, {kVehicleId}});
+  config.trust_list.add({car_key.public_key(), v2i::security::SignerRole::kVehicle, {kFilteredVehicle}});
   CorrectionFilter filter(config);
   v2i::MessageSigner rsu(rsu_key);
   v2i::FixWithheld notice;
   notice.rsu_id = 1;
-  notice.vehicle_id = kVehicleId;
+  notice.vehicle_id = kFilteredVehicle;
   notice.sweep_time = kNow - 40 * kNsPerMs;
   notice.reason = v2i::FixWithheldReason::kPositionUnbounded;
   notice.position_sigma_m = 0.73;
@@ -185,7 +180,7 @@ TEST(CorrectionFilter, FixWithheldNoticeIsKeptOnlyWhenGenuineAndOurs) {
   EXPECT_EQ(filter.last_fix_withheld().position_sigma_m, 0.73);
 
   v2i::FixWithheld other = notice;
-  other.vehicle_id = kVehicleId + 1;
+  other.vehicle_id = kFilteredVehicle + 1;
   other.reason = v2i::FixWithheldReason::kNoFit;
   EXPECT_EQ(filter.check(rsu.encode(other, kNow), kNow, out), CorrectionVerdict::kWrongVehicleId);
   v2i::FixWithheld forged = notice;

@@ -21,12 +21,12 @@ namespace rsu::vehicle {
 namespace {
 
 constexpr double kSpeed = 11.0;  // m/s, along +x (the corridor's drive)
-constexpr TimeNs kStart = 100 * kNsPerSecond;
+constexpr TimeNs kDriveStart = 100 * kNsPerSecond;
 constexpr TimeNs kStep = 100 * kNsPerMs;       // 10 Hz NDT and RSU
 constexpr TimeNs kSweepAfter = 40 * kNsPerMs;  // each fix is swept 40 ms after an NDT pose
 
 Eigen::Vector2d truth_at(TimeNs t) {
-  return {kSpeed * to_seconds(t - kStart), -1.75};
+  return {kSpeed * to_seconds(t - kDriveStart), -1.75};
 }
 
 Eigen::Matrix3d diagonal(double sxy, double syaw) {
@@ -42,8 +42,8 @@ struct RsuModel {
   double yaw_sigma_rad = 0.015;
   double claimed_yaw_sigma_rad = 0.015;
   std::function<Eigen::Vector2d(TimeNs)> error = [](TimeNs) { return Eigen::Vector2d::Zero(); };
-  TimeNs from = kStart;  // first sweep time in view
-  TimeNs until = kStart + 1000 * kNsPerSecond;
+  TimeNs from = kDriveStart;  // first sweep time in view
+  TimeNs until = kDriveStart + 1000 * kNsPerSecond;
   std::uint64_t seed = 1;
 };
 
@@ -89,13 +89,13 @@ v2i::Correction make_fix(const RsuModel& rsu, TimeNs t, int k) {
 // Drives for `seconds`; errors are scored at the NDT poses' times (as the corridor report does), from
 // `score_from` on.
 DriveResult drive(double seconds, const NdtModel& ndt, const std::vector<RsuModel>& rsus,
-                  const VehicleCoreConfig& config = {}, TimeNs score_from = kStart) {
+                  const VehicleCoreConfig& config = {}, TimeNs score_from = kDriveStart) {
   VehicleCore core(config);
   DriveResult r;
   int scored = 0;
   const int steps = static_cast<int>(seconds * 10.0);
   for (int k = 0; k < steps; ++k) {
-    const TimeNs t = kStart + k * kStep;
+    const TimeNs t = kDriveStart + k * kStep;
     const NormalPair n = standard_normal_pair(ndt.seed, 7, static_cast<std::uint64_t>(k));
     const NormalPair m = standard_normal_pair(ndt.seed, 8, static_cast<std::uint64_t>(k));
     const Eigen::Vector2d p = truth_at(t) + ndt.drift(t) + ndt.true_sigma_m * Eigen::Vector2d(n.a, n.b);
@@ -205,7 +205,7 @@ TEST(IntegrityMonitor, BiasedSourcesAreExcludedWithinOneSecond) {
       rsu.seed = seed;
       const double angle = 0.7 * static_cast<double>(seed);  // every direction
       rsu.error = [=](TimeNs) { return Eigen::Vector2d(bias * std::cos(angle), bias * std::sin(angle)); };
-      rsu.from = kStart + 3 * kNsPerSecond;  // in view once the own filter has settled
+      rsu.from = kDriveStart + 3 * kNsPerSecond;  // in view once the own filter has settled
       const DriveResult r = drive(8.0, ndt, {rsu});
       delays.push_back(fixes_until_exclusion(r, rsu.rsu_id));
       for (const FixRecord& f : r.fixes) {
@@ -271,7 +271,7 @@ TEST(IntegrityMonitor, WrongVehicleBurstsAreExcludedAndTheRsuReadmittedAfterward
   NdtModel ndt;
   RsuModel rsu;
   const auto in_burst = [](TimeNs t) {
-    const double s = std::fmod(to_seconds(t - kStart), 20.0);
+    const double s = std::fmod(to_seconds(t - kDriveStart), 20.0);
     return s >= 4.0 && s < 4.5;
   };
   rsu.error = [=](TimeNs t) { return in_burst(t) ? Eigen::Vector2d(6.0, 3.5) : Eigen::Vector2d::Zero(); };
@@ -288,7 +288,7 @@ TEST(IntegrityMonitor, WrongVehicleBurstsAreExcludedAndTheRsuReadmittedAfterward
         excluded_at.push_back(f.time);
       }
     } else {
-      EXPECT_FALSE(excluded_now(f)) << "at " << to_seconds(f.time - kStart) << " s";
+      EXPECT_FALSE(excluded_now(f)) << "at " << to_seconds(f.time - kDriveStart) << " s";
     }
     if (f.step.check && f.step.check->admitted_now && !excluded_at.empty()) {
       readmitted_at.push_back(f.time);
@@ -327,8 +327,8 @@ TEST(IntegrityMonitor, AFaultyRsuBesideAGoodOneIsExcludedAndTheGoodOneKept) {
   faulty.seed = 5;
   faulty.error = [](TimeNs) { return Eigen::Vector2d(0.0, 1.0); };
   VehicleCore core;
-  const DriveResult both = drive(20.0, ndt, {good, faulty}, {}, kStart + 2 * kNsPerSecond);
-  const DriveResult alone = drive(20.0, ndt, {good}, {}, kStart + 2 * kNsPerSecond);
+  const DriveResult both = drive(20.0, ndt, {good, faulty}, {}, kDriveStart + 2 * kNsPerSecond);
+  const DriveResult alone = drive(20.0, ndt, {good}, {}, kDriveStart + 2 * kNsPerSecond);
   EXPECT_EQ(fixes_until_exclusion(both, 2), 2);
   EXPECT_EQ(fixes_until_exclusion(both, 1), -1);
   int faulty_fused = 0;
@@ -347,15 +347,15 @@ TEST(IntegrityMonitor, AFaultyRsuBesideAGoodOneIsExcludedAndTheGoodOneKept) {
 TEST(IntegrityMonitor, TwoAgreeingRsusOverruleADriftedNdtOneDoesNot) {
   NdtModel ndt;
   ndt.drift = [](TimeNs t) {
-    const double s = to_seconds(t - kStart);
+    const double s = to_seconds(t - kDriveStart);
     return Eigen::Vector2d(0.0, 1.5 * std::clamp(s - 3.0, 0.0, 1.0));
   };
   RsuModel a;
-  a.from = kStart + 5 * kNsPerSecond;
+  a.from = kDriveStart + 5 * kNsPerSecond;
   RsuModel b = a;
   b.rsu_id = 2;
   b.seed = 9;
-  const TimeNs score_from = kStart + 7 * kNsPerSecond;
+  const TimeNs score_from = kDriveStart + 7 * kNsPerSecond;
   const DriveResult two = drive(15.0, ndt, {a, b}, {}, score_from);
   const DriveResult one = drive(15.0, ndt, {a}, {}, score_from);
   std::printf(
@@ -384,7 +384,7 @@ double degraded_corridor_ndt_error(TimeNs t) {
   static const std::pair<double, double> kMeasured[] = {{0.0, 0.0},   {5.1, -0.04}, {5.6, -0.44},
                                                         {6.1, -0.35}, {7.1, -0.30}, {7.6, 0.01},
                                                         {8.6, 0.20},  {9.6, 0.05},  {20.0, 0.0}};
-  const double s = to_seconds(t - kStart);
+  const double s = to_seconds(t - kDriveStart);
   for (std::size_t i = 1; i < std::size(kMeasured); ++i) {
     const auto [t0, e0] = kMeasured[i - 1];
     const auto [t1, e1] = kMeasured[i];
@@ -401,10 +401,10 @@ TEST(IntegrityMonitor, ADegradedNdtIsStillHelpedByAGoodRsu) {
     NdtModel ndt;
     ndt.true_sigma_m = 0.02;
     ndt.drift = [](TimeNs t) { return Eigen::Vector2d(degraded_corridor_ndt_error(t), 0.0); };
-    ndt.degraded = [=](TimeNs t) { return to_seconds(t - kStart) >= flagged_from_s; };
+    ndt.degraded = [=](TimeNs t) { return to_seconds(t - kDriveStart) >= flagged_from_s; };
     RsuModel rsu;
     rsu.true_sigma_m = 0.03;  // the degraded corridor's RSU fixes (MAE 0.02-0.03 m)
-    const DriveResult r = drive(12.0, ndt, {rsu}, {}, kStart + 4 * kNsPerSecond);
+    const DriveResult r = drive(12.0, ndt, {rsu}, {}, kDriveStart + 4 * kNsPerSecond);
     std::printf("degraded NDT (flagged from %.1f s): NDT MAE %.3f m, fused %.3f m (%.0f %% lower)\n",
                 flagged_from_s, r.ndt_mae, r.fused_mae, 100.0 * (1.0 - r.fused_mae / r.ndt_mae));
     EXPECT_LE(r.fused_mae, (in_time ? 0.2 : 1.0) * r.ndt_mae) << "flagged from " << flagged_from_s << " s";
@@ -422,10 +422,10 @@ TEST(IntegrityMonitor, AnNdtClaimingCentimetresWhileDegradedIsWeakenedOnlyWhenAn
   ndt.true_sigma_m = 0.02;
   ndt.claimed_sigma_m = 0.03;
   ndt.drift = [](TimeNs t) { return Eigen::Vector2d(degraded_corridor_ndt_error(t), 0.0); };
-  ndt.degraded = [](TimeNs t) { return (t - kStart) / kStep % 3 != 0; };
+  ndt.degraded = [](TimeNs t) { return (t - kDriveStart) / kStep % 3 != 0; };
   RsuModel good;
   good.true_sigma_m = 0.03;
-  const TimeNs score_from = kStart + 4 * kNsPerSecond;
+  const TimeNs score_from = kDriveStart + 4 * kNsPerSecond;
   const DriveResult helped = drive(12.0, ndt, {good}, {}, score_from);
   RsuModel biased = good;
   biased.error = [](TimeNs) { return Eigen::Vector2d(1.0, 0.0); };
@@ -452,7 +452,7 @@ TEST(IntegrityMonitor, AnNdtClaimingCentimetresWhileDegradedIsWeakenedOnlyWhenAn
 double ndt_excursion(TimeNs t, double along_m) {
   static const std::pair<double, double> kShape[] = {{0.0, 0.0}, {4.5, 0.0},  {5.3, 0.92}, {6.3, 1.0},
                                                      {7.0, 0.7}, {7.6, 0.15}, {8.5, 0.0},  {20.0, 0.0}};
-  const double s = to_seconds(t - kStart);
+  const double s = to_seconds(t - kDriveStart);
   for (std::size_t i = 1; i < std::size(kShape); ++i) {
     const auto [t0, e0] = kShape[i - 1];
     const auto [t1, e1] = kShape[i];
@@ -470,7 +470,7 @@ TEST(IntegrityMonitor, AnNdtSlidingAlongTheRoadDoesNotExcludeAnHonestRsuThatAgre
   ndt.degraded = [](TimeNs) { return true; };
   RsuModel rsu;
   rsu.true_sigma_m = 0.03;
-  const TimeNs score_from = kStart + 4 * kNsPerSecond;
+  const TimeNs score_from = kDriveStart + 4 * kNsPerSecond;
   const DriveResult r = drive(12.0, ndt, {rsu}, {}, score_from);
   VehicleCoreConfig fix_by_fix;
   fix_by_fix.integrity.degraded_own_correlation_time = 0;
@@ -502,9 +502,9 @@ TEST(IntegrityMonitor, AnRsuBiasedTheWayTheNdtSlidesIsStillExcluded) {
     RsuModel biased;
     biased.true_sigma_m = 0.03;
     biased.error = [](TimeNs) { return Eigen::Vector2d(1.0, 0.0); };
-    biased.from = kStart + static_cast<TimeNs>(seen_from_s * 1e9);
-    const DriveResult r = drive(12.0, ndt, {biased}, {}, kStart + 4 * kNsPerSecond);
-    const DriveResult before = drive(12.0, ndt, {biased}, fix_by_fix, kStart + 4 * kNsPerSecond);
+    biased.from = kDriveStart + static_cast<TimeNs>(seen_from_s * 1e9);
+    const DriveResult r = drive(12.0, ndt, {biased}, {}, kDriveStart + 4 * kNsPerSecond);
+    const DriveResult before = drive(12.0, ndt, {biased}, fix_by_fix, kDriveStart + 4 * kNsPerSecond);
     const auto fused_fixes = std::count_if(r.fixes.begin(), r.fixes.end(), fused);
     std::printf(
         "1 m biased RSU from %.1f s, NDT sliding 0.65 m the same way: excluded after %d fixes, %d fused; NDT "
@@ -529,11 +529,11 @@ TEST(IntegrityMonitor, AnRsuBiasedTheWayTheNdtSlidesIsStillExcluded) {
 TEST(IntegrityMonitor, ARunawayNdtIsNotOverruledByOneRsu) {
   NdtModel ndt;
   ndt.drift = [](TimeNs t) {
-    return Eigen::Vector2d(0.5 * std::max(0.0, to_seconds(t - kStart) - 3.0), 0.0);
+    return Eigen::Vector2d(0.5 * std::max(0.0, to_seconds(t - kDriveStart) - 3.0), 0.0);
   };
-  ndt.degraded = [](TimeNs t) { return to_seconds(t - kStart) >= 3.0; };
+  ndt.degraded = [](TimeNs t) { return to_seconds(t - kDriveStart) >= 3.0; };
   RsuModel rsu;
-  const DriveResult r = drive(15.0, ndt, {rsu}, {}, kStart + 3 * kNsPerSecond);
+  const DriveResult r = drive(15.0, ndt, {rsu}, {}, kDriveStart + 3 * kNsPerSecond);
   std::printf("runaway NDT (0.5 m/s, flagged degraded): NDT MAE %.3f m, fused %.3f m\n", r.ndt_mae,
               r.fused_mae);
   EXPECT_GT(fixes_until_exclusion(r, 1), 0);
@@ -544,9 +544,9 @@ TEST(IntegrityMonitor, ARunawayNdtIsNotOverruledByOneRsu) {
 // is excluded, and never fused.
 TEST(IntegrityMonitor, ADegradedOwnEstimateStillCatchesGrossFaults) {
   NdtModel ndt;
-  ndt.degraded = [](TimeNs t) { return t >= kStart + 2 * kNsPerSecond; };
+  ndt.degraded = [](TimeNs t) { return t >= kDriveStart + 2 * kNsPerSecond; };
   RsuModel rsu;
-  rsu.from = kStart + 3 * kNsPerSecond;
+  rsu.from = kDriveStart + 3 * kNsPerSecond;
   rsu.error = [](TimeNs) { return Eigen::Vector2d(10.0, 0.0); };
   const DriveResult r = drive(10.0, ndt, {rsu});
   EXPECT_EQ(fixes_until_exclusion(r, 1), 2);
@@ -564,7 +564,7 @@ TEST(IntegrityMonitor, AnAdmittedRsuVouchesForANewOne) {
   RsuModel second;
   second.rsu_id = 2;
   second.seed = 3;
-  second.from = kStart + 4 * kNsPerSecond;
+  second.from = kDriveStart + 4 * kNsPerSecond;
   const auto admitted_at = [](const DriveResult& r) {
     int fixes = 0;
     for (const FixRecord& f : r.fixes) {
@@ -598,7 +598,7 @@ TEST(IntegrityMonitor, TwoGrossFixesInARowExcludeEvenWithWideCovariances) {
     IntegrityMonitor monitor(config);
     std::vector<FixCheck> checks;
     for (std::size_t k = 0; k < offsets_along_m.size(); ++k) {
-      const TimeNs t = kStart + static_cast<TimeNs>(k) * 2 * kStep;  // 0.2 s apart, as measured
+      const TimeNs t = kDriveStart + static_cast<TimeNs>(k) * 2 * kStep;  // 0.2 s apart, as measured
       fusion::StateEstimate own;
       own.time = t;
       own.state(fusion::kX) = truth_at(t).x();
@@ -661,7 +661,7 @@ TEST(IntegrityMonitor, RemembersAtMostMaxSources) {
   for (std::uint64_t id = 1; id <= 100; ++id) {
     v2i::Correction fix;
     fix.rsu_id = id;
-    fix.sweep_time = kStart + static_cast<TimeNs>(id) * kStep;
+    fix.sweep_time = kDriveStart + static_cast<TimeNs>(id) * kStep;
     fix.pose_covariance = diagonal(0.05, 0.015);
     monitor.check(fix, own, OwnEstimate::kHealthy, Eigen::Vector2d::Zero());
     EXPECT_LE(monitor.sources().size(), 8U);

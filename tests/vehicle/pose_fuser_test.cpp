@@ -13,19 +13,19 @@
 namespace rsu::vehicle {
 namespace {
 
-constexpr double kSpeed = 12.0;  // m/s
+constexpr double kFuserSpeed = 12.0;  // m/s
 constexpr double kHeading = deg_to_rad(30.0);
 constexpr double kRearAxleBehindCentre = 1.3;  // m: the reference point is the rear axle
-constexpr TimeNs kStart = 50 * kNsPerSecond;
-constexpr TimeNs kStep = 100 * kNsPerMs;  // 10 Hz NDT and RSU, as in the paper
-constexpr double kNdtSigma = 0.25;        // m, about the paper's NDT error between tall buildings
-constexpr double kNdtYawSigma = 0.02;     // rad
-constexpr double kRsuSigma = 0.06;        // m, a VLP-32C RSU fix (paper Table: 0.12 m MAE)
-constexpr double kRsuYawSigma = 0.02;     // rad
+constexpr TimeNs kFuserStart = 50 * kNsPerSecond;
+constexpr TimeNs kFuserStep = 100 * kNsPerMs;  // 10 Hz NDT and RSU, as in the paper
+constexpr double kNdtSigma = 0.25;             // m, about the paper's NDT error between tall buildings
+constexpr double kNdtYawSigma = 0.02;          // rad
+constexpr double kRsuSigma = 0.06;             // m, a VLP-32C RSU fix (paper Table: 0.12 m MAE)
+constexpr double kRsuYawSigma = 0.02;          // rad
 
-// Truth: the rear axle moves along kHeading at kSpeed.
+// Truth: the rear axle moves along kHeading at kFuserSpeed.
 Eigen::Vector2d truth_reference(TimeNs t) {
-  const double s = kSpeed * to_seconds(t - kStart);
+  const double s = kFuserSpeed * to_seconds(t - kFuserStart);
   return {10.0 + s * std::cos(kHeading), -5.0 + s * std::sin(kHeading)};
 }
 Eigen::Vector2d truth_box_centre(TimeNs t) {
@@ -38,7 +38,7 @@ PoseFuserConfig fuser_config() {
   return config;
 }
 
-Eigen::Matrix3d diagonal(double sxy, double syaw) {
+Eigen::Matrix3d fuser_covariance(double sxy, double syaw) {
   return Eigen::Vector3d(sxy * sxy, sxy * sxy, syaw * syaw).asDiagonal();
 }
 
@@ -52,11 +52,11 @@ v2i::Correction rsu_fix(TimeNs sweep, int k) {
   // A box has no front: every other fix reports the heading backwards.
   c.pose = {centre.x() + kRsuSigma * n.a, centre.y() + kRsuSigma * n.b,
             wrap_angle(kHeading + kRsuYawSigma * m.a + (k % 2 ? kPi : 0.0))};
-  c.pose_covariance = diagonal(kRsuSigma, kRsuYawSigma);
+  c.pose_covariance = fuser_covariance(kRsuSigma, kRsuYawSigma);
   return c;
 }
 
-struct DriveResult {
+struct FusedDrive {
   double ndt_rmse = 0.0;
   double fused_rmse = 0.0;
   PoseFuserStats stats;
@@ -64,19 +64,19 @@ struct DriveResult {
 
 // 8 s of driving. Each RSU fix is swept 30 ms after an NDT pose but delivered only after the next NDT
 // pose (a late correction). Errors are taken over the last half, after the filter has settled.
-DriveResult drive(PoseFuser& fuser) {
+FusedDrive drive(PoseFuser& fuser) {
   constexpr int kSteps = 80;
   double ndt_sq = 0.0;
   double fused_sq = 0.0;
   int counted = 0;
   std::optional<v2i::Correction> in_flight;
   for (int k = 0; k < kSteps; ++k) {
-    const TimeNs t = kStart + k * kStep;
+    const TimeNs t = kFuserStart + k * kFuserStep;
     const NormalPair n = standard_normal_pair(1, 0, static_cast<std::uint64_t>(k));
     const NormalPair m = standard_normal_pair(1, 1, static_cast<std::uint64_t>(k));
     const Eigen::Vector2d truth = truth_reference(t);
     const Pose2 ndt{truth.x() + kNdtSigma * n.a, truth.y() + kNdtSigma * n.b, kHeading + kNdtYawSigma * m.a};
-    fuser.add_ndt(ndt, diagonal(kNdtSigma, kNdtYawSigma), t);
+    fuser.add_ndt(ndt, fuser_covariance(kNdtSigma, kNdtYawSigma), t);
     if (in_flight) {
       fuser.add_rsu(*in_flight);
     }
@@ -94,7 +94,7 @@ DriveResult drive(PoseFuser& fuser) {
 
 TEST(PoseFuser, BeatsNoisyNdtOnAStraightDrive) {
   PoseFuser fuser(fuser_config());
-  const DriveResult r = drive(fuser);
+  const FusedDrive r = drive(fuser);
   RecordProperty("ndt_rmse_m", std::to_string(r.ndt_rmse));
   RecordProperty("fused_rmse_m", std::to_string(r.fused_rmse));
   EXPECT_GT(r.ndt_rmse, 0.2);  // the NDT really is as noisy as simulated
@@ -106,16 +106,16 @@ TEST(PoseFuser, BeatsNoisyNdtOnAStraightDrive) {
   EXPECT_GE(r.stats.reapplied, r.stats.late);
   const auto latest = fuser.latest();
   ASSERT_TRUE(latest.has_value());
-  EXPECT_NEAR(latest->state(fusion::kSpeed), kSpeed, 0.5);
+  EXPECT_NEAR(latest->state(fusion::kSpeed), kFuserSpeed, 0.5);
   EXPECT_LT(angle_distance(latest->state(fusion::kYaw), kHeading), 0.02);
 }
 
 TEST(PoseFuser, AnOffBy90DegreeFixNeverMovesThePose) {
   PoseFuser fuser(fuser_config());
   drive(fuser);
-  const TimeNs t = kStart + 80 * kStep;
+  const TimeNs t = kFuserStart + 80 * kFuserStep;
   const Eigen::Vector2d truth = truth_reference(t);
-  fuser.add_ndt({truth.x(), truth.y(), kHeading}, diagonal(kNdtSigma, kNdtYawSigma), t);
+  fuser.add_ndt({truth.x(), truth.y(), kHeading}, fuser_covariance(kNdtSigma, kNdtYawSigma), t);
   const auto before = fuser.pose_at(t + 50 * kNsPerMs);
   ASSERT_TRUE(before.has_value());
 
@@ -126,7 +126,7 @@ TEST(PoseFuser, AnOffBy90DegreeFixNeverMovesThePose) {
   const Eigen::Vector2d side(-std::sin(kHeading), std::cos(kHeading));
   wrong.pose.x += 1.5 * side.x();
   wrong.pose.y += 1.5 * side.y();
-  wrong.pose_covariance = diagonal(0.02, 0.01);
+  wrong.pose_covariance = fuser_covariance(0.02, 0.01);
   const PoseFuserStats stats_before = fuser.stats();
   const fusion::MeasurementOutcome outcome = fuser.add_rsu(wrong);
   EXPECT_TRUE(outcome == fusion::MeasurementOutcome::kRejectedYawBranch ||
@@ -160,14 +160,14 @@ struct DriftResult {
 DriftResult drift_across_road(Reanchor reanchor) {
   PoseFuser fuser(fuser_config());
   const Eigen::Vector2d across(-std::sin(kHeading), std::cos(kHeading));
-  const Eigen::Matrix3d ndt_cov = diagonal(0.1, 0.01);
+  const Eigen::Matrix3d ndt_cov = fuser_covariance(0.1, 0.01);
   DriftResult r;
   int k = 0;
-  for (TimeNs t = kStart; t < kStart + 5 * kNsPerSecond; t += kStep, ++k) {
-    const double drift = std::min(2.0, 2.0 * to_seconds(t - kStart));  // m, grows for 1 s then stays
+  for (TimeNs t = kFuserStart; t < kFuserStart + 5 * kNsPerSecond; t += kFuserStep, ++k) {
+    const double drift = std::min(2.0, 2.0 * to_seconds(t - kFuserStart));  // m, grows for 1 s then stays
     const Eigen::Vector2d ndt = truth_reference(t) + drift * across;
     fuser.add_ndt({ndt.x(), ndt.y(), kHeading}, ndt_cov, t);
-    if (t >= kStart + 3 * kNsPerSecond)
+    if (t >= kFuserStart + 3 * kNsPerSecond)
       fuser.add_rsu(rsu_fix(t + 40 * kNsPerMs, k), reanchor);
     const auto fused = fuser.pose_at(t + 40 * kNsPerMs);
     EXPECT_TRUE(fused.has_value());
@@ -203,11 +203,11 @@ TEST(PoseFuser, ReanchorsAtOnceWhenIndependentRsusAgree) {
   PoseFuser fuser(fuser_config());
   const Eigen::Vector2d across(-std::sin(kHeading), std::cos(kHeading));
   for (int k = 0; k < 20; ++k) {
-    const TimeNs t = kStart + k * kStep;
+    const TimeNs t = kFuserStart + k * kFuserStep;
     const Eigen::Vector2d ndt = truth_reference(t) + 2.0 * across;
-    fuser.add_ndt({ndt.x(), ndt.y(), kHeading}, diagonal(0.1, 0.01), t);
+    fuser.add_ndt({ndt.x(), ndt.y(), kHeading}, fuser_covariance(0.1, 0.01), t);
   }
-  const TimeNs t = kStart + 19 * kStep + 40 * kNsPerMs;
+  const TimeNs t = kFuserStart + 19 * kFuserStep + 40 * kNsPerMs;
   const v2i::Correction fix = rsu_fix(t, 0);
   EXPECT_EQ(fuser.add_rsu(fix, Reanchor::kNow), fusion::MeasurementOutcome::kRejectedGate);
   EXPECT_EQ(fuser.stats().rsu_reanchors, 1u);
@@ -223,9 +223,9 @@ TEST(PoseFuser, ReanchorsAtOnceWhenIndependentRsusAgree) {
 TEST(PoseFuser, ScatteredOutliersDoNotReanchor) {
   PoseFuser fuser(fuser_config());
   int k = 0;
-  for (TimeNs t = kStart; t < kStart + 3 * kNsPerSecond; t += kStep, ++k) {
+  for (TimeNs t = kFuserStart; t < kFuserStart + 3 * kNsPerSecond; t += kFuserStep, ++k) {
     const Eigen::Vector2d ref = truth_reference(t);
-    fuser.add_ndt({ref.x(), ref.y(), kHeading}, diagonal(0.1, 0.01), t);
+    fuser.add_ndt({ref.x(), ref.y(), kHeading}, fuser_covariance(0.1, 0.01), t);
     v2i::Correction bad = rsu_fix(t + 40 * kNsPerMs, k);
     bad.pose.x += (k % 2 ? 3.0 : -3.0);  // jumps 6 m from fix to fix: no run
     fuser.add_rsu(bad);
@@ -249,12 +249,12 @@ TEST(PoseFuser, AFaultyRsuBesideAGoodOneDoesNotTakeOverThePose) {
   std::uint64_t faulty_refused_late = 0;
   constexpr int kSteps = 80;
   for (int k = 0; k < kSteps; ++k) {
-    const TimeNs t = kStart + k * kStep;
+    const TimeNs t = kFuserStart + k * kFuserStep;
     const NormalPair n = standard_normal_pair(1, 0, static_cast<std::uint64_t>(k));
     const Eigen::Vector2d truth = truth_reference(t);
     const Pose2 ndt{truth.x() + kNdtSigma * n.a, truth.y() + kNdtSigma * n.b, kHeading};
     for (PoseFuser* f : {&good_only, &both})
-      f->add_ndt(ndt, diagonal(kNdtSigma, kNdtYawSigma), t);
+      f->add_ndt(ndt, fuser_covariance(kNdtSigma, kNdtYawSigma), t);
     v2i::Correction good = rsu_fix(t + 30 * kNsPerMs, k);
     good.rsu_id = 1;
     v2i::Correction faulty = rsu_fix(t + 60 * kNsPerMs, k + 1000);
@@ -294,7 +294,7 @@ TEST(PoseFuser, FollowsItsOwnLocalizationAgainAfterAnInstantJumpToSpeed) {
   PoseFuser fuser(fuser_config());
   constexpr double kJumpSpeed = 10.0;  // m/s
   constexpr double kSigma = 0.05;      // m, a good NDT in an open street
-  constexpr TimeNs kMoveAt = kStart + 3 * kNsPerSecond;
+  constexpr TimeNs kMoveAt = kFuserStart + 3 * kNsPerSecond;
   const Eigen::Vector2d along(std::cos(kHeading), std::sin(kHeading));
   const Eigen::Vector2d parked(10.0, -5.0);
   const auto truth_at = [&](TimeNs t) {
@@ -302,11 +302,11 @@ TEST(PoseFuser, FollowsItsOwnLocalizationAgainAfterAnInstantJumpToSpeed) {
   };
   int k = 0;
   std::uint64_t ndt_accepted_moving = 0;
-  for (TimeNs t = kStart; t <= kMoveAt + 4 * kNsPerSecond; t += kStep, ++k) {
+  for (TimeNs t = kFuserStart; t <= kMoveAt + 4 * kNsPerSecond; t += kFuserStep, ++k) {
     const NormalPair n = standard_normal_pair(3, 0, static_cast<std::uint64_t>(k));
     const Eigen::Vector2d truth = truth_at(t);
     const auto outcome = fuser.add_ndt({truth.x() + kSigma * n.a, truth.y() + kSigma * n.b, kHeading},
-                                       diagonal(kSigma, 0.01), t);
+                                       fuser_covariance(kSigma, 0.01), t);
     if (t > kMoveAt && outcome == fusion::MeasurementOutcome::kAccepted)
       ++ndt_accepted_moving;
   }
@@ -325,17 +325,17 @@ TEST(PoseFuser, FollowsItsOwnLocalizationAgainAfterAnInstantJumpToSpeed) {
 
 TEST(PoseFuser, NothingBeforeTheFirstNdtPoseAndNoRsuStart) {
   PoseFuser fuser(fuser_config());
-  EXPECT_FALSE(fuser.pose_at(kStart).has_value());
+  EXPECT_FALSE(fuser.pose_at(kFuserStart).has_value());
   // A box yaw cannot start the filter (which way does the vehicle face?).
-  EXPECT_EQ(fuser.add_rsu(rsu_fix(kStart, 0)), fusion::MeasurementOutcome::kRejectedNotInitialized);
+  EXPECT_EQ(fuser.add_rsu(rsu_fix(kFuserStart, 0)), fusion::MeasurementOutcome::kRejectedNotInitialized);
   EXPECT_EQ(fuser.stats().rsu_rejected_other, 1U);
-  EXPECT_FALSE(fuser.pose_at(kStart).has_value());
-  v2i::Correction nan = rsu_fix(kStart, 0);
+  EXPECT_FALSE(fuser.pose_at(kFuserStart).has_value());
+  v2i::Correction nan = rsu_fix(kFuserStart, 0);
   nan.pose.x = std::nan("");
-  EXPECT_EQ(fuser.add_ndt({1.0, 2.0, 0.3}, diagonal(0.2, 0.02), kStart),
+  EXPECT_EQ(fuser.add_ndt({1.0, 2.0, 0.3}, fuser_covariance(0.2, 0.02), kFuserStart),
             fusion::MeasurementOutcome::kInitialized);
   EXPECT_EQ(fuser.add_rsu(nan), fusion::MeasurementOutcome::kRejectedInvalid);
-  const auto p = fuser.pose_at(kStart);
+  const auto p = fuser.pose_at(kFuserStart);
   ASSERT_TRUE(p.has_value());
   EXPECT_DOUBLE_EQ(p->state(fusion::kX), 1.0);
   EXPECT_DOUBLE_EQ(p->state(fusion::kY), 2.0);

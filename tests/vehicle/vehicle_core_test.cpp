@@ -19,36 +19,38 @@
 namespace rsu::vehicle {
 namespace {
 
-constexpr double kSpeed = 8.0;  // m/s along +x
-constexpr TimeNs kStart = 20 * kNsPerSecond;
-constexpr TimeNs kStep = 100 * kNsPerMs;
-constexpr double kNdtSigma = 0.2;
-constexpr double kRsuSigma = 0.04;
+constexpr double kCoreSpeed = 8.0;  // m/s along +x
+constexpr TimeNs kCoreStart = 20 * kNsPerSecond;
+constexpr TimeNs kCoreStep = 100 * kNsPerMs;
+constexpr double kCoreNdtSigma = 0.2;
+constexpr double kCoreRsuSigma = 0.04;
 
 double truth_x(TimeNs t) {
-  return kSpeed * to_seconds(t - kStart);
+  return kCoreSpeed * to_seconds(t - kCoreStart);
 }
 
 NdtPose ndt_at(int k) {
-  const TimeNs t = kStart + k * kStep;
+  const TimeNs t = kCoreStart + k * kCoreStep;
   const NormalPair n = standard_normal_pair(8, 0, static_cast<std::uint64_t>(k));
-  return {t,
-          {truth_x(t) + kNdtSigma * n.a, kNdtSigma * n.b, 0.0},
-          Eigen::Vector3d(kNdtSigma * kNdtSigma, kNdtSigma * kNdtSigma, 0.02 * 0.02).asDiagonal(),
-          {}};
+  return {
+      t,
+      {truth_x(t) + kCoreNdtSigma * n.a, kCoreNdtSigma * n.b, 0.0},
+      Eigen::Vector3d(kCoreNdtSigma * kCoreNdtSigma, kCoreNdtSigma * kCoreNdtSigma, 0.02 * 0.02).asDiagonal(),
+      {}};
 }
 
 v2i::Correction fix_at(int k) {
-  const TimeNs t = kStart + k * kStep + 40 * kNsPerMs;
+  const TimeNs t = kCoreStart + k * kCoreStep + 40 * kNsPerMs;
   const NormalPair n = standard_normal_pair(8, 1, static_cast<std::uint64_t>(k));
   v2i::Correction c;
   c.rsu_id = 1;
   c.vehicle_id = 1;
   c.sequence = static_cast<std::uint32_t>(k);
   c.sweep_time = t;
-  c.pose = {truth_x(t) + kRsuSigma * n.a, kRsuSigma * n.b, kPi};  // a box yaw, backwards
+  c.pose = {truth_x(t) + kCoreRsuSigma * n.a, kCoreRsuSigma * n.b, kPi};  // a box yaw, backwards
   c.pose_covariance =
-      Eigen::Vector3d(kRsuSigma * kRsuSigma, kRsuSigma * kRsuSigma, 0.015 * 0.015).asDiagonal();
+      Eigen::Vector3d(kCoreRsuSigma * kCoreRsuSigma, kCoreRsuSigma * kCoreRsuSigma, 0.015 * 0.015)
+          .asDiagonal();
   return c;
 }
 
@@ -70,7 +72,7 @@ TEST(VehicleCore, FusesCorrectionsAndAnnouncesTheFusedStateWithItsMotionOnceSett
     }
     if (k >= 30) {
       ASSERT_TRUE(step.announce.speed_mps.has_value());
-      EXPECT_NEAR(*step.announce.speed_mps, kSpeed, 0.5);
+      EXPECT_NEAR(*step.announce.speed_mps, kCoreSpeed, 0.5);
       ndt_sq += std::pow(ndt.pose.x - truth_x(ndt.time), 2) + ndt.pose.y * ndt.pose.y;
       fused_sq += std::pow(step.fused->state(fusion::kX) - truth_x(ndt.time), 2) +
                   std::pow(step.fused->state(fusion::kY), 2);
@@ -186,7 +188,7 @@ TEST(VehicleCore, BeforeAnyNdtPoseNothingIsFusedAndTheNdtPoseItselfIsAnnounced) 
   const CorrectionStep early = core.on_correction(fix_at(0));
   ASSERT_TRUE(early.outcome.has_value());
   EXPECT_EQ(*early.outcome, fusion::MeasurementOutcome::kRejectedNotInitialized);
-  EXPECT_FALSE(core.pose_at(kStart).has_value());
+  EXPECT_FALSE(core.pose_at(kCoreStart).has_value());
   const NdtPose ndt = ndt_at(0);
   const NdtStep step = core.on_ndt(ndt);
   ASSERT_TRUE(step.fused.has_value());
@@ -201,7 +203,7 @@ TEST(VehicleCore, BeforeAnyNdtPoseNothingIsFusedAndTheNdtPoseItselfIsAnnounced) 
 struct LaneChange {
   static constexpr double kSpeedMps = 11.0;
   static Eigen::Vector3d truth(TimeNs t) {  // x, y, heading
-    const double s = to_seconds(t - kStart);
+    const double s = to_seconds(t - kCoreStart);
     const double phase = std::clamp((s - 4.0) / 3.0, 0.0, 1.0);
     const double y = -1.75 + 1.75 * (1.0 - std::cos(kPi * phase));
     const double dy = (s > 4.0 && s < 7.0) ? 1.75 * kPi / 3.0 * std::sin(kPi * phase) : 0.0;
@@ -223,7 +225,7 @@ LateDriveResult drive_with_late_fixes(const VehicleCoreConfig& config, TimeNs de
   LateDriveResult r;
   int scored = 0;
   for (int k = 0; k < 120; ++k) {
-    const TimeNs t = kStart + k * kStep;
+    const TimeNs t = kCoreStart + k * kCoreStep;
     while (!in_flight.empty() && in_flight.front().first <= t) {
       core.on_correction(in_flight.front().second);
       in_flight.pop_front();
@@ -237,7 +239,7 @@ LateDriveResult drive_with_late_fixes(const VehicleCoreConfig& config, TimeNs de
                 {}};
     ndt.quality = {true, 4, 0.04, 8.3, 0.0};
     const NdtStep step = core.on_ndt(ndt);
-    if (step.fused && t >= kStart + 3 * kNsPerSecond) {
+    if (step.fused && t >= kCoreStart + 3 * kNsPerSecond) {
       const Eigen::Vector2d p = truth.head<2>();
       const double e_ndt = (Eigen::Vector2d(ndt.pose.x, ndt.pose.y) - p).norm();
       const double e_fused =
@@ -347,7 +349,7 @@ TEST(VehicleCore, AFailedMatchIsWeakenedInEveryDirection) {
       ndt.quality = {converged, converged ? 4 : 30, 0.04, 8.3, 0.0};
       core.on_ndt(ndt);
     }
-    const TimeNs t = kStart + 4 * kStep;
+    const TimeNs t = kCoreStart + 4 * kCoreStep;
     const auto fused = core.pose_at(t);
     const auto own = core.own_pose_at(t);
     ASSERT_TRUE(fused.has_value() && own.has_value());

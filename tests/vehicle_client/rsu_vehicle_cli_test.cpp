@@ -16,6 +16,7 @@
 #include <thread>
 #include <variant>
 
+#include "../v2i/test_keys.h"
 #include "common/angles.h"
 #include "common/random.h"
 #include "fake_rsu.h"
@@ -41,12 +42,6 @@ double truth_x(TimeNs t) {
   return 5.0 + kSpeed * to_seconds(t - kStart);
 }
 constexpr double kTruthY = 3.0;
-
-v2i::security::SigningKey key_from(std::uint8_t fill) {
-  v2i::security::Seed seed{};
-  seed.fill(fill);
-  return v2i::security::SigningKey(seed);
-}
 
 // Holds the vehicle's key file and a trust list naming the fake RSU's key (rsu id 3).
 struct TempDir {

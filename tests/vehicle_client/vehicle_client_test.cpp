@@ -13,6 +13,7 @@
 #include <mutex>
 #include <variant>
 
+#include "../v2i/test_keys.h"
 #include "fake_rsu.h"
 #include "v2i/message_authenticator.h"
 #include "v2i/message_signer.h"
@@ -24,11 +25,11 @@ namespace {
 using namespace std::chrono_literals;
 namespace asio = boost::asio;
 
-constexpr std::uint64_t kVehicleId = 4242;
-constexpr TimeNs kStart = 1'700'000'000 * kNsPerSecond;
+constexpr std::uint64_t kClientVehicleId = 4242;
+constexpr TimeNs kClientStart = 1'700'000'000 * kNsPerSecond;
 
 struct ManualClock {
-  std::shared_ptr<std::atomic<TimeNs>> now = std::make_shared<std::atomic<TimeNs>>(kStart);
+  std::shared_ptr<std::atomic<TimeNs>> now = std::make_shared<std::atomic<TimeNs>>(kClientStart);
   Clock clock() const {
     return [n = now] { return n->load(); };
   }
@@ -36,7 +37,7 @@ struct ManualClock {
 
 VehicleClientConfig config_for(const test::FakeRsu& rsu) {
   VehicleClientConfig config;
-  config.vehicle_id = kVehicleId;
+  config.vehicle_id = kClientVehicleId;
   config.size = {4.5, 1.8, 1.5};
   config.reference_offset = {-1.3, 0.0};  // rear axle 1.3 m behind the box centre
   config.rsu_endpoints = {rsu.endpoint_text()};
@@ -63,7 +64,7 @@ bool run_until(asio::io_context& io, Done done, std::chrono::milliseconds limit 
 
 VehicleState state_at(int k) {
   VehicleState s;
-  s.time = kStart + k * 100 * kNsPerMs;
+  s.time = kClientStart + k * 100 * kNsPerMs;
   s.pose = {100.0 + k, -20.0 + 0.5 * k, 0.3 + 0.01 * k};
   s.covariance = Eigen::Vector3d(0.04, 0.05, 0.001).asDiagonal();
   s.speed_mps = 10.0;
@@ -82,7 +83,7 @@ v2i::VehicleAnnouncement decode_announcement(const std::vector<std::uint8_t>& by
 v2i::Correction correction(std::uint32_t sequence, TimeNs sweep_time) {
   v2i::Correction c;
   c.rsu_id = 7;
-  c.vehicle_id = kVehicleId;
+  c.vehicle_id = kClientVehicleId;
   c.sequence = sequence;
   c.sweep_time = sweep_time;
   c.pose = {101.5, -19.0, 0.31};
@@ -122,7 +123,7 @@ TEST(VehicleClient, AnnouncementsCarryTheStateAndIncreasingSequences) {
     const v2i::VehicleAnnouncement a = decode_announcement(*bytes);
     const VehicleState expected = state_at(k);
     EXPECT_EQ(a.protocol_version, v2i::kProtocolVersion);
-    EXPECT_EQ(a.vehicle_id, kVehicleId);
+    EXPECT_EQ(a.vehicle_id, kClientVehicleId);
     EXPECT_EQ(a.sequence, static_cast<std::uint32_t>(k));
     EXPECT_EQ(a.generation_time, expected.time);
     EXPECT_DOUBLE_EQ(a.size.length_m, 4.5);
@@ -192,11 +193,11 @@ TEST(VehicleClient, CorrectionsToTheAnnouncedEndpointReachCallbackAndPoll) {
   client.set_correction_callback([&](const ReceivedCorrection& r) { called.push_back(r); });
   const v2i::VehicleAnnouncement a = announce_once(io, client, rsu);
 
-  clock.now->store(kStart + 123);
+  clock.now->store(kClientStart + 123);
   constexpr int kCount = 3;
   for (int k = 0; k < kCount; ++k) {
-    rsu.send_to(v2i::encode_v2i_message(correction(10 + k, kStart + k * 100 * kNsPerMs)), a.reply_to.address,
-                a.reply_to.port);
+    rsu.send_to(v2i::encode_v2i_message(correction(10 + k, kClientStart + k * 100 * kNsPerMs)),
+                a.reply_to.address, a.reply_to.port);
   }
   ASSERT_TRUE(run_until(io, [&] { return called.size() == kCount; }));
   const std::vector<ReceivedCorrection> polled = client.poll();
@@ -206,12 +207,12 @@ TEST(VehicleClient, CorrectionsToTheAnnouncedEndpointReachCallbackAndPoll) {
     for (const ReceivedCorrection* r :
          std::initializer_list<const ReceivedCorrection*>{&called[i], &polled[i]}) {
       EXPECT_EQ(r->correction.sequence, static_cast<std::uint32_t>(10 + k));
-      EXPECT_EQ(r->correction.sweep_time, kStart + k * 100 * kNsPerMs);
+      EXPECT_EQ(r->correction.sweep_time, kClientStart + k * 100 * kNsPerMs);
       EXPECT_EQ(r->correction.rsu_id, 7U);
       EXPECT_DOUBLE_EQ(r->correction.pose.x, 101.5);
       EXPECT_DOUBLE_EQ(r->correction.pose.yaw, 0.31);
       EXPECT_EQ(r->correction.quality.points_used, 321U);
-      EXPECT_EQ(r->received_time, kStart + 123);  // the injected clock, not the host's
+      EXPECT_EQ(r->received_time, kClientStart + 123);  // the injected clock, not the host's
       EXPECT_EQ(r->sender, "127.0.0.1:" + std::to_string(rsu.port()));
     }
   }
@@ -229,14 +230,14 @@ TEST(VehicleClient, BadDatagramsAreCountedByReasonAndDropped) {
     rsu.send_to(bytes, a.reply_to.address, a.reply_to.port);
   };
 
-  const TimeNs t0 = kStart;
+  const TimeNs t0 = kClientStart;
   send(v2i::encode_v2i_message(correction(1, t0)));  // good
   send({0xde, 0xad, 0xbe, 0xef, 0x01, 0x02, 0x03});  // garbage
   send({});                                          // empty: garbage
   send(std::vector<std::uint8_t>(1500, 0x08));       // oversized: garbage
   send(v2i::encode_v2i_message(a));                  // not a correction
   v2i::Correction other = correction(2, t0 + 100);
-  other.vehicle_id = kVehicleId + 1;
+  other.vehicle_id = kClientVehicleId + 1;
   send(v2i::encode_v2i_message(other));  // wrong vehicle
   v2i::Correction future_version = correction(2, t0 + 100);
   future_version.protocol_version = v2i::kProtocolVersion + 1;
@@ -313,7 +314,7 @@ TEST(VehicleClient, ThreadedClientDeliversCorrectionsOnItsOwnThread) {
   const auto bytes = rsu.receive();
   ASSERT_TRUE(bytes.has_value());
   const v2i::VehicleAnnouncement a = decode_announcement(*bytes);
-  rsu.send_to(v2i::encode_v2i_message(correction(5, kStart)), a.reply_to.address, a.reply_to.port);
+  rsu.send_to(v2i::encode_v2i_message(correction(5, kClientStart)), a.reply_to.address, a.reply_to.port);
   std::unique_lock lock(mutex);
   ASSERT_TRUE(arrived.wait_for(lock, 3s, [&] { return !sequences.empty(); }));
   EXPECT_EQ(sequences.front(), 5U);
@@ -327,7 +328,7 @@ TEST(VehicleClient, NoCallbackAfterStop) {
   client.set_correction_callback([&](const ReceivedCorrection&) { ++calls; });
   const v2i::VehicleAnnouncement a = announce_once(io, client, rsu);
   client.stop();
-  rsu.send_to(v2i::encode_v2i_message(correction(1, kStart)), a.reply_to.address, a.reply_to.port);
+  rsu.send_to(v2i::encode_v2i_message(correction(1, kClientStart)), a.reply_to.address, a.reply_to.port);
   run_until(
       io, [] { return false; }, 100ms);
   EXPECT_EQ(calls, 0);
@@ -362,12 +363,6 @@ TEST(VehicleClient, BadConfigIsRefusedWithAReason) {
   EXPECT_THROW(VehicleClient(io, config), std::invalid_argument);
 }
 
-v2i::security::SigningKey key_from(std::uint8_t fill) {
-  v2i::security::Seed seed{};
-  seed.fill(fill);
-  return v2i::security::SigningKey(seed);
-}
-
 // Signed mode over loopback: the RSU can verify the announcements as this vehicle's, and the client
 // uses a correction only when the RSU's key signed it, fresh and not replayed.
 // An RSU's notices that it withheld this vehicle's fix are counted by reason and the latest kept, with
@@ -382,14 +377,14 @@ TEST(VehicleClient, FixWithheldNoticesAreCountedByReasonNeverPolled) {
     n.rsu_id = 7;
     n.vehicle_id = vehicle_id;
     n.announcement_sequence = a.sequence;
-    n.sweep_time = kStart - 20 * kNsPerMs;
+    n.sweep_time = kClientStart - 20 * kNsPerMs;
     n.reason = reason;
     rsu.send_to(v2i::encode_v2i_message(n), a.reply_to.address, a.reply_to.port);
   };
-  notice(v2i::FixWithheldReason::kPositionUnbounded, kVehicleId);
-  notice(v2i::FixWithheldReason::kPositionUnbounded, kVehicleId);
-  notice(v2i::FixWithheldReason::kInconsistent, kVehicleId + 1);  // another vehicle's
-  notice(v2i::FixWithheldReason::kNoOwnCluster, kVehicleId);
+  notice(v2i::FixWithheldReason::kPositionUnbounded, kClientVehicleId);
+  notice(v2i::FixWithheldReason::kPositionUnbounded, kClientVehicleId);
+  notice(v2i::FixWithheldReason::kInconsistent, kClientVehicleId + 1);  // another vehicle's
+  notice(v2i::FixWithheldReason::kNoOwnCluster, kClientVehicleId);
   ASSERT_TRUE(run_until(io, [&] { return client.stats().datagrams_received == 4; }));
   const VehicleClientStats stats = client.stats();
   EXPECT_EQ(stats.fixes_withheld.count(v2i::FixWithheldReason::kPositionUnbounded), 2U);
@@ -422,24 +417,25 @@ TEST(VehicleClient, SignedModeSignsAnnouncementsAndVerifiesCorrectionsBeforeUse)
   const auto sent = rsu.receive();
   ASSERT_TRUE(sent.has_value());
   v2i::security::TrustList rsu_trust;
-  rsu_trust.add({car.public_key(), v2i::security::SignerRole::kVehicle, {kVehicleId}});
+  rsu_trust.add({car.public_key(), v2i::security::SignerRole::kVehicle, {kClientVehicleId}});
   v2i::MessageAuthenticator at_rsu(v2i::SecurityConfig{}, rsu_trust);
-  const v2i::AuthenticatedMessage heard = at_rsu.authenticate(*sent, kStart + 5 * kNsPerMs);
+  const v2i::AuthenticatedMessage heard = at_rsu.authenticate(*sent, kClientStart + 5 * kNsPerMs);
   ASSERT_EQ(heard.verdict, v2i::AuthVerdict::kAccepted);
   const auto& a = std::get<v2i::VehicleAnnouncement>(heard.message.body);
-  EXPECT_EQ(heard.message.header.generation_time, kStart);  // the client's clock when it signed
+  EXPECT_EQ(heard.message.header.generation_time, kClientStart);  // the client's clock when it signed
 
   v2i::MessageSigner rsu_signer(rsu_key);
   v2i::MessageSigner forged(forger);
   auto send = [&](const std::vector<std::uint8_t>& bytes) {
     rsu.send_to(bytes, a.reply_to.address, a.reply_to.port);
   };
-  const std::vector<std::uint8_t> genuine = rsu_signer.encode(correction(1, kStart - 40 * kNsPerMs), kStart);
+  const std::vector<std::uint8_t> genuine =
+      rsu_signer.encode(correction(1, kClientStart - 40 * kNsPerMs), kClientStart);
   send(genuine);
-  send(forged.encode(correction(2, kStart - 30 * kNsPerMs), kStart));           // forged: wrong key
-  send(genuine);                                                                // replayed
-  send(v2i::encode_v2i_message(correction(3, kStart - 20 * kNsPerMs)));         // unsigned
-  send(rsu_signer.encode(correction(4, kStart - 10 * kNsPerMs), kStart + 10));  // genuine
+  send(forged.encode(correction(2, kClientStart - 30 * kNsPerMs), kClientStart));  // forged: wrong key
+  send(genuine);                                                                   // replayed
+  send(v2i::encode_v2i_message(correction(3, kClientStart - 20 * kNsPerMs)));      // unsigned
+  send(rsu_signer.encode(correction(4, kClientStart - 10 * kNsPerMs), kClientStart + 10));  // genuine
   ASSERT_TRUE(run_until(io, [&] { return client.stats().datagrams_received == 5; }));
   const VehicleClientStats stats = client.stats();
   EXPECT_EQ(stats.accepted(), 2U);

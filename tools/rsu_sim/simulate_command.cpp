@@ -57,7 +57,7 @@ void write_topdown(const std::filesystem::path& out_dir, const sim::Scenario& sc
   points << "x,y,z,label\n";
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
     const lidar::LidarPoint& p = frame.frame.points[i];
-    const Eigen::Vector3d m = sensor_to_map * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d m = sensor_to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     const auto& truth = frame.truth[i];
     const long label =
         truth.surface == sim::SurfaceClass::kVehicle ? static_cast<long>(truth.vehicle_id) : -1L;
