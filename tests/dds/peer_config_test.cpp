@@ -10,20 +10,21 @@
 namespace rsu::daemon {
 namespace {
 
-DaemonConfig parse_dds(const std::string& dds_section) {
+// A VLP-16 RSU's configuration with these sections (dds:, v2i:, ...) after its lidar: section.
+DaemonConfig parse_with(const std::string& sections) {
   return parse_config(
       "rsu_id: 1\n"
       "lidar:\n"
       "  model: vlp16\n"
       "  mount: {x: 0, y: 0, z: 2}\n"
       "  input: {velodyne_udp: {}}\n" +
-          dds_section,
+          sections,
       "/etc/rsud/rsud.yaml");
 }
 
-std::string dds_refusal(const std::string& dds_section) {
+std::string refusal_with(const std::string& sections) {
   try {
-    parse_dds(dds_section);
+    parse_with(sections);
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -31,7 +32,7 @@ std::string dds_refusal(const std::string& dds_section) {
 }
 
 TEST(PeerConfig, OffByDefaultBestEffortAndTheCoreLimits) {
-  const DaemonConfig c = parse_dds("dds: {enabled: true}\n");
+  const DaemonConfig c = parse_with("dds: {enabled: true}\n");
   EXPECT_FALSE(c.dds.peers.enabled);
   EXPECT_EQ(c.dds.peers.topic, "rsu/peer_announcements");
   EXPECT_EQ(c.dds.peers.qos.reliability, dds::Reliability::kBestEffort);
@@ -41,7 +42,7 @@ TEST(PeerConfig, OffByDefaultBestEffortAndTheCoreLimits) {
 }
 
 TEST(PeerConfig, ReadsEveryKeyIntoTheBusAndTheCore) {
-  const DaemonConfig c = parse_dds(
+  const DaemonConfig c = parse_with(
       "dds:\n"
       "  enabled: true\n"
       "  peers:\n"
@@ -61,33 +62,33 @@ TEST(PeerConfig, ReadsEveryKeyIntoTheBusAndTheCore) {
 }
 
 TEST(PeerConfig, ErrorsNameFileLineAndField) {
-  EXPECT_EQ(dds_refusal("dds:\n  peers: {enabled: true}\n"),
+  EXPECT_EQ(refusal_with("dds:\n  peers: {enabled: true}\n"),
             "/etc/rsud/rsud.yaml:7: dds.peers.enabled: needs the DDS participant: set dds.enabled: true");
-  EXPECT_NE(dds_refusal("dds:\n  enabled: true\n  peers: {enabled: true, topci: x}\n")
+  EXPECT_NE(refusal_with("dds:\n  enabled: true\n  peers: {enabled: true, topci: x}\n")
                 .find("/etc/rsud/rsud.yaml:8: dds.peers.topci: unknown field"),
             std::string::npos);
-  EXPECT_NE(dds_refusal("dds:\n  enabled: true\n  peers: {topic: \"a b\"}\n")
+  EXPECT_NE(refusal_with("dds:\n  enabled: true\n  peers: {topic: \"a b\"}\n")
                 .find("dds.peers.topic: \"a b\" is not a ROS"),
             std::string::npos);
   EXPECT_NE(
-      dds_refusal("dds:\n  enabled: true\n  peers: {burst: 0.5}\n").find("dds.peers.burst: must be >= 1"),
+      refusal_with("dds:\n  enabled: true\n  peers: {burst: 0.5}\n").find("dds.peers.burst: must be >= 1"),
       std::string::npos);
-  EXPECT_NE(dds_refusal("dds:\n  enabled: true\n  peers: {max_sources: 0}\n")
+  EXPECT_NE(refusal_with("dds:\n  enabled: true\n  peers: {max_sources: 0}\n")
                 .find("dds.peers.max_sources: must be"),
             std::string::npos);
   EXPECT_NE(
-      dds_refusal("dds:\n  enabled: true\n  peers: {qos: {history_depth: many}}\n").find("dds.peers.qos"),
+      refusal_with("dds:\n  enabled: true\n  peers: {qos: {history_depth: many}}\n").find("dds.peers.qos"),
       std::string::npos);
 }
 
 TEST(V2iReplyToConfig, PoliciesAndTheReplacedKeyNamed) {
-  EXPECT_EQ(parse_dds("").core.reply_to, core::ReplyToPolicy::kMatchAddressAndPort);
-  EXPECT_EQ(parse_dds("v2i: {reply_to: match_address}\n").core.reply_to, core::ReplyToPolicy::kMatchAddress);
-  EXPECT_EQ(parse_dds("v2i: {reply_to: use_source}\n").core.reply_to, core::ReplyToPolicy::kUseSource);
-  EXPECT_NE(dds_refusal("v2i: {reply_to: anywhere}\n").find("v2i.reply_to: expected match_address_and_port"),
+  EXPECT_EQ(parse_with("").core.reply_to, core::ReplyToPolicy::kMatchAddressAndPort);
+  EXPECT_EQ(parse_with("v2i: {reply_to: match_address}\n").core.reply_to, core::ReplyToPolicy::kMatchAddress);
+  EXPECT_EQ(parse_with("v2i: {reply_to: use_source}\n").core.reply_to, core::ReplyToPolicy::kUseSource);
+  EXPECT_NE(refusal_with("v2i: {reply_to: anywhere}\n").find("v2i.reply_to: expected match_address_and_port"),
             std::string::npos);
   // A configuration written before v2i.reply_to existed is told what to write instead.
-  const std::string old_key = dds_refusal("v2i:\n  require_reply_to_source_address: true\n");
+  const std::string old_key = refusal_with("v2i:\n  require_reply_to_source_address: true\n");
   EXPECT_NE(old_key.find("/etc/rsud/rsud.yaml:7: v2i.require_reply_to_source_address: replaced by reply_to"),
             std::string::npos)
       << old_key;
@@ -97,12 +98,12 @@ TEST(V2iReplyToConfig, PoliciesAndTheReplacedKeyNamed) {
 // v2i.refusal_notices and v2i.withheld_notices: the documented defaults (deploy/rsud.yaml), every key,
 // and a rate or interval that is not positive refused with its place.
 TEST(V2iNoticesConfig, DefaultsEveryKeyAndLocatedErrors) {
-  const DaemonConfig defaults = parse_dds("");
+  const DaemonConfig defaults = parse_with("");
   EXPECT_TRUE(defaults.core.withheld_notices.enabled);
   EXPECT_EQ(defaults.core.withheld_notices.per_vehicle_interval_s, 1.0);
   EXPECT_EQ(defaults.core.withheld_notices.rate_per_s, 200.0);
   EXPECT_EQ(defaults.core.refusal_notices.rate_per_s, 50.0);
-  const DaemonConfig c = parse_dds(
+  const DaemonConfig c = parse_with(
       "v2i:\n"
       "  withheld_notices: {enabled: false, per_vehicle_interval_s: 2.5, rate_per_s: 20}\n"
       "  refusal_notices: {rate_per_s: 5}\n");
@@ -111,15 +112,15 @@ TEST(V2iNoticesConfig, DefaultsEveryKeyAndLocatedErrors) {
   EXPECT_EQ(c.core.withheld_notices.rate_per_s, 20.0);
   EXPECT_EQ(c.core.refusal_notices.rate_per_s, 5.0);
   EXPECT_TRUE(c.core.refusal_notices.enabled);
-  EXPECT_NE(dds_refusal("v2i:\n  withheld_notices: {rate_per_s: 0}\n")
+  EXPECT_NE(refusal_with("v2i:\n  withheld_notices: {rate_per_s: 0}\n")
                 .find("/etc/rsud/rsud.yaml:7: v2i.withheld_notices.rate_per_s"),
             std::string::npos);
-  EXPECT_NE(dds_refusal("v2i:\n  withheld_notices: {per_vehicle_interval_s: -1}\n")
+  EXPECT_NE(refusal_with("v2i:\n  withheld_notices: {per_vehicle_interval_s: -1}\n")
                 .find("v2i.withheld_notices.per_vehicle_interval_s"),
             std::string::npos);
-  EXPECT_NE(
-      dds_refusal("v2i:\n  withheld_notices: {every: 1}\n").find("v2i.withheld_notices.every: unknown field"),
-      std::string::npos);
+  EXPECT_NE(refusal_with("v2i:\n  withheld_notices: {every: 1}\n")
+                .find("v2i.withheld_notices.every: unknown field"),
+            std::string::npos);
 }
 
 }  // namespace
