@@ -21,7 +21,6 @@
 #include <fstream>
 #include <iostream>
 #include <map>
-#include <numbers>
 #include <sstream>
 
 #include "common/angles.h"

@@ -10,7 +10,6 @@
 
 #include <Eigen/Geometry>
 #include <functional>
-#include <numbers>
 #include <stdexcept>
 
 #include "common/angles.h"

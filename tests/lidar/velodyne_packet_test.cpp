@@ -7,7 +7,6 @@
 
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <random>
 #include <stdexcept>
 #include <string>
