@@ -107,8 +107,11 @@ std::size_t RsuCore::check_mount_pending() {
 
 MountRotations RsuCore::take_mount_rotations() {
   MountRotations taken;
-  if (monitor_building_)
-    return taken;  // kept pending until the reference is back
+  // Nothing to check, nothing handed out: rsud submits a job whenever a reference comes, and a reference
+  // with no rotations had woken its mount thread (and posted an empty result back) on every LiDAR
+  // packet, ~10 % of the event loop's time with an OS1-128 (issue 16, latency).
+  if (monitor_building_ || mount_rotations_pending_.empty())
+    return taken;  // while building: kept pending until the reference is back
   if (monitor_due_ && !mount_rotations_pending_.empty()) {
     monitor_building_ = true;
     taken.source = mount_reference_source();

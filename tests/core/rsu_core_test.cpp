@@ -907,6 +907,8 @@ TEST(RsuCore, MountCheckedOnAnotherThreadDecidesAsWithinTheSteps) {
   std::size_t taken_rotations = 0;
   b.run_until(split, end, [&](const LidarStepResult&, TimeNs) {
     MountRotations taken = split.take_mount_rotations();
+    // A job (a reference or a source: rsud submits one for either) only with rotations to check.
+    EXPECT_EQ(taken.rotations.empty(), !taken.reference && !taken.source);
     if (taken.rotations.empty())
       return;
     taken_rotations += taken.rotations.size();
