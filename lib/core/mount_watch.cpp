@@ -109,10 +109,11 @@ MountRotations RsuCore::take_mount_rotations() {
   MountRotations taken;
   // Nothing to check, nothing handed out: rsud submits a job whenever a reference comes, and a reference
   // with no rotations had woken its mount thread (and posted an empty result back) on every LiDAR
-  // packet, ~10 % of the event loop's time with an OS1-128 (issue 16, latency).
+  // packet: 10 % of the event loop's samples with an OS1-128 (issue 16, latency; README, "a thread woken
+  // for nothing").
   if (monitor_building_ || mount_rotations_pending_.empty())
     return taken;  // while building: kept pending until the reference is back
-  if (monitor_due_ && !mount_rotations_pending_.empty()) {
+  if (monitor_due_) {
     monitor_building_ = true;
     taken.source = mount_reference_source();
   } else if (monitor_) {

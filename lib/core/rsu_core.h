@@ -204,7 +204,8 @@ class RsuCore {
   // The same check in two halves, for a caller that registers the rotations on a thread of its own (rsud:
   // a dense LiDAR's check held its loop for 2-3 ms a rotation, and the packets behind it): the pending
   // rotations with the reference they are checked against (MountReference is immutable) or, the first
-  // time, what to build it from (no rotations: nothing to check); their checks back, in the order taken.
+  // time, what to build it from; nothing at all (no reference, no source) while no rotation is pending,
+  // so that a caller submits work only when there is some; their checks back, in the order taken.
   // Checks against a reference (or a background) that a reload has replaced since are dropped.
   MountRotations take_mount_rotations();
   void record_mount_checks(const MountChecks& checks);
