@@ -86,12 +86,14 @@ bool GatheredVehicleFixer::fits_vehicle(const perception::RectangleFit& fit,
 }
 
 GatheredFix GatheredVehicleFixer::fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a,
-                                      bool lost_nearby, std::vector<Eigen::Vector2d> occluders) const {
+                                      bool lost_nearby, std::vector<Eigen::Vector2d> occluders,
+                                      std::vector<perception::OcclusionQuery>* occlusion_queries) const {
   GatheredFix out;
   out.sweep_time = held.sweep_time();  // also for no fix: a notice names the rotation (withheld_notices.h)
   perception::LidarGeometry lidar = lidar_;
   lidar.complete_sweep = !lost_nearby;
   lidar.occluders = std::move(occluders);
+  lidar.occlusion_log = occlusion_queries;
   // A near vehicle was held because its assigned detection lay outside its footprint (the gatherer);
   // if none of its own came while the sweep passed it, that one is more likely a neighbour's (its own
   // hidden, or its packets lost): no fix rather than someone else's.

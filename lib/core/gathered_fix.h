@@ -17,6 +17,7 @@
 #include "core/vehicle_gatherer.h"
 #include "lidar/point.h"
 #include "perception/detection.h"
+#include "perception/lidar_geometry.h"
 #include "perception/vehicle_fix.h"
 #include "v2i/messages.h"
 
@@ -54,9 +55,17 @@ class GatheredVehicleFixer {
   // The fix of `held` with what the vehicle announced (`a`): from the whole gathered union if it is
   // one vehicle of the announced size; otherwise from the detection the assignment gave it alone.
   // lost_nearby: LiDAR packets were lost while the sweep passed it (no side of it counts as seen);
-  // occluders: the other objects' points that may hide part of it (sweep_occluders.h).
+  // occluders: the other objects' points that may hide part of it (sweep_occluders.h); what the fix
+  // asked of them is appended to `occlusion_queries` when given (answers_alike).
   GatheredFix fix(const HeldVehicle& held, const v2i::VehicleAnnouncement& a, bool lost_nearby = false,
-                  std::vector<Eigen::Vector2d> occluders = {}) const;
+                  std::vector<Eigen::Vector2d> occluders = {},
+                  std::vector<perception::OcclusionQuery>* occlusion_queries = nullptr) const;
+  // Whether `occluders` answer a fix's `occlusion_queries` as its own did: then that fix is the one
+  // these give, bit for bit (perception::LidarGeometry::occlusion_log).
+  bool answers_alike(std::span<const Eigen::Vector2d> occluders,
+                     std::span<const perception::OcclusionQuery> occlusion_queries) const {
+    return lidar_.answers_alike(occluders, occlusion_queries);
+  }
   // A cluster's rectangle for association (perception::detect), fitted as its fix is (thinned alike).
   perception::Detection detect(std::span<const lidar::LidarPoint> points) const;
 

@@ -77,8 +77,11 @@ Prepared prepare(Preparation preparation) {
   out.fixer = std::move(preparation.fixer);
   out.step_time = preparation.step_time;
   for (FixInputs& in : preparation.vehicles) {
-    GatheredFix fix = out.fixer->fix(in.held, in.announcement, in.lost_nearby, in.occluders);
-    out.fixes.emplace_back(std::move(in), std::move(fix));
+    PreparedFix prepared;
+    prepared.fix =
+        out.fixer->fix(in.held, in.announcement, in.lost_nearby, in.occluders, &prepared.occlusion_queries);
+    prepared.inputs = std::move(in);
+    out.fixes.push_back(std::move(prepared));
   }
   for (std::vector<lidar::LidarPoint>& points : preparation.clusters) {
     perception::Detection d = out.fixer->detect(points);
@@ -105,18 +108,19 @@ perception::Detection PreparedFixes::fit(std::span<const lidar::LidarPoint> poin
   return d;
 }
 
-void PreparedFixes::add(FixInputs&& inputs, GatheredFix&& fix) {
+void PreparedFixes::add(PreparedFix&& fix) {
   if (fixes_.size() == kKept)
     fixes_.erase(fixes_.begin());
-  fixes_.push_back({std::move(inputs), std::move(fix)});
+  fixes_.push_back(std::move(fix));
 }
 
 GatheredFix PreparedFixes::fix(const GatheredVehicleFixer& fixer, const HeldVehicle& held,
                                const v2i::VehicleAnnouncement& a, bool lost_nearby,
                                const std::vector<Eigen::Vector2d>& occluders, LidarStats& stats) {
-  const auto it = std::find_if(fixes_.begin(), fixes_.end(), [&](const Entry& e) {
+  const auto it = std::find_if(fixes_.begin(), fixes_.end(), [&](const PreparedFix& e) {
     return e.inputs.lost_nearby == lost_nearby && same_held(e.inputs.held, held) &&
-           same_announcement(e.inputs.announcement, a) && same_bits(e.inputs.occluders, occluders);
+           same_announcement(e.inputs.announcement, a) &&
+           (same_bits(e.inputs.occluders, occluders) || fixer.answers_alike(occluders, e.occlusion_queries));
   });
   if (it == fixes_.end())
     return fixer.fix(held, a, lost_nearby, occluders);
@@ -160,8 +164,8 @@ void RsuCore::record_prepared(Prepared&& prepared) {
   const TimeNs now = prepared.step_time;
   if (prepared.fixer != fixer_)
     return;  // a reload replaced the fixer since: these may differ from what it computes
-  for (auto& [inputs, fix] : prepared.fixes) {
-    prepared_.add(std::move(inputs), std::move(fix));
+  for (PreparedFix& fix : prepared.fixes) {
+    prepared_.add(std::move(fix));
     ++lidar_stats_.fixes_prepared;
   }
   std::vector<perception::Detection> detections;

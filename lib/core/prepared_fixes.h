@@ -6,8 +6,12 @@
 // within the tolerance). Once every laser has swept past a cluster nothing else can change it, so
 // RsuCore fits and fixes it meanwhile (RsuCore::prepare_fixes, in prepared_fixes.cpp) and keeps the
 // results here with their exact inputs. The release takes them only when its inputs are the same bit for
-// bit (points, announcement, occluders, ...), else computes them: the corrections are the same either
-// way, only ready sooner (RsuCoreConfig::prepare_fixes turns it off, the baseline).
+// bit (points, announcement, ...) and its occluders answer every question the fix asked of them alike,
+// else computes them: the corrections are the same either way, only ready sooner
+// (RsuCoreConfig::prepare_fixes turns it off, the baseline). The occluders need not be the same: a car
+// parked behind a passing one is held until the sweep has passed its footprint, and the passing car's
+// points near it go on arriving until then (the load test's OS1-128 run, 45 s: fixes used at their
+// release 1,621-1,666 of 1,905 prepared while the occluders had to be the same, 1,697-1,710 since).
 //
 // The preparation itself is pure (prepare(), below): RsuCore hands out what to prepare
 // (RsuCore::take_preparation) and takes the results back (RsuCore::record_prepared), so that rsud runs it
@@ -29,6 +33,7 @@
 #include "core/vehicle_gatherer.h"
 #include "lidar/point.h"
 #include "perception/detection.h"
+#include "perception/lidar_geometry.h"
 #include "v2i/messages.h"
 
 namespace rsu::core {
@@ -53,12 +58,19 @@ struct Preparation {
   bool empty() const { return clusters.empty() && vehicles.empty(); }
 };
 
+// A fix with its inputs and what it asked of the occluders (GatheredVehicleFixer::answers_alike).
+struct PreparedFix {
+  FixInputs inputs;
+  GatheredFix fix;
+  std::vector<perception::OcclusionQuery> occlusion_queries;
+};
+
 // Their fits and fixes, each with its inputs.
 struct Prepared {
   std::shared_ptr<const GatheredVehicleFixer> fixer;
   TimeNs step_time = 0;
   std::vector<std::pair<std::vector<lidar::LidarPoint>, perception::Detection>> fits;
-  std::vector<std::pair<FixInputs, GatheredFix>> fixes;
+  std::vector<PreparedFix> fixes;
 };
 
 // Fits and fixes what `preparation` holds. Pure, and touching nothing of the core: rsud runs it on a
@@ -73,21 +85,17 @@ class PreparedFixes {
   // by `fixer`.
   perception::Detection fit(std::span<const lidar::LidarPoint> points, const GatheredVehicleFixer& fixer);
   // A vehicle's fix, by GatheredVehicleFixer::fix's inputs.
-  void add(FixInputs&& inputs, GatheredFix&& fix);
-  // A released vehicle's fix: the one prepared for exactly these inputs (then forgotten; counted as
-  // fixes_prepared_used), else computed by `fixer`.
+  void add(PreparedFix&& fix);
+  // A released vehicle's fix: the one prepared for these inputs, its occluders answering alike (then
+  // forgotten; counted as fixes_prepared_used), else computed by `fixer`.
   GatheredFix fix(const GatheredVehicleFixer& fixer, const HeldVehicle& held,
                   const v2i::VehicleAnnouncement& a, bool lost_nearby,
                   const std::vector<Eigen::Vector2d>& occluders, LidarStats& stats);
 
  private:
   static constexpr std::size_t kKept = 8;  // the newest of each; one is taken within a few packets
-  struct Entry {
-    FixInputs inputs;
-    GatheredFix fix;
-  };
   std::vector<std::pair<std::vector<lidar::LidarPoint>, perception::Detection>> fits_;
-  std::vector<Entry> fixes_;
+  std::vector<PreparedFix> fixes_;
 };
 
 }  // namespace rsu::core

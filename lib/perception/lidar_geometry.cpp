@@ -21,19 +21,38 @@ bool LidarGeometry::sees_surface(double range_m, double low, double high) const 
   return false;
 }
 
-bool LidarGeometry::occluded(const Eigen::Vector2d& xy, double margin) const {
-  const Eigen::Vector2d sight = xy - this->xy();
+namespace {
+
+bool occluded_by(std::span<const Eigen::Vector2d> occluders, const LidarGeometry& lidar,
+                 const Eigen::Vector2d& xy, double margin) {
+  const Eigen::Vector2d sight = xy - lidar.xy();
   const double range = sight.norm();
   if (occluders.empty() || !(range > margin))
     return false;
-  const double cos_max = std::cos(std::max(2.0 * azimuth_step_rad, std::atan(margin / range)));
+  const double cos_max = std::cos(std::max(2.0 * lidar.azimuth_step_rad, std::atan(margin / range)));
   for (const Eigen::Vector2d& o : occluders) {
-    const Eigen::Vector2d to = o - this->xy();
+    const Eigen::Vector2d to = o - lidar.xy();
     const double r = to.norm();
     if (r > 0.0 && r < range - margin && to.dot(sight) >= cos_max * r * range)
       return true;
   }
   return false;
+}
+
+}  // namespace
+
+bool LidarGeometry::occluded(const Eigen::Vector2d& xy, double margin) const {
+  const bool out = occluded_by(occluders, *this, xy, margin);
+  if (occlusion_log != nullptr)
+    occlusion_log->push_back({xy, margin, out});
+  return out;
+}
+
+bool LidarGeometry::answers_alike(std::span<const Eigen::Vector2d> other_occluders,
+                                  std::span<const OcclusionQuery> log) const {
+  return std::all_of(log.begin(), log.end(), [&](const OcclusionQuery& q) {
+    return occluded_by(other_occluders, *this, q.xy, q.margin) == q.occluded;
+  });
 }
 
 int LidarGeometry::laser_of(const Eigen::Vector3d& p) const {

@@ -18,6 +18,13 @@
 
 namespace rsu::perception {
 
+// One question a computation asked of the occluders (LidarGeometry::occluded) and their answer.
+struct OcclusionQuery {
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  double margin = 0.0;
+  bool occluded = false;
+};
+
 struct LidarGeometry {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // map frame
   // The lasers' elevation angles (radians, up positive) for a level mount. Empty: unknown, every
@@ -33,6 +40,11 @@ struct LidarGeometry {
   // goes on: its points' end there is the shadow's edge, not the vehicle's. Empty: nothing known to
   // occlude.
   std::vector<Eigen::Vector2d> occluders;
+  // When set, occluded() appends each question and its answer here. A fix reads the occluders only
+  // through occluded(), so it comes out the same, bit for bit, with any occluders that answer its
+  // questions alike (answers_alike): a fix prepared while the sweep's other objects were still growing
+  // holds at the release if none of the points added since lies where it looked (core/prepared_fixes.h).
+  std::vector<OcclusionQuery>* occlusion_log = nullptr;
 
   Eigen::Vector2d xy() const { return position.head<2>(); }
   double height_above_ground() const { return position.z() - ground_z; }
@@ -44,6 +56,9 @@ struct LidarGeometry {
   // Whether an occluder lies nearer than xy (by more than `margin`) within the angle `margin` subtends
   // at xy's range (at least two azimuth steps) of the line of sight to it.
   bool occluded(const Eigen::Vector2d& xy, double margin) const;
+  // Whether `other_occluders`, in place of this geometry's, answer every question of `log` as recorded.
+  bool answers_alike(std::span<const Eigen::Vector2d> other_occluders,
+                     std::span<const OcclusionQuery> log) const;
   // Which laser (index into elevations_rad) returned a point at `p` (map frame): the one whose elevation
   // is nearest the point's as seen from the LiDAR; -1 when the elevations are unknown.
   int laser_of(const Eigen::Vector3d& p) const;
