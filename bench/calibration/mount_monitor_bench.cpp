@@ -6,6 +6,7 @@
 
 #include "bench/perception/corridor_frames.h"
 #include "calibration/mount_monitor.h"
+#include "lidar/point_eigen.h"
 #include "perception/range_image_background.h"
 
 namespace rsu::bench {
@@ -60,7 +61,7 @@ void BM_BaselineBackgroundTest(benchmark::State& state, int model) {
     std::vector<lidar::LidarPoint> map = frame;
     const Eigen::Isometry3d t = f.mount.to_isometry();
     for (lidar::LidarPoint& p : map) {
-      const Eigen::Vector3d q = t * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+      const Eigen::Vector3d q = t * lidar::position_of(p);
       p.x = static_cast<float>(q.x());
       p.y = static_cast<float>(q.y());
       p.z = static_cast<float>(q.z());

@@ -30,6 +30,7 @@
 
 #include "common/angles.h"
 #include "core/rsu_core.h"
+#include "lidar/point_eigen.h"
 #include "lidar/velodyne_packet.h"
 #include "sim/lidar_simulator.h"
 #include "sim/ouster_simulator.h"
@@ -459,7 +460,7 @@ void BM_SweepReleaseWait(benchmark::State& state) {
     vehicle.emplace_back();
     for (std::size_t i = 0; i < f.frame.points.size(); ++i) {
       lidar::LidarPoint p = f.frame.points[i];
-      const Eigen::Vector3d m = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+      const Eigen::Vector3d m = to_map * lidar::position_of(p);
       p.x = static_cast<float>(m.x());
       p.y = static_cast<float>(m.y());
       p.z = static_cast<float>(m.z());

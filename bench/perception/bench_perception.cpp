@@ -23,6 +23,7 @@
 #include <pcl/segmentation/extract_clusters.h>
 
 #include "corridor_frames.h"
+#include "lidar/point_eigen.h"
 #include "perception/azimuth_thinning.h"
 #include "perception/pipeline.h"
 #include "perception/vehicle_fix.h"
@@ -315,7 +316,7 @@ std::vector<Eigen::Vector3d> vehicle_points(const rsu::bench::CorridorFrames& f)
   if (largest != nullptr) {
     for (const std::uint32_t i : *largest) {
       const LidarPoint& p = f.frame[i];
-      points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
+      points.push_back(rsu::lidar::position_of(p));
     }
   }
   return points;

@@ -10,6 +10,7 @@
 
 #include "common/pose.h"
 #include "lidar/point.h"
+#include "lidar/point_eigen.h"
 #include "lidar/sensor_model.h"
 #include "sim/lidar_simulator.h"
 #include "sim/scenario.h"
@@ -31,8 +32,7 @@ inline std::vector<lidar::LidarPoint> to_map_frame(const lidar::LidarFrame& fram
   const Eigen::Isometry3d t = mount.to_isometry();
   std::vector<lidar::LidarPoint> out = frame.points;
   for (auto& p : out) {
-    const Eigen::Vector3d q =
-        t * Eigen::Vector3d(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
+    const Eigen::Vector3d q = t * lidar::position_of(p);
     p.x = static_cast<float>(q.x());
     p.y = static_cast<float>(q.y());
     p.z = static_cast<float>(q.z());

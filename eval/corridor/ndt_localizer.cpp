@@ -16,6 +16,7 @@
 
 #include "common/symmetric_eigen.h"
 #include "fusion/covariance_floor.h"
+#include "lidar/point_eigen.h"
 
 namespace rsu::eval {
 
@@ -143,7 +144,7 @@ NdtResult NdtLocalizer::align(const std::vector<lidar::LidarPoint>& scan, const 
     const double r2 = px * px + py * py;
     if (r2 < config_.self_filter_radius_m * config_.self_filter_radius_m)
       continue;
-    const Eigen::Vector3d v = sensor_to_vehicle * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+    const Eigen::Vector3d v = sensor_to_vehicle * lidar::position_of(p);
     if (std::abs(v.x()) > config_.crop_range_m || std::abs(v.y()) > config_.crop_range_m)
       continue;
     cropped->emplace_back(static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z()));

@@ -13,6 +13,7 @@
 #include "common/angles.h"
 #include "common/random.h"
 #include "eval/consistency.h"
+#include "lidar/point_eigen.h"
 #include "lidar/sensor_model.h"
 #include "perception/pipeline.h"
 #include "perception/vehicle_fix.h"
@@ -44,7 +45,7 @@ std::vector<Hit> frame_hits(const sim::SimulatedFrame& frame, const Eigen::Isome
     if (surface == sim::SurfaceClass::kNone || surface == sim::SurfaceClass::kGround)
       continue;
     const lidar::LidarPoint& p = frame.frame.points[i];
-    const Eigen::Vector3d xyz = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+    const Eigen::Vector3d xyz = to_map * lidar::position_of(p);
     const bool vehicle = surface == sim::SurfaceClass::kVehicle;
     if (vehicle || xyz.z() >= min_static_z)
       hits.push_back({xyz, p.time_ns, vehicle ? frame.truth[i].vehicle_id : 0U});

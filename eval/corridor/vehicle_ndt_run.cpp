@@ -6,6 +6,7 @@
 #include "common/angles.h"
 #include "eval/corridor/map_sampling.h"
 #include "fusion/vehicle_ekf.h"
+#include "lidar/point_eigen.h"
 #include "sim/lidar_simulator.h"
 #include "sim/raycaster.h"
 #include "sim/trajectory.h"
@@ -34,8 +35,7 @@ void deskew(std::vector<lidar::LidarPoint>& points, TimeNs t_ref, double speed, 
     motion.linear() = Eigen::AngleAxisd(dyaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     motion.translation() =
         Eigen::Vector3d(speed * dt * std::cos(dyaw / 2), speed * dt * std::sin(dyaw / 2), 0.0);
-    const Eigen::Vector3d q =
-        vehicle_to_sensor * motion * sensor_to_vehicle * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+    const Eigen::Vector3d q = vehicle_to_sensor * motion * sensor_to_vehicle * lidar::position_of(p);
     p.x = static_cast<float>(q.x());
     p.y = static_cast<float>(q.y());
     p.z = static_cast<float>(q.z());

@@ -11,6 +11,7 @@
 #include "common/angles.h"
 #include "common/random.h"
 #include "eval/consistency.h"
+#include "lidar/point_eigen.h"
 #include "lidar/sensor_model.h"
 #include "perception/ground_height_filter.h"
 #include "sim/lidar_simulator.h"
@@ -98,7 +99,7 @@ std::vector<Eigen::Vector3d> vehicle_points(const sim::SimulatedFrame& frame, co
   std::vector<lidar::LidarPoint> map_points;
   map_points.reserve(frame.frame.points.size());
   for (const lidar::LidarPoint& p : frame.frame.points) {
-    const Eigen::Vector3d m = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+    const Eigen::Vector3d m = to_map * lidar::position_of(p);
     lidar::LidarPoint q = p;
     q.x = static_cast<float>(m.x());
     q.y = static_cast<float>(m.y());
@@ -111,7 +112,7 @@ std::vector<Eigen::Vector3d> vehicle_points(const sim::SimulatedFrame& frame, co
     const lidar::LidarPoint& p = map_points[i];
     if (std::hypot(static_cast<double>(p.x) - distance, static_cast<double>(p.y)) > roi_radius)
       continue;
-    out.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
+    out.push_back(lidar::position_of(p));
     times.push_back(p.time_ns);
   }
   return out;

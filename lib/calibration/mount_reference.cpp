@@ -13,6 +13,7 @@
 #include "calibration/coarse_search.h"
 #include "common/angles.h"
 #include "common/symmetric_eigen.h"
+#include "lidar/point_eigen.h"
 
 namespace rsu::calibration {
 namespace {
@@ -53,7 +54,7 @@ MountReference::MountReference(const std::vector<std::vector<lidar::LidarPoint>>
     std::unordered_map<std::int64_t, Scatter> cells;
     for (const auto& frame : reference) {
       for (const lidar::LidarPoint& p : frame) {
-        const Eigen::Vector3d q = Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+        const Eigen::Vector3d q = lidar::position_of(p);
         const std::optional<std::int64_t> key = voxel_key(q, size);
         if (!key || q.norm() < config_.min_range_m)
           continue;
@@ -160,7 +161,7 @@ MountDrift MountReference::estimate(std::span<const lidar::LidarPoint> rotation,
       std::max<std::size_t>(1, rotation.size() / std::max<std::size_t>(1, config_.sample_points));
   for (std::size_t i = 0; i < rotation.size(); i += stride) {
     const lidar::LidarPoint& p = rotation[i];
-    const Eigen::Vector3d q = Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+    const Eigen::Vector3d q = lidar::position_of(p);
     if (q.allFinite() && q.norm() >= config_.min_range_m)
       points.push_back(q);
   }

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "common/angles.h"
+#include "lidar/point_eigen.h"
 
 namespace rsu::core {
 namespace {
@@ -92,7 +93,7 @@ void SweepOccluders::set_unfinished(std::span<const std::vector<lidar::LidarPoin
     for (const lidar::LidarPoint& p : points)
       k.xy.emplace_back(p.x, p.y);
     const lidar::LidarPoint& first = points.front();  // as perception::Detection holds it
-    k.first = {static_cast<double>(first.x), static_cast<double>(first.y), static_cast<double>(first.z)};
+    k.first = lidar::position_of(first);
     unfinished_.push_back(std::move(k));
   }
 }

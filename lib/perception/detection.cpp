@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "perception/detection.h"
 
+#include "lidar/point_eigen.h"
+
 namespace rsu::perception {
 namespace {
 
@@ -16,7 +18,7 @@ Detection detect_points(std::size_t n, PointAt point_at, const Eigen::Vector2d& 
   TimeNs offset_sum = 0;  // relative to t0: a detection spans well under a second, so no overflow
   for (std::size_t k = 0; k < n; ++k) {
     const lidar::LidarPoint& p = point_at(k);
-    d.points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
+    d.points.push_back(lidar::position_of(p));
     footprint.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y));
     offset_sum += p.time_ns - t0;
   }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // SweepOccluders (sweep_occluders.h): which other objects' points may hide a released vehicle.
 #include "core/sweep_occluders.h"
+#include "lidar/point_eigen.h"
 
 #include <gtest/gtest.h>
 
@@ -70,7 +71,7 @@ TEST(SweepOccluders, OpenClustersButTheVehiclesOwn) {
   occluders.set_unfinished(open);
   HeldVehicle held;
   for (const lidar::LidarPoint& p : own)  // as perception::Detection holds them
-    held.points.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
+    held.points.push_back(lidar::position_of(p));
   const std::vector<Eigen::Vector2d> got = occluders.of(held);
   ASSERT_EQ(got.size(), in_front.size());
   for (const Eigen::Vector2d& xy : got)

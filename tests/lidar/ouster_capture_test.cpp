@@ -28,6 +28,7 @@
 #include "io/yaml_field.h"
 #include "lidar/ouster/ouster_decoder.h"
 #include "lidar/pcap.h"
+#include "lidar/point_eigen.h"
 #include "tests/lidar/ouster_test_packets.h"
 #include "tests/lidar/real_data.h"
 
@@ -214,7 +215,7 @@ void check_frame_geometry(const Metadata& m, const Frame& f) {
   for (const LidarPoint& p : f.points) {
     const int column = f.time_column.at(static_cast<std::uint64_t>(p.time_ns));  // time is a column's
     const double range = f.column_ranges.at(column).at(p.ring) * 1e-3;
-    const Eigen::Vector3d v = Eigen::Vector3f(p.x, p.y, p.z).cast<double>() - origin;
+    const Eigen::Vector3d v = position_of(p) - origin;
     const double dist = v.norm();
     nearest = std::min(nearest, dist);
     // The range is measured from |beam| behind the beam origin, itself |beam| from the lidar origin.
@@ -292,7 +293,7 @@ std::map<int, std::vector<double>> ring_profiles(const Metadata& m, const Frame&
     const int bin = static_cast<int>(std::lround(azimuth / (2 * kPi) * w)) % w;
     auto& profile = out[p.ring];
     profile.resize(static_cast<std::size_t>(w), 0.0);
-    profile[static_cast<std::size_t>((bin + w) % w)] = Eigen::Vector3f(p.x, p.y, p.z).cast<double>().norm();
+    profile[static_cast<std::size_t>((bin + w) % w)] = position_of(p).norm();
   }
   return out;
 }
@@ -372,7 +373,7 @@ std::string summary(const Capture& c, const Decoded& d) {
     for (const LidarPoint& p : f.points) {
       auto& [n, sum] = rings[p.ring];
       ++n;
-      sum += Eigen::Vector3f(p.x, p.y, p.z).cast<double>().norm();
+      sum += position_of(p).norm();
     }
     for (const auto& [ring, r] : rings) {
       out << "  ring " << ring << ": " << r.first << " points, mean distance " << fixed(r.second / r.first, 3)
@@ -381,7 +382,7 @@ std::string summary(const Capture& c, const Decoded& d) {
     const std::size_t step = f.points.size() / 25 + 1;
     for (std::size_t i = 0; i < f.points.size(); i += step) {
       const LidarPoint& p = f.points[i];
-      const Eigen::Vector3d mm = Eigen::Vector3f(p.x, p.y, p.z).cast<double>() * 1e3;
+      const Eigen::Vector3d mm = position_of(p) * 1e3;
       out << "  point " << i << ": ring " << p.ring << " t " << p.time_ns << " azimuth "
           << fixed(static_cast<double>(p.azimuth_rad) * 180 / kPi, 2) << " deg, xyz " << fixed(mm.x(), 0)
           << " " << fixed(mm.y(), 0) << " " << fixed(mm.z(), 0) << " mm, intensity " << p.intensity << "\n";

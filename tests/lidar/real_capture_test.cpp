@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "io/pcd_io.h"
+#include "lidar/point_eigen.h"
 #include "lidar/velodyne_decoder.h"
 #include "real_data.h"
 
@@ -20,8 +21,7 @@ namespace rsu::lidar {
 namespace {
 
 double range_m(const LidarPoint& p) {
-  const Eigen::Vector3d v(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
-  return v.norm();
+  return position_of(p).norm();
 }
 
 // Decodes every data packet of a capture (each resolved against its record time) and keeps the points

@@ -2,6 +2,7 @@
 // SweepClusterer: clusters are released exactly when the sweep has passed them far enough that no
 // later point can join them (the geometric rule in sweep_clusterer.h), computed here independently.
 #include "perception/sweep_clusterer.h"
+#include "lidar/point_eigen.h"
 
 #include <gtest/gtest.h>
 
@@ -680,7 +681,7 @@ void check_exact_against_offline(const lidar::SensorModel& model, const std::vec
   std::vector<bool> foreground;
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
     lidar::LidarPoint p = frame.frame.points[i];
-    const Eigen::Vector3d m = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+    const Eigen::Vector3d m = to_map * lidar::position_of(p);
     p.x = static_cast<float>(m.x());
     p.y = static_cast<float>(m.y());
     p.z = static_cast<float>(m.z());

@@ -23,6 +23,7 @@
 #include "common/angles.h"
 #include "common/pose.h"
 #include "common/time.h"
+#include "lidar/point_eigen.h"
 #include "lidar/sensor_model.h"
 #include "perception/azimuth_thinning.h"
 #include "perception/detection.h"
@@ -149,7 +150,7 @@ Sweep sweep_of(const lidar::SensorModel& model, const Pose3& mount, const sim::V
   const Eigen::Isometry3d to_map = mount.to_isometry();
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
     const lidar::LidarPoint& p = frame.frame.points[i];
-    const Eigen::Vector3d m = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+    const Eigen::Vector3d m = to_map * lidar::position_of(p);
     if (m.z() < kGroundFilterM)
       continue;
     // The vehicle's own returns are its points; any other object's are what may hide part of it (rsud

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/lidar_simulator.h"
+#include "lidar/point_eigen.h"
 
 #include <gtest/gtest.h>
 
@@ -43,7 +44,7 @@ Building wall_at_8m() {
 }
 
 Eigen::Vector3d xyz(const lidar::LidarPoint& p) {
-  return Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+  return lidar::position_of(p);
 }
 
 // A VLP-16 2 m above an empty ground plane: each downward ring draws a circle of radius
@@ -377,7 +378,7 @@ TEST(SimOusterSimulator, PacketsDecodeToPointsOnTheSceneInEachProfile) {
       ASSERT_EQ(decoder.decode(bytes, points), lidar::ouster::PacketResult::accepted) << k;
       EXPECT_EQ(decoder.last_packet().first_time_ns, sim.packet_time_ns(k) + 1'000'000'000);
       for (const lidar::LidarPoint& p : points) {
-        const Eigen::Vector3d x = to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+        const Eigen::Vector3d x = to_map * lidar::position_of(p);
         if (std::abs(x.z()) < tolerance)
           ++on_ground;
         else if (std::abs(x.head<2>().dot(normal) - 8.0) < tolerance)

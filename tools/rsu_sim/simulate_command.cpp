@@ -14,6 +14,7 @@
 
 #include "io/pcd_io.h"
 #include "lidar/pcap.h"
+#include "lidar/point_eigen.h"
 #include "lidar/velodyne_packet.h"
 #include "sim/lidar_simulator.h"
 #include "sim/parallel_indices.h"
@@ -57,7 +58,7 @@ void write_topdown(const std::filesystem::path& out_dir, const sim::Scenario& sc
   points << "x,y,z,label\n";
   for (std::size_t i = 0; i < frame.frame.points.size(); ++i) {
     const lidar::LidarPoint& p = frame.frame.points[i];
-    const Eigen::Vector3d m = sensor_to_map * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
+    const Eigen::Vector3d m = sensor_to_map * lidar::position_of(p);
     const auto& truth = frame.truth[i];
     const long label =
         truth.surface == sim::SurfaceClass::kVehicle ? static_cast<long>(truth.vehicle_id) : -1L;
