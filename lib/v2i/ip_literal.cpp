@@ -30,7 +30,11 @@ std::optional<IpLiteral> parse_ip_literal(std::string_view text) {
 
 bool is_unicast(const IpLiteral& address) {
   const auto& b = address.bytes;
-  if (address.ipv4) {
+  // An IPv4-mapped IPv6 literal (::ffff:a.b.c.d, RFC 4291 2.5.5.2) is the IPv4 address to a dual-stack
+  // socket, whichever way it was written: "::ffff:224.0.0.1" is a multicast group as "224.0.0.1" is.
+  const bool mapped = std::all_of(b.begin(), b.begin() + 10, [](unsigned char x) { return x == 0; }) &&
+                      b[10] == 0xff && b[11] == 0xff;
+  if (mapped) {
     const bool unspecified = b[12] == 0;  // 0.0.0.0/8: "this network"
     const bool multicast = b[12] >= 224 && b[12] <= 239;
     const bool broadcast = b[12] == 255 && b[13] == 255 && b[14] == 255 && b[15] == 255;

@@ -21,7 +21,8 @@ struct IpLiteral {
 // most 64 characters, no embedded NUL).
 std::optional<IpLiteral> parse_ip_literal(std::string_view text);
 
-// A literal that names one host: not unspecified (0.0.0.0/8, ::), multicast or IPv4 broadcast.
+// A literal that names one host: not unspecified (0.0.0.0/8, ::), multicast or IPv4 broadcast (an
+// IPv4-mapped IPv6 literal judged as its IPv4 address).
 bool is_unicast(const IpLiteral& address);
 
 // Whether both are literals of the same host, whatever the spelling ("127.0.0.1" and the dual-stack
