@@ -73,6 +73,8 @@ std::vector<std::size_t> outside_octagon(std::span<const float> x, std::span<con
 }  // namespace
 
 std::vector<std::size_t> convex_hull_vertices(std::span<const float> x, std::span<const float> y) {
+  if (x.empty() || y.empty())
+    return {};  // the octagon's extremes would name point 0
   std::vector<std::size_t> candidates = outside_octagon(x.first(std::min(x.size(), y.size())), y);
   std::sort(candidates.begin(), candidates.end(),
             [&](std::size_t a, std::size_t b) { return x[a] < x[b] || (x[a] == x[b] && y[a] < y[b]); });
