@@ -3,6 +3,7 @@
 // which values are drawn, so simulated noise is reproducible whatever the threading or culling.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -17,9 +18,12 @@ constexpr std::uint64_t mix64(std::uint64_t z) {
   return z ^ (z >> 31);
 }
 
-// Uniform in (0, 1), never exactly 0 (safe for log).
+// Uniform in (0, 1), never exactly 0 or 1 (safe for log, and for log(1 - u) in normal_quantile). The top
+// 53 bits all ones would give 1 - 2^-54, which rounds to 1.0 (normal_quantile(1.0) is NaN): that one
+// value is held at the largest double below 1, and every other stays as it was.
 constexpr double uniform_open01(std::uint64_t bits) {
-  return (static_cast<double>(bits >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+  return std::min((static_cast<double>(bits >> 11) + 0.5) * (1.0 / 9007199254740992.0),
+                  1.0 - 1.0 / 9007199254740992.0);
 }
 
 // A pair of independent standard normal variates for the key (seed, stream, index), Box-Muller.
