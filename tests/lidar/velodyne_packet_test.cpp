@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/angles.h"
 #include "packet_stream.h"
@@ -263,6 +264,65 @@ TEST(LidarVelodynePacket, ModelsWithoutPacketFormatAreRefused) {
 TEST(LidarVelodynePacket, ResultNames) {
   EXPECT_EQ(to_string(DecodeResult::accepted), "accepted");
   EXPECT_EQ(to_string(DecodeResult::azimuth_out_of_range), "azimuth_out_of_range");
+}
+
+// The packet's hour is the one that puts its time past the hour nearest the reference: across the top of
+// the hour both ways, at the half hour, before 1970 and at absurd references (no overflow).
+TEST(LidarVelodynePacket, ResolveHourTakesTheNearestHour) {
+  const TimeNs day = 20000LL * 24 * kHour;  // 2024-10-04, 00:00 UTC
+  const TimeNs eleven = day + 11 * kHour;
+  // Received at 10:59:59.95, stamped 0.02 s past the hour: 11:00:00.02 (the sensor's clock is ahead).
+  EXPECT_EQ(resolve_hour(20 * kNsPerMs, eleven - 50 * kNsPerMs), eleven + 20 * kNsPerMs);
+  // Received at 11:00:00.05, stamped 59:59.98: 10:59:59.98.
+  EXPECT_EQ(resolve_hour(kHour - 20 * kNsPerMs, eleven + 50 * kNsPerMs), eleven - 20 * kNsPerMs);
+  // Within the hour.
+  EXPECT_EQ(resolve_hour(17 * 60 * kNsPerSecond, eleven + 20 * 60 * kNsPerSecond),
+            eleven + 17 * 60 * kNsPerSecond);
+  // Half an hour either way stays in the reference's hour; a nanosecond more goes to the next or previous.
+  EXPECT_EQ(resolve_hour(0, eleven + kHour / 2), eleven);
+  EXPECT_EQ(resolve_hour(0, eleven + kHour / 2 + 1), eleven + kHour);
+  EXPECT_EQ(resolve_hour(kHour / 2 + 10, eleven), eleven + kHour / 2 + 10 - kHour);
+  // Before 1970 (a reference of -0.01 s): the hour before the epoch.
+  EXPECT_EQ(resolve_hour(kHour - 5 * kNsPerMs, -10 * kNsPerMs), -5 * kNsPerMs);
+  // Absurd references are clamped, not overflowed: the result is some time with the stamp past its hour.
+  for (const TimeNs reference : {std::numeric_limits<TimeNs>::max(), std::numeric_limits<TimeNs>::min()}) {
+    const TimeNs t = resolve_hour(123 * kNsPerMs, reference);
+    const TimeNs past = ((t % kHour) + kHour) % kHour;
+    EXPECT_EQ(past, 123 * kNsPerMs);
+  }
+}
+
+std::vector<std::uint8_t> position_packet(std::uint32_t timestamp_us, const std::string& nmea) {
+  std::vector<std::uint8_t> p(512, 0);
+  for (int i = 0; i < 4; ++i)  // bytes 198-201, little-endian (the VLP-16 manual's position packet)
+    p[198 + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(timestamp_us >> (8 * i));
+  for (std::size_t i = 0; i < nmea.size(); ++i)
+    p[206 + i] = static_cast<std::uint8_t>(nmea[i]);
+  return p;
+}
+
+TEST(LidarVelodynePacket, PositionPacketTimestampAndSentence) {
+  const std::string rmc = "$GPRMC,220243,A,3708.5809,N,12139.7813,W,028.8,158.3,111212,013.8,E,D*14";
+  const auto with_gps = parse_position_packet(position_packet(3'599'999'999U, rmc + "\r\n"));
+  ASSERT_TRUE(with_gps);
+  EXPECT_EQ(with_gps->timestamp_us, 3'599'999'999U);
+  EXPECT_EQ(with_gps->nmea, rmc);  // up to the CR
+  EXPECT_EQ(parse_position_packet(position_packet(7, rmc + "\n$GPGGA"))->nmea, rmc);
+  const auto without = parse_position_packet(position_packet(0, ""));  // no GPS receiver: NULs
+  ASSERT_TRUE(without);
+  EXPECT_TRUE(without->nmea.empty());
+  // A sentence that fills the packet to its end (306 bytes, no terminator) stops at the packet's end.
+  const auto full = parse_position_packet(position_packet(1, std::string(306, 'x')));
+  ASSERT_TRUE(full);
+  EXPECT_EQ(full->nmea.size(), 306U);
+  // Refused: a timestamp of an hour or more, any other length.
+  EXPECT_FALSE(parse_position_packet(position_packet(3'600'000'000U, rmc)));
+  EXPECT_FALSE(parse_position_packet(position_packet(0xffffffffU, rmc)));
+  std::vector<std::uint8_t> short_packet = position_packet(5, rmc);
+  short_packet.pop_back();
+  EXPECT_FALSE(parse_position_packet(short_packet));
+  EXPECT_FALSE(parse_position_packet(std::vector<std::uint8_t>(1206, 0)));  // a data packet's length
+  EXPECT_FALSE(parse_position_packet({}));
 }
 
 }  // namespace
