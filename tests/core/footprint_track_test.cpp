@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <optional>
+#include <random>
 
 #include <Eigen/Core>
 
@@ -194,6 +196,77 @@ TEST(FootprintTrack, ALongDriveStaysBoundedAndHonest) {
   EXPECT_GT(sent, 30);
   EXPECT_EQ(run.stats.track_conflicts, 0U);
   EXPECT_EQ(run.stats.track_resets, 0U);
+}
+
+// The carried bound's reach along a direction, against the region written out: the segment [lo, hi] along
+// its axis, widened by the along error, times the band across it, widened by the across error, moved by
+// the motion; its projection's ends are those of its four corners.
+TEST(FootprintTrack, CarriedIntervalIsTheCarriedRegionsProjection) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 500; ++trial) {
+    FootprintBound b;
+    b.centre = {20.0 * u(rng), 20.0 * u(rng)};
+    const double yaw = 3.2 * u(rng);
+    b.axis = {std::cos(yaw), std::sin(yaw)};
+    b.lo = -0.1 - 2.0 * std::abs(u(rng));
+    b.hi = 0.1 + 2.0 * std::abs(u(rng));
+    b.across_half_m = 0.5 * std::abs(u(rng));
+    const Eigen::Vector2d motion(2.0 * u(rng), 2.0 * u(rng));
+    const double along_error = 0.5 * std::abs(u(rng)), across_error = 0.3 * std::abs(u(rng));
+    const Eigen::Vector2d origin(20.0 * u(rng), 20.0 * u(rng));
+    const double turn = 3.2 * u(rng);
+    const Eigen::Vector2d direction(std::cos(turn), std::sin(turn));
+    const Eigen::Vector2d across(-b.axis.y(), b.axis.x());
+    double lo = INFINITY, hi = -INFINITY;
+    for (const double s : {b.lo - along_error, b.hi + along_error}) {
+      for (const double t : {-(b.across_half_m + across_error), b.across_half_m + across_error}) {
+        const double v = (b.centre + motion + s * b.axis + t * across - origin).dot(direction);
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+    }
+    const auto [got_lo, got_hi] = carried_interval(b, motion, along_error, across_error, origin, direction);
+    EXPECT_NEAR(got_lo, lo, 1e-9) << "trial " << trial;
+    EXPECT_NEAR(got_hi, hi, 1e-9) << "trial " << trial;
+  }
+}
+
+// What one rotation's fix bounds: an interval-placed centre its hard interval plus 3 sigma of the other
+// terms of its variance; any other the larger of 3 sigma and min_bound_half_m. Across, 3 sigma.
+TEST(FootprintTrack, BoundOfAFixFromItsCovariance) {
+  const FootprintTrackConfig config;
+  perception::CorrectedPose fix;
+  fix.pose = {4.0, -2.0, std::numbers::pi / 6.0};
+  const Eigen::Vector2d axis(std::cos(fix.pose.yaw), std::sin(fix.pose.yaw));
+  const Eigen::Vector2d across(-axis.y(), axis.x());
+  // Along 0.2 m sigma, across 0.05 m, uncorrelated in the box frame.
+  const Eigen::Matrix2d local = Eigen::Vector2d(0.04, 0.0025).asDiagonal();
+  Eigen::Matrix2d frame;
+  frame << axis, across;
+  fix.covariance = Eigen::Matrix3d::Identity() * 1e-4;
+  fix.covariance.topLeftCorner<2, 2>() = frame * local * frame.transpose();
+
+  fix.length_axis.anchor = perception::AxisAnchor::face;
+  FootprintBound b = bound_of(fix, config);
+  EXPECT_NEAR(b.hi, 3.0 * 0.2, 1e-12);
+  EXPECT_NEAR(b.lo, -3.0 * 0.2, 1e-12);
+  EXPECT_NEAR(b.across_half_m, 3.0 * 0.05, 1e-12);
+  EXPECT_NEAR((b.centre - Eigen::Vector2d(4.0, -2.0)).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(b.axis.dot(axis), 1.0, 1e-15);
+
+  fix.covariance.topLeftCorner<2, 2>() = frame * Eigen::Vector2d(1e-4, 1e-4).asDiagonal() * frame.transpose();
+  EXPECT_NEAR(bound_of(fix, config).hi, config.min_bound_half_m, 1e-12);  // 3 sigma = 0.03 m: the floor
+
+  // An interval 0.8 m wide holding the centre, its variance the uniform's (0.8^2 / 12) plus 0.05^2 of noise.
+  fix.length_axis.anchor = perception::AxisAnchor::interval;
+  fix.length_axis.interval_m = 0.8;
+  const double variance = 0.8 * 0.8 / 12.0 + 0.05 * 0.05;
+  fix.covariance.topLeftCorner<2, 2>() =
+      frame * Eigen::Vector2d(variance, 0.0025).asDiagonal() * frame.transpose();
+  b = bound_of(fix, config);
+  EXPECT_NEAR(b.hi, 0.4 + 3.0 * 0.05, 1e-9);
+  EXPECT_NEAR(b.lo, -(0.4 + 3.0 * 0.05), 1e-9);
 }
 
 }  // namespace
