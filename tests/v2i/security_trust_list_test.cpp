@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "test_keys.h"
+#include "v2i/security/key_text.h"
 #include "v2i/security/trust_list.h"
 
 namespace rsu::v2i::security {
@@ -66,6 +68,30 @@ TEST(TrustList, BrokenLinesAreLocatedErrors) {
   EXPECT_EQ(error_of("rsu " + pk + " 1\nvehicle " + pk + " 2\n"),
             "trust.list:2: key " + to_hex(key_from(5).key_id()) + " is listed twice");
   EXPECT_THROW(TrustList().add({key_from(6).public_key(), SignerRole::kRsu, {}}), std::invalid_argument);
+}
+
+// The lines every key and trust-list file is read by: comments and blank lines gone, fields split on
+// blanks (spaces, tabs, a CRLF file's CR), each line numbered as an editor numbers it.
+TEST(KeyText, MeaningfulLinesKeepTheirNumbers) {
+  const std::string text =
+      "# a comment\n"
+      "\n"
+      "ed25519-public-key  abc\t def # trailing comment\r\n"
+      "   \t\r\n"
+      "#only\n"
+      "vehicle 7\r\n"
+      "last line without newline";
+  const std::vector<TextLine> lines = meaningful_lines(text);
+  ASSERT_EQ(lines.size(), 3U);
+  EXPECT_EQ(lines[0].number, 3);
+  EXPECT_EQ(lines[0].fields, (std::vector<std::string>{"ed25519-public-key", "abc", "def"}));
+  EXPECT_EQ(lines[1].number, 6);
+  EXPECT_EQ(lines[1].fields, (std::vector<std::string>{"vehicle", "7"}));
+  EXPECT_EQ(lines[2].number, 7);
+  EXPECT_EQ(lines[2].fields, (std::vector<std::string>{"last", "line", "without", "newline"}));
+  EXPECT_TRUE(meaningful_lines("").empty());
+  EXPECT_TRUE(meaningful_lines("\n\n# nothing\n\r\n").empty());
+  EXPECT_EQ(meaningful_lines("a#b c").front().fields, (std::vector<std::string>{"a"}));
 }
 
 }  // namespace
