@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <numbers>
 
 namespace rsu {
 namespace {
@@ -46,7 +48,7 @@ TEST(Random, NormalQuantileInvertsTheDistributionFunction) {
   for (double lg = -15.0; lg <= std::log10(0.5); lg += 0.05) {
     for (const double p : {std::pow(10.0, lg), 0.02425, 0.0242, 0.0243}) {
       const double x = normal_quantile(p);
-      const double density = std::exp(-0.5 * x * x) / std::sqrt(2.0 * M_PI);
+      const double density = std::exp(-0.5 * x * x) / std::sqrt(2.0 * std::numbers::pi);
       const double refined = x - (normal_cdf(x) - p) / density;
       EXPECT_LE(std::abs(x - refined), 1.2e-9 * std::max(1.0, std::abs(refined))) << "p " << p;
       EXPECT_LT(x, 0.0 + 1e-15) << "p " << p;  // the lower half
@@ -56,7 +58,7 @@ TEST(Random, NormalQuantileInvertsTheDistributionFunction) {
     }
   }
   // Increasing.
-  double last = -INFINITY;
+  double last = -std::numeric_limits<double>::infinity();
   for (double p = 1e-6; p < 1.0 - 1e-6; p += 1e-3) {
     EXPECT_GT(normal_quantile(p), last) << "p " << p;
     last = normal_quantile(p);

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -218,7 +219,7 @@ TEST(FootprintTrack, CarriedIntervalIsTheCarriedRegionsProjection) {
     const double turn = 3.2 * u(rng);
     const Eigen::Vector2d direction(std::cos(turn), std::sin(turn));
     const Eigen::Vector2d across(-b.axis.y(), b.axis.x());
-    double lo = INFINITY, hi = -INFINITY;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (const double s : {b.lo - along_error, b.hi + along_error}) {
       for (const double t : {-(b.across_half_m + across_error), b.across_half_m + across_error}) {
         const double v = (b.centre + motion + s * b.axis + t * across - origin).dot(direction);
