@@ -303,16 +303,21 @@ std::vector<std::uint8_t> position_packet(std::uint32_t timestamp_us, const std:
 
 TEST(LidarVelodynePacket, PositionPacketTimestampAndSentence) {
   const std::string rmc = "$GPRMC,220243,A,3708.5809,N,12139.7813,W,028.8,158.3,111212,013.8,E,D*14";
-  const auto with_gps = parse_position_packet(position_packet(3'599'999'999U, rmc + "\r\n"));
+  // The sentence is a view of the packet's bytes: the packets are kept while it is read.
+  const std::vector<std::uint8_t> gps_packet = position_packet(3'599'999'999U, rmc + "\r\n");
+  const auto with_gps = parse_position_packet(gps_packet);
   ASSERT_TRUE(with_gps);
   EXPECT_EQ(with_gps->timestamp_us, 3'599'999'999U);
   EXPECT_EQ(with_gps->nmea, rmc);  // up to the CR
-  EXPECT_EQ(parse_position_packet(position_packet(7, rmc + "\n$GPGGA"))->nmea, rmc);
-  const auto without = parse_position_packet(position_packet(0, ""));  // no GPS receiver: NULs
+  const std::vector<std::uint8_t> two_sentences = position_packet(7, rmc + "\n$GPGGA");
+  EXPECT_EQ(parse_position_packet(two_sentences)->nmea, rmc);
+  const std::vector<std::uint8_t> no_gps = position_packet(0, "");
+  const auto without = parse_position_packet(no_gps);  // no GPS receiver: NULs
   ASSERT_TRUE(without);
   EXPECT_TRUE(without->nmea.empty());
   // A sentence that fills the packet to its end (306 bytes, no terminator) stops at the packet's end.
-  const auto full = parse_position_packet(position_packet(1, std::string(306, 'x')));
+  const std::vector<std::uint8_t> full_packet = position_packet(1, std::string(306, 'x'));
+  const auto full = parse_position_packet(full_packet);
   ASSERT_TRUE(full);
   EXPECT_EQ(full->nmea.size(), 306U);
   // Refused: a timestamp of an hour or more, any other length.
