@@ -236,7 +236,7 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
   f.expect_map({"background_method", "ground_z", "ground_min_height_m", "range_image_margin_m",
                 "reference_match_radius_m", "cluster_tolerance_m", "cluster_min_points", "cluster_max_points",
                 "correction", "max_position_sigma_m", "coverage_radius_m", "release_margin_deg",
-                "joint_release_range_gap_m", "footprint_track", "prepare_thread"});
+                "joint_release_range_gap_m", "footprint_track", "prepare_thread", "release_fixed_open"});
   auto& p = c.core.perception;
   if (f.has("background_method")) {
     const YamlField m = f.child("background_method");
@@ -252,6 +252,8 @@ void read_perception(const YamlField& f, DaemonConfig& c) {
   }
   if (f.has("prepare_thread"))
     c.prepare_thread = bool_of(f.child("prepare_thread"));
+  if (f.has("release_fixed_open"))
+    c.core.release_fixed_open = bool_of(f.child("release_fixed_open"));
   p.ground.ground_z = f.number_or("ground_z", p.ground.ground_z);
   p.ground.min_height = f.non_negative_or("ground_min_height_m", p.ground.min_height);
   p.range_image.margin_m = f.non_negative_or("range_image_margin_m", p.range_image.margin_m);

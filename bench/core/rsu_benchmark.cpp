@@ -273,6 +273,7 @@ void BM_EndToEndLatency(benchmark::State& state) {
   const auto mount_check = static_cast<MountCheck>(state.range(3));
   RsuCoreConfig config = bench_config(rec.model);
   config.prepare_fixes = state.range(4) >= 1;
+  config.release_fixed_open = state.range(4) != 3;
   const bool prepare_elsewhere = state.range(4) == 2;
   std::vector<double> latency_ms;
   std::vector<double> latency_cpu_ms;
@@ -397,9 +398,10 @@ void BM_EndToEndLatency(benchmark::State& state) {
                 : mount_check == MountCheck::kAfterSend
                     ? ", mount check on the loop after the send (baseline)"
                     : ", mount check before the batch (baseline)",
-                !config.prepare_fixes ? ", fixes not prepared (baseline)"
-                : prepare_elsewhere   ? ", fixes prepared on a thread that keeps up"
-                                      : "");
+                !config.prepare_fixes        ? ", fixes not prepared (baseline)"
+                : !config.release_fixed_open ? ", no cluster released open (baseline)"
+                : prepare_elsewhere          ? ", fixes prepared on a thread that keeps up"
+                                             : "");
   state.SetLabel(label);
 }
 // Args: sensor (0 = VLP-16, 1 = VLP-32C, 2 = OS1-128 2048x10), range of the vehicle from the LiDAR (m), the
@@ -408,9 +410,13 @@ void BM_EndToEndLatency(benchmark::State& state) {
 // 2 = on a thread of its own, as rsud does; 1 = on the loop after the corrections are sent; 0 = before the
 // next batch), fixes prepared while the sweep closes the cluster (RsuCoreConfig::prepare_fixes: 1 = on the
 // loop after the send, as rsud by default; 2 = on another thread, modelled as one whose results are always
-// back before the next packet, so a bound; 0 = not, the baseline).
+// back before the next packet, so a bound; 0 = not, the baseline; 3 = on the loop, every cluster released
+// only once closed: RsuCoreConfig::release_fixed_open false, its baseline).
 BENCHMARK(BM_EndToEndLatency)
     ->ArgsProduct({{0, 1}, {10, 20, 30, 40}, {0, 1}, {0, 1, 2}, {1}})
+    ->ArgsProduct({{0, 1}, {10, 20, 30, 40}, {0, 1}, {2}, {3}})
+    ->Args({0, 10, 2, 2, 3})
+    ->Args({1, 10, 2, 2, 3})
     ->ArgsProduct({{0, 1}, {10, 20, 30, 40}, {0, 1}, {2}, {0}})
     ->ArgsProduct({{1}, {10, 20, 30, 40}, {0, 1}, {2}, {2}})
     ->Args({0, 10, 2, 2, 1})
@@ -423,9 +429,11 @@ BENCHMARK(BM_EndToEndLatency)
 BENCHMARK(BM_EndToEndLatency)
     ->ArgsProduct({{2}, {10, 20, 30, 40}, {0, 1}, {2, 1}, {1}})
     ->ArgsProduct({{2}, {10, 20, 30, 40}, {0, 1}, {2}, {2}})
+    ->ArgsProduct({{2}, {10, 20, 30, 40}, {0, 1}, {2}, {3}})
     ->Args({2, 10, 2, 2, 1})
     ->Args({2, 10, 2, 1, 1})
     ->Args({2, 10, 2, 2, 0})
+    ->Args({2, 10, 2, 2, 3})
     ->Iterations(3)
     ->Unit(benchmark::kMillisecond);
 

@@ -17,6 +17,7 @@ void report(const lidar::PacketOrderStats& o, const perception::SweepClustererSt
   out.add("packet", "clock_offset", l.packets_clock_offset);
   out.add("sweep", "foreground_points", s.foreground_points);
   out.add("sweep", "clusters_released", s.clusters_released);
+  out.add("sweep", "clusters_released_open", s.clusters_released_open);
   out.add("sweep", "clusters_dropped_small", s.clusters_dropped_small);
   out.add("sweep", "clusters_dropped_large", s.clusters_dropped_large);
   out.add("sweep", "clusters_dropped_cut_at_start", s.clusters_dropped_cut_at_start);

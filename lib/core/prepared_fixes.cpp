@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
 #include "core/rsu_core.h"
+#include "lidar/point_eigen.h"
 #include "tracking/association.h"
 
 namespace rsu::core {
@@ -90,6 +92,21 @@ Prepared prepare(Preparation preparation) {
   return out;
 }
 
+std::array<Eigen::Vector2d, 4> grown_box_outline(const perception::CorrectedPose& fix, double length_m,
+                                                 double width_m) {
+  const double half_length = 0.5 * length_m;
+  const double half_width = 0.5 * width_m;
+  const double yaw_sigma = std::sqrt(std::max(0.0, fix.covariance(2, 2)));
+  const double grow =
+      3.0 * std::hypot(perception::position_sigma_m(fix), yaw_sigma * std::hypot(half_length, half_width));
+  const Eigen::Vector2d along(std::cos(fix.pose.yaw), std::sin(fix.pose.yaw));
+  const Eigen::Vector2d across(-along.y(), along.x());
+  const Eigen::Vector2d centre(fix.pose.x, fix.pose.y);
+  const Eigen::Vector2d l = (half_length + grow) * along;
+  const Eigen::Vector2d w = (half_width + grow) * across;
+  return {centre + l + w, centre + l - w, centre - l - w, centre - l + w};
+}
+
 void PreparedFixes::add_fit(std::vector<lidar::LidarPoint>&& points, perception::Detection detection) {
   if (fits_.size() == kKept)
     fits_.erase(fits_.begin());
@@ -152,9 +169,42 @@ Preparation RsuCore::take_preparation() {
       add_fix_inputs(held, now, p.vehicles);
   }
   prepared_held_ = std::move(held_now);
-  for (perception::SweptCluster& cluster : clusterer_.swept_open())
+  for (perception::SweptCluster& cluster : clusterer_.swept_open()) {
+    if (config_.release_fixed_open) {
+      if (open_handed_.size() == kOpenKept)
+        open_handed_.erase(open_handed_.begin());
+      open_handed_.emplace_back(perception::OpenClusterName{cluster.id, cluster.points.size()},
+                                lidar::position_of(cluster.points.front()));
+    }
     p.clusters.push_back(std::move(cluster.points));
+  }
   return p;
+}
+
+// A prepared fix that sends a correction, of a vehicle gathered with a cluster handed out open: that
+// cluster may be released open once the sweep has passed the fix's grown box (grown_box_outline).
+void RsuCore::note_fixed_open(const PreparedFix& prepared) {
+  if (!config_.release_fixed_open || !prepared.fix.ok())
+    return;
+  const std::vector<Eigen::Vector3d>& points = prepared.inputs.held.points;
+  const v2i::BoxSize& size = prepared.inputs.announcement.size;
+  for (const auto& [name, first] : open_handed_) {
+    if (std::find(points.begin(), points.end(), first) == points.end())
+      continue;
+    if (fixed_open_.size() == kOpenKept)
+      fixed_open_.erase(fixed_open_.begin());
+    fixed_open_.push_back({name, grown_box_outline(prepared.fix.fix.corrected, size.length_m, size.width_m)});
+  }
+}
+
+// The open clusters whose fixed box the sweep has passed (note_fixed_open), to release with the closed.
+std::vector<perception::OpenClusterName> RsuCore::fixed_open_swept() const {
+  std::vector<perception::OpenClusterName> out;
+  for (const FixedOpenCluster& f : fixed_open_) {
+    if (sweep_.swept(f.outline))
+      out.push_back(f.name);
+  }
+  return out;
 }
 
 // What was prepared, kept for the releases; each fitted cluster is also associated and gathered as its
@@ -165,6 +215,7 @@ void RsuCore::record_prepared(Prepared&& prepared) {
   if (prepared.fixer != fixer_)
     return;  // a reload replaced the fixer since: these may differ from what it computes
   for (PreparedFix& fix : prepared.fixes) {
+    note_fixed_open(fix);
     prepared_.add(std::move(fix));
     ++lidar_stats_.fixes_prepared;
   }

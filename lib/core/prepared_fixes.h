@@ -18,6 +18,7 @@
 // on a thread of its own. A result that comes back too late is merely unused.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -34,6 +35,8 @@
 #include "lidar/point.h"
 #include "perception/detection.h"
 #include "perception/lidar_geometry.h"
+#include "perception/size_correction.h"
+#include "perception/sweep_clusterer.h"
 #include "v2i/messages.h"
 
 namespace rsu::core {
@@ -76,6 +79,24 @@ struct Prepared {
 // Fits and fixes what `preparation` holds. Pure, and touching nothing of the core: rsud runs it on a
 // thread of its own.
 Prepared prepare(Preparation preparation);
+
+// Released open (RsuCoreConfig::release_fixed_open). A cluster every laser has swept past is complete
+// unless a later return comes within the clustering tolerance, and near the LiDAR the sweep needs another
+// asin(d / r) to rule that out: 8-10 deg, 2.2-2.8 ms at 10 Hz, for a car passing 4-5 m from the mast. Such
+// a return is the vehicle's only if the vehicle reaches beyond what the sweep has passed. Once its fix is
+// prepared, the fix's box grown by 3 sigma bounds where the vehicle is; when every laser has swept past
+// that too, no return of the vehicle can still come, and the cluster is released open: what would still
+// join it is another object's (a pedestrian beside the car, a pole), which the closed cluster would have
+// mixed into the fix, and it forms a cluster of its own instead. The cluster and the box it waits for:
+struct FixedOpenCluster {
+  perception::OpenClusterName name;
+  std::array<Eigen::Vector2d, 4> outline;  // map frame
+};
+// The corners of `fix`'s box (the announced `length_m` x `width_m` at its pose) grown on every side by 3
+// sigma of a corner's displacement: its position's sigma (the larger axis) and its yaw's turning the
+// corners, independent.
+std::array<Eigen::Vector2d, 4> grown_box_outline(const perception::CorrectedPose& fix, double length_m,
+                                                 double width_m);
 
 class PreparedFixes {
  public:

@@ -99,9 +99,15 @@ LidarStepResult RsuCore::process(std::span<const lidar::LidarPoint> points, Rele
   for (const lidar::LidarPoint& p : points)
     clusterer_.add(p, background_.classify(p) == perception::PointClass::foreground);
   sweep_.advance(points);
-  // Clusters: Euclidean clustering, each cluster released as soon as the sweep has passed it.
-  std::vector<perception::SweptCluster> clusters =
-      release == Release::everything ? clusterer_.release_all() : clusterer_.release_closed();
+  // Clusters: Euclidean clustering, each cluster released as soon as the sweep has passed it (or its
+  // vehicle's fixed box: released open, prepared_fixes.h).
+  std::vector<perception::SweptCluster> clusters = release == Release::everything
+                                                       ? clusterer_.release_all()
+                                                       : clusterer_.release_closed(fixed_open_swept());
+  std::erase_if(fixed_open_, [&](const FixedOpenCluster& f) {
+    return std::any_of(clusters.begin(), clusters.end(),
+                       [&](const perception::SweptCluster& c) { return c.id == f.name.id; });
+  });
   unfinished_current_ = false;  // the clusters open now (occluders_of)
   // Fit: a rectangle for each cluster (L-shape fitting, paper Sec. 3.1).
   std::vector<perception::Detection> detections = detect(std::move(clusters));

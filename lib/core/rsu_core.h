@@ -222,6 +222,10 @@ class RsuCore {
   // The vehicle's notice that `fix` is not sent, and why, when it is owed one and the limits allow it.
   void tell_withheld(const GatheredFix& fix, const v2i::VehicleAnnouncement& a, bool lost_nearby, TimeNs now,
                      LidarStepResult& result);
+  // Released open (prepared_fixes.h): a prepared fix's cluster noted with its box, and those the sweep
+  // has passed.
+  void note_fixed_open(const PreparedFix& prepared);
+  std::vector<perception::OpenClusterName> fixed_open_swept() const;
   // The inputs of `held`'s fix, appended to `out` when its vehicle is registered (prepared_fixes.h).
   void add_fix_inputs(const HeldVehicle& held, TimeNs now, std::vector<FixInputs>& out);
   // Whether LiDAR packets were lost while the sweep crossed `held` (or just before its first points).
@@ -265,6 +269,11 @@ class RsuCore {
   FootprintTracks tracks_;          // each vehicle's footprint bounded over rotations
   // The held vehicles fixed ahead, as (vehicle id, parts gathered, points).
   std::vector<std::tuple<std::uint64_t, std::size_t, std::size_t>> prepared_held_;
+  // Released open (prepared_fixes.h): the clusters handed out open to fit, by name and first point (map
+  // frame), and those whose vehicle's fix is prepared, with the box the sweep must pass; the newest of each.
+  static constexpr std::size_t kOpenKept = 8;
+  std::vector<std::pair<perception::OpenClusterName, Eigen::Vector3d>> open_handed_;
+  std::vector<FixedOpenCluster> fixed_open_;
   CorrectionBuilder corrections_;
   RefusalNotices refusals_;
   WithheldNotices withheld_;

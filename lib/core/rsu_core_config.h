@@ -140,6 +140,12 @@ struct RsuCoreConfig {
   // that decides it is closed, and use the result on its release when its inputs are the same bit for
   // bit (rsu_core.h, prepare_fixes): the corrections are the same, sent sooner. false: the baseline.
   bool prepare_fixes = true;
+  // With prepare_fixes: a cluster not yet closed is released once its vehicle's prepared fix is ready and
+  // every laser has swept past the fix's whole box grown by 3 sigma (prepared_fixes.h, "Released open"):
+  // no return of that vehicle can still come, so a point that would still join the cluster within the
+  // clustering tolerance is another object's, which the closed cluster would have mixed into the fix.
+  // false: every cluster waits until it is closed.
+  bool release_fixed_open = true;
   GatheringConfig gathering;
   // Each connected vehicle's footprint tracked over rotations: what earlier rotations bounded along its
   // length, carried by its own motion and intersected with the current one (core/footprint_track.h).

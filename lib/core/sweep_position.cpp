@@ -44,29 +44,38 @@ void SweepPosition::advance(std::span<const lidar::LidarPoint> points) {
   }
 }
 
-TimeNs SweepPosition::passed_time(std::span<const Eigen::Vector2d> outline) const {
-  if (!known_ || outline.empty())
-    return 0;
+double SweepPosition::still_to_turn(std::span<const Eigen::Vector2d> outline, double beyond) const {
   // Beam azimuths clockwise from the sensor's +x, relative to the first outline point so that an
   // outline across the 0/360 deg cut needs no unwrapping.
   const double reference = mount_.beam_azimuth(outline.front());
   double ahead = 0.0;
-  double nearest = std::numeric_limits<double>::infinity();
-  for (const Eigen::Vector2d& q : outline) {
+  for (const Eigen::Vector2d& q : outline)
     ahead = std::max(ahead, wrap_angle(mount_.beam_azimuth(q) - reference));
+  // Future firings lag the newest point by its laser's offset above the smallest, the lead and the
+  // margin (file comment).
+  const double target = reference + ahead + beyond + lag_rad(latest_);
+  return wrap_angle_positive(target - static_cast<double>(latest_.azimuth_rad));
+}
+
+TimeNs SweepPosition::passed_time(std::span<const Eigen::Vector2d> outline) const {
+  if (!known_ || outline.empty())
+    return 0;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector2d& q : outline)
     nearest = std::min(nearest, (q - mount_.xy()).norm());
-  }
   // The clusterer's rule: a point at range r is closed once the earliest future firing is asin(d / r)
-  // past it, and future firings lag the newest point by its laser's offset above the smallest, the lead
-  // and the margin (file comment).
+  // past it.
   const double d = tolerance_m_;
   const double closing = nearest > d ? std::asin(d / nearest) : std::numbers::pi / 2.0;
-  const double target = reference + ahead + closing + lag_rad(latest_);
-  const double forward = wrap_angle_positive(target - static_cast<double>(latest_.azimuth_rad));
+  const double forward = still_to_turn(outline, closing);
   if (forward > std::numbers::pi)
     return latest_.time_ns;  // already behind the sweep
   const double radians_per_ns = 2.0 * std::numbers::pi / static_cast<double>(rotation_period_ns());
   return latest_.time_ns + static_cast<TimeNs>(forward / radians_per_ns);
+}
+
+bool SweepPosition::swept(std::span<const Eigen::Vector2d> outline) const {
+  return known_ && !outline.empty() && still_to_turn(outline, 0.0) > std::numbers::pi;
 }
 
 }  // namespace rsu::core

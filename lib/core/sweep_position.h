@@ -44,8 +44,15 @@ class SweepPosition {
   // The firing time at which the sweep has passed every point of `outline` (map frame) far enough
   // that no cluster near them can still grow; 0 before the sweep is known or for an empty outline.
   TimeNs passed_time(std::span<const Eigen::Vector2d> outline) const;
+  // Whether every laser has swept past every point of `outline` (map frame): no return from inside it
+  // can still come (the closing angle of passed_time not added). False before the sweep is known or for
+  // an empty outline.
+  bool swept(std::span<const Eigen::Vector2d> outline) const;
 
  private:
+  // How far the sweep must still turn until every later firing points `beyond` past every point of
+  // `outline` (rad, in [0, 2 pi): above pi it is already past); `outline` not empty.
+  double still_to_turn(std::span<const Eigen::Vector2d> outline, double beyond) const;
   // How far behind the newest point's beam azimuth later firings may point: its laser's offset above the
   // smallest, the lead and the margin (the whole spread for a point whose laser is not in the table).
   double lag_rad(const lidar::LidarPoint& newest) const;

@@ -17,6 +17,10 @@ constexpr double kTwoPi = 2.0 * kPi;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+bool in_line_of_sight(const ComponentSummary& a, const ComponentSummary& b) {
+  return b.min_azimuth <= a.max_azimuth && b.max_azimuth >= a.min_azimuth;
+}
+
 }  // namespace
 
 SweepClusterer::SweepClusterer(const SweepConfig& config, const perception::ClusteringConfig& clustering,
@@ -178,12 +182,12 @@ void SweepClusterer::drop_stale() {
   }
 }
 
-std::vector<SweptCluster> SweepClusterer::release_closed() {
-  return release(false);
+std::vector<SweptCluster> SweepClusterer::release_closed(std::span<const OpenClusterName> fixed_open) {
+  return release(false, fixed_open);
 }
 
 std::vector<SweptCluster> SweepClusterer::release_all() {
-  return release(true);
+  return release(true, {});
 }
 
 std::vector<std::vector<lidar::LidarPoint>> SweepClusterer::overtaken_open_points() {
@@ -222,6 +226,7 @@ std::vector<SweptCluster> SweepClusterer::swept_open() {
     if (cut_at_start(members))
       continue;
     SweptCluster cluster;
+    cluster.id = s.first_seq;
     cluster.points.reserve(members.size());
     for (const PendingPoint& m : members)
       cluster.points.push_back(m.point);
@@ -231,7 +236,33 @@ std::vector<SweptCluster> SweepClusterer::swept_open() {
   return out;
 }
 
-std::vector<SweptCluster> SweepClusterer::release(bool everything) {
+SweptCluster SweepClusterer::released(const ComponentSummary& s, std::span<const ComponentSummary> open,
+                                      std::span<const PendingPoint> members) {
+  // Released ahead of nearer open clusters in its line of sight: they become its occluders
+  // (overtaken_open_points), and it may continue behind them. Only for clusters released, not dropped.
+  SweptCluster cluster;
+  cluster.id = s.first_seq;
+  for (const ComponentSummary& o : open) {
+    if (!in_line_of_sight(s, o))
+      continue;
+    // One it did not wait for, farther within the gap: what it holds so far (a fragment of the same
+    // vehicle if it lies in its footprint, core/vehicle_gatherer.h).
+    if (o.min_range >= s.min_range && o.min_range - s.max_range < config_.joint_release_range_gap_m)
+      cluster.open_beyond.push_back(o.box);
+    if (!(o.min_range < s.max_range))
+      continue;
+    cluster.ahead_of_open = true;
+    if (std::find(overtaken_.begin(), overtaken_.end(), o.first_seq) == overtaken_.end())
+      overtaken_.push_back(o.first_seq);
+  }
+  cluster.points.reserve(members.size());
+  for (const PendingPoint& m : members)
+    cluster.points.push_back(m.point);
+  return cluster;
+}
+
+std::vector<SweptCluster> SweepClusterer::release(bool everything,
+                                                  std::span<const OpenClusterName> fixed_open) {
   std::vector<SweptCluster> out;
   if (!everything) {
     drop_stale();
@@ -248,12 +279,23 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   const double a_future = sweep_ - lag_rad_;
   std::vector<std::uint32_t> closed;
   std::vector<ComponentSummary> open;  // copies: take() below changes the components
+  // An open one named in `fixed_open`, unchanged and swept by every laser, goes with them (header).
+  const auto fixed = [&](const ComponentSummary& s) {
+    return a_future > s.max_azimuth &&
+           std::any_of(fixed_open.begin(), fixed_open.end(),
+                       [&](const OpenClusterName& n) { return n.id == s.first_seq && n.size == s.size; });
+  };
+  std::vector<std::uint64_t> released_open;  // first_seq of those
   for (const std::uint32_t c : clusters_.components()) {
     const ComponentSummary& s = clusters_.summary(c);
-    if (everything || a_future > s.close_at)
+    if (everything || a_future > s.close_at) {
       closed.push_back(c);
-    else
+    } else if (fixed(s)) {
+      closed.push_back(c);
+      released_open.push_back(s.first_seq);
+    } else {
       open.push_back(s);
+    }
   }
   if (closed.empty()) {
     return out;
@@ -263,13 +305,10 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
   });
   for (const std::uint32_t c : closed) {
     const ComponentSummary s = clusters_.summary(c);  // a copy: take() below removes the component
-    const double gap = config_.joint_release_range_gap_m;
-    const auto in_line_of_sight = [&](const ComponentSummary& o) {
-      return o.min_azimuth <= s.max_azimuth && o.max_azimuth >= s.min_azimuth;
-    };
     // Waits for an open cluster in its line of sight that starts nearer, within the gap (file comment).
     const bool waits = std::any_of(open.begin(), open.end(), [&](const ComponentSummary& o) {
-      return in_line_of_sight(o) && o.min_range < s.min_range && s.min_range - o.max_range < gap;
+      return in_line_of_sight(s, o) && o.min_range < s.min_range &&
+             s.min_range - o.max_range < config_.joint_release_range_gap_m;
     });
     if (waits)
       continue;
@@ -286,28 +325,11 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything) {
       ++stats_.clusters_dropped_large;
       continue;
     }
-    // Released ahead of nearer open clusters in its line of sight: they become its occluders
-    // (overtaken_open_points), and it may continue behind them. Only for clusters released, not dropped.
-    SweptCluster cluster;
-    for (const ComponentSummary& o : open) {
-      if (!in_line_of_sight(o))
-        continue;
-      // One it did not wait for, farther within the gap: what it holds so far (a fragment of the same
-      // vehicle if it lies in its footprint, core/vehicle_gatherer.h).
-      if (o.min_range >= s.min_range && o.min_range - s.max_range < gap)
-        cluster.open_beyond.push_back(o.box);
-      if (!(o.min_range < s.max_range))
-        continue;
-      cluster.ahead_of_open = true;
-      if (std::find(overtaken_.begin(), overtaken_.end(), o.first_seq) == overtaken_.end())
-        overtaken_.push_back(o.first_seq);
-    }
-    cluster.points.reserve(members.size());
-    for (const PendingPoint& m : members) {
-      cluster.points.push_back(m.point);
-    }
+    SweptCluster cluster = released(s, open, members);
     out.push_back(std::move(cluster));
     ++stats_.clusters_released;
+    if (std::find(released_open.begin(), released_open.end(), s.first_seq) != released_open.end())
+      ++stats_.clusters_released_open;
   }
   return out;
 }

@@ -46,6 +46,12 @@
 // the same vehicle: the released cluster names it (SweptCluster::open_beyond), and the gatherer holds
 // the vehicle for it where it reaches into the vehicle's footprint.
 //
+// Released open (release_closed's `fixed_open`; core/prepared_fixes.h): the closing rule is exact about
+// the cluster, not about the vehicle. RsuCore names an open cluster every laser has swept past once its
+// vehicle's fix, prepared meanwhile, bounds the vehicle inside a box the sweep has passed too: it goes
+// with the closed ones, and a point that would still have joined it (another object's) starts a cluster
+// of its own.
+//
 // Each point's bound is a threshold: it can gain no neighbour once a_future > a + asin(d / r) (the
 // test r sin(a_future - a) > d rearranged; never while r <= d), so a cluster closes once a_future passes the
 // largest of its points' thresholds, kept as the points join (incremental_clustering.h). Clustering is
@@ -98,6 +104,9 @@ struct SweepConfig {
 
 struct SweptCluster {
   std::vector<lidar::LidarPoint> points;  // map frame, in arrival order
+  // The clusterer's name for it while it was open (its first point's number in the stream): what
+  // release_closed's `fixed_open` names. Never reused.
+  std::uint64_t id = 0;
   // Released while a nearer cluster in its line of sight was still open (joint_release_range_gap_m):
   // part of it may be hidden behind that one and show again beyond it.
   bool ahead_of_open = false;
@@ -107,10 +116,17 @@ struct SweptCluster {
   std::vector<Eigen::AlignedBox2d> open_beyond;
 };
 
+// An open cluster as swept_open gave it: its SweptCluster::id and how many points it held then.
+struct OpenClusterName {
+  std::uint64_t id = 0;
+  std::size_t size = 0;
+};
+
 struct SweepClustererStats {
   std::uint64_t points_seen = 0;
   std::uint64_t foreground_points = 0;
   std::uint64_t clusters_released = 0;
+  std::uint64_t clusters_released_open = 0;  // of them, released open (release_closed's fixed_open)
   std::uint64_t clusters_dropped_small = 0;  // fewer than ClusteringConfig::min_points (noise)
   std::uint64_t clusters_dropped_large = 0;  // more than max_points (e.g. a wall, no background yet)
   // Reaching back to where the stream (re)started: part of the object went by before the first point.
@@ -143,8 +159,12 @@ class SweepClusterer {
   // azimuth). Background points only advance the sweep; foreground points wait for their cluster.
   void add(const lidar::LidarPoint& point, bool foreground);
 
-  // Clusters closed by the sweep so far (see the file comment), in order of their first point.
-  std::vector<SweptCluster> release_closed();
+  // Clusters closed by the sweep so far (see the file comment), in order of their first point; with
+  // them the open clusters `fixed_open` names (by SweptCluster::id and size, as swept_open gave them)
+  // if every laser has swept past them and they have not grown since: their vehicle's fix is ready, and
+  // the sweep has passed the whole of its box (RsuCore, early release), so what may still join them
+  // within the tolerance is another object's.
+  std::vector<SweptCluster> release_closed(std::span<const OpenClusterName> fixed_open = {});
   // Everything pending, closed or not: the end of a whole frame (PCD replay) or of the stream (drain).
   std::vector<SweptCluster> release_all();
   // Clusters not closed yet that every laser has swept past (a_future beyond their largest azimuth):
@@ -174,7 +194,10 @@ class SweepClusterer {
 
  private:
   void init(double rotation_hz);
-  std::vector<SweptCluster> release(bool everything);
+  std::vector<SweptCluster> release(bool everything, std::span<const OpenClusterName> fixed_open);
+  // The released cluster of component `s` and its `members`, named by the `open` ones in its line of sight.
+  SweptCluster released(const ComponentSummary& s, std::span<const ComponentSummary> open,
+                        std::span<const PendingPoint> members);
   void drop_stale();
   bool cut_at_start(std::span<const PendingPoint> members) const;
 

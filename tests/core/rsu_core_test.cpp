@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <future>
+#include <initializer_list>
 #include <limits>
 #include <string>
 #include <utility>
@@ -485,28 +486,43 @@ TEST(RsuCore, TwoVehiclesSideBySideAreNotSwapped) {
   EXPECT_GE(for_b, 2);
 }
 
+// The preparation tests' street: a VLP-32C 2 m up (test_config's mount) and two static cars, ids 1 and 2,
+// each announced from just before it appears until `until`, 0.36 m off its place, to every core given.
+RsuCoreConfig vlp32c_config() {
+  RsuCoreConfig c = test_config();
+  c.sensor_model = "vlp32c";
+  return c;
+}
+
+SimStream two_car_stream(const Pose2& one, const Pose2& two) {
+  return SimStream(testing::street_scene(), {static_vehicle(1, one), static_vehicle(2, two)},
+                   lidar::make_vlp32c(), testing::roadside_mount(), sim::NoiseModel{}, kEmptyRotations);
+}
+
+void announce_two_cars(std::initializer_list<RsuCore*> cores, const Pose2& one, const Pose2& two,
+                       const SimStream& stream, TimeNs until) {
+  const TimeNs from = kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs;
+  for (RsuCore* core : cores) {
+    announce_between(*core, 1, {one.x + 0.3, one.y - 0.2, one.yaw}, "192.0.2.1", from, until);
+    announce_between(*core, 2, {two.x - 0.2, two.y + 0.3, two.yaw}, "192.0.2.2", from, until);
+  }
+}
+
 // Issue 16 (latency): a cluster every laser has swept past is fitted and fixed while the sweep covers the
 // angle that closes it (RsuCoreConfig::prepare_fixes), and its release uses that fix only when its inputs
 // are the same bit for bit: the corrections, and the packets they leave with, are those without it.
 TEST(RsuCore, FixesPreparedAheadAreTheFixesOfTheRelease) {
-  const Pose3 m = testing::roadside_mount();
   const Pose2 near_car =
       beside_mount(-1.5, 5.2, 0.1);  // 5.4 m: the sweep closes it ~10 deg after its last point
   const Pose2 far_car = beside_mount(12.0, -7.0, 0.6);
-  const std::vector<sim::Vehicle> vehicles = {static_vehicle(1, near_car), static_vehicle(2, far_car)};
-  RsuCoreConfig config = test_config();
-  config.sensor_model = "vlp32c";
+  RsuCoreConfig config = vlp32c_config();
+  config.release_fixed_open = false;  // the preparation alone (released open: the tests below)
   RsuCore prepared(config);
   config.prepare_fixes = false;
   RsuCore computed(config);
-  SimStream stream(testing::street_scene(), vehicles, lidar::make_vlp32c(), m, sim::NoiseModel{},
-                   kEmptyRotations);
-  const TimeNs t0 = kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs;
+  SimStream stream = two_car_stream(near_car, far_car);
   const TimeNs t1 = (kEmptyRotations + 4) * stream.rotation_ns();
-  for (RsuCore* core : {&prepared, &computed}) {
-    announce_between(*core, 1, {near_car.x + 0.3, near_car.y - 0.2, near_car.yaw}, "192.0.2.1", t0, t1);
-    announce_between(*core, 2, {far_car.x - 0.2, far_car.y + 0.3, far_car.yaw}, "192.0.2.2", t0, t1);
-  }
+  announce_two_cars({&prepared, &computed}, near_car, far_car, stream, t1);
   stream.run_until(prepared, &computed, t1);
   const auto& with = stream.corrections();
   const auto& without = stream.twin_corrections();
@@ -530,23 +546,17 @@ TEST(RsuCore, FixesPreparedAheadAreTheFixesOfTheRelease) {
 // core::prepare on a thread of its own): the corrections, and the packets they leave with, are still those
 // without it, and the prepared fixes are used. What a fixer that a reload replaced prepared is dropped.
 TEST(RsuCore, FixesPreparedOnAnotherThreadAreTheFixesOfTheRelease) {
-  const Pose3 m = testing::roadside_mount();
   const Pose2 near_car = beside_mount(-1.5, 5.2, 0.1);
   const Pose2 far_car = beside_mount(12.0, -7.0, 0.6);
-  RsuCoreConfig config = test_config();
-  config.sensor_model = "vlp32c";
+  RsuCoreConfig config = vlp32c_config();
+  config.release_fixed_open = false;  // the preparation alone (released open: the tests below)
   RsuCore split(config);
   config.prepare_fixes = false;
   RsuCore computed(config);
-  SimStream stream(testing::street_scene(), {static_vehicle(1, near_car), static_vehicle(2, far_car)},
-                   lidar::make_vlp32c(), m, sim::NoiseModel{}, kEmptyRotations);
-  const TimeNs t0 = kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs;
+  SimStream stream = two_car_stream(near_car, far_car);
   const TimeNs t1 = (kEmptyRotations + 4) * stream.rotation_ns();
   const TimeNs t2 = t1 + 2 * stream.rotation_ns();
-  for (RsuCore* core : {&split, &computed}) {
-    announce_between(*core, 1, {near_car.x + 0.3, near_car.y - 0.2, near_car.yaw}, "192.0.2.1", t0, t2);
-    announce_between(*core, 2, {far_car.x - 0.2, far_car.y + 0.3, far_car.yaw}, "192.0.2.2", t0, t2);
-  }
+  announce_two_cars({&split, &computed}, near_car, far_car, stream, t2);
   std::future<Prepared> in_flight;
   std::size_t handed_out = 0;
   stream.run_until(split, &computed, t1, [&](const LidarStepResult&, TimeNs) {
@@ -597,22 +607,16 @@ TEST(RsuCore, FixesPreparedOnAnotherThreadAreTheFixesOfTheRelease) {
 // The prepared fix stands when they answer every question the fix asked of them alike (prepared_fixes.h);
 // the corrections, and the packets they leave with, are still those computed at the release.
 TEST(RsuCore, FixPreparedBehindAGrowingOccluderStandsWhenItAnswersAlike) {
-  const Pose3 m = testing::roadside_mount();
   const Pose2 parked = beside_mount(15.0, 6.0, 0.0);  // 16 m out
   const Pose2 nearer = beside_mount(5.0, 1.0, 0.2);   // 5 m out, in its line of sight
-  RsuCoreConfig config = test_config();
-  config.sensor_model = "vlp32c";
+  RsuCoreConfig config = vlp32c_config();
+  config.release_fixed_open = false;  // the preparation alone (released open: the tests below)
   RsuCore prepared(config);
   config.prepare_fixes = false;
   RsuCore computed(config);
-  SimStream stream(testing::street_scene(), {static_vehicle(1, parked), static_vehicle(2, nearer)},
-                   lidar::make_vlp32c(), m, sim::NoiseModel{}, kEmptyRotations);
-  const TimeNs t0 = kEmptyRotations * stream.rotation_ns() - 100 * kNsPerMs;
+  SimStream stream = two_car_stream(parked, nearer);
   const TimeNs t1 = (kEmptyRotations + 4) * stream.rotation_ns();
-  for (RsuCore* core : {&prepared, &computed}) {
-    announce_between(*core, 1, {parked.x + 0.3, parked.y - 0.2, parked.yaw}, "192.0.2.1", t0, t1);
-    announce_between(*core, 2, {nearer.x - 0.2, nearer.y + 0.3, nearer.yaw}, "192.0.2.2", t0, t1);
-  }
+  announce_two_cars({&prepared, &computed}, parked, nearer, stream, t1);
   stream.run_until(prepared, &computed, t1);
   const auto& with = stream.corrections();
   const auto& without = stream.twin_corrections();
@@ -634,6 +638,41 @@ TEST(RsuCore, FixPreparedBehindAGrowingOccluderStandsWhenItAnswersAlike) {
   // with the same occluders bit for bit).
   EXPECT_GE(prepared.lidar_stats().fixes_prepared_used, with.size());
   EXPECT_LE(prepared.lidar_stats().fixes_prepared_used, prepared.lidar_stats().fixes_prepared);
+}
+
+// Released open (prepared_fixes.h): a near car's cluster goes once its fix is prepared and every laser has
+// swept past the fix's box grown by 3 sigma, before the closing angle (10 deg at 5.4 m) has passed. Nothing
+// else within the tolerance comes after it here, so each correction is the one the closed cluster gives,
+// sent earlier.
+TEST(RsuCore, ANearCarIsCorrectedBeforeItsClusterClosesWithTheSameFix) {
+  const Pose2 near_car = beside_mount(-1.5, 5.2, 0.1);
+  const Pose2 far_car = beside_mount(12.0, -7.0, 0.6);
+  RsuCoreConfig config = vlp32c_config();
+  RsuCore open(config);
+  config.release_fixed_open = false;
+  RsuCore closed(config);
+  SimStream stream = two_car_stream(near_car, far_car);
+  const TimeNs t1 = (kEmptyRotations + 4) * stream.rotation_ns();
+  announce_two_cars({&open, &closed}, near_car, far_car, stream, t1);
+  stream.run_until(open, &closed, t1);
+  const auto& with = stream.corrections();
+  const auto& without = stream.twin_corrections();
+  ASSERT_EQ(with.size(), without.size());
+  EXPECT_GE(with.size(), 6U);
+  int near_sooner = 0;
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    const v2i::Correction& a = with[i].correction.correction;
+    const v2i::Correction& b = without[i].correction.correction;
+    EXPECT_EQ(a.vehicle_id, b.vehicle_id) << "correction " << i;
+    EXPECT_EQ(v2i::encode_v2i_message(a), v2i::encode_v2i_message(b)) << "correction " << i;
+    EXPECT_LE(with[i].emitted_at, without[i].emitted_at) << "correction " << i;
+    EXPECT_LT(distance(a, a.vehicle_id == 1 ? near_car : far_car), 0.10) << "correction " << i;
+    if (a.vehicle_id == 1 && with[i].emitted_at < without[i].emitted_at)
+      ++near_sooner;
+  }
+  EXPECT_GE(near_sooner, 3) << "the near car's corrections, sent before its cluster closed";
+  EXPECT_GE(testing::counter(open, "sweep.clusters_released_open"), 3U);
+  EXPECT_EQ(testing::counter(closed, "sweep.clusters_released_open"), 0U);
 }
 
 // The fault street (tests/integration/scenarios/fault_street.yaml): a VLP-16 2 m up, a lamp post 6.7 m

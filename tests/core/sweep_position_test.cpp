@@ -95,5 +95,41 @@ TEST(SweepPosition, ALaserOutsideTheTableCountsAsTheLeadingOne) {
   EXPECT_NEAR(static_cast<double>(sweep.passed_time(outline)), static_cast<double>(expected), 2000.0);
 }
 
+// swept(): every laser's beam past every point of the outline by the margin (no closing angle: the
+// early release of prepared_fixes.h asks whether a return from inside it can still come), against the
+// brute-force walk with the closing angle left out: swept exactly when the walk ends at once.
+TEST(SweepPosition, SweptOnceEveryLaserHasPassedEveryPointOfTheOutline) {
+  const LidarMount mount(Pose3{});
+  const TimeNs t0 = 5'000'000'000;
+  const double place = 1.0;  // the outline's largest azimuth; its other corner 2 deg before, nearer
+  const std::vector<Eigen::Vector2d> outline = {at(place - deg_to_rad(2.0), 4.0), at(place, 6.0)};
+  const double radians_per_ns = 2.0 * std::numbers::pi * kRotationHz * 1e-9;
+  int swept = 0;
+  for (double beyond_deg = -3.1; beyond_deg < 14.0; beyond_deg += 0.25) {
+    for (std::uint16_t ring = 0; ring < kOffsets.size(); ++ring) {
+      SweepPosition sweep(mount, kToleranceM, kMarginDeg, geometry());
+      EXPECT_FALSE(sweep.swept(outline)) << "the sweep is not known yet";
+      const double encoder = place + deg_to_rad(beyond_deg);
+      const lidar::LidarPoint p = newest(ring, encoder, t0);
+      sweep.advance(std::span<const lidar::LidarPoint>(&p, 1));
+      bool every_laser_past = true;
+      for (const double o : kOffsets)
+        every_laser_past = every_laser_past && encoder + o > place + deg_to_rad(kMarginDeg);
+      EXPECT_EQ(sweep.swept(outline), every_laser_past) << beyond_deg << " deg, ring " << ring;
+      EXPECT_FALSE(sweep.swept({})) << "an empty outline";
+      swept += every_laser_past ? 1 : 0;
+      // Swept is passed_time without the closing angle: no later than it.
+      if (every_laser_past) {
+        EXPECT_GE(sweep.passed_time(outline), t0);
+      } else {
+        const double to_go = place + deg_to_rad(kMarginDeg) - kOffsets.back() - encoder;
+        EXPECT_GT(static_cast<double>(sweep.passed_time(outline) - t0), to_go / radians_per_ns - 2000.0);
+      }
+    }
+  }
+  EXPECT_GT(swept, 20);
+  EXPECT_LT(swept, 68 * 4 - 20);
+}
+
 }  // namespace
 }  // namespace rsu::core

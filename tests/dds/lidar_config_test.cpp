@@ -148,6 +148,17 @@ TEST(LidarConfig, PrepareThreadIsOffUnlessTurnedOn) {
             std::string::npos);
 }
 
+// perception.release_fixed_open (issue 16, latency): on unless turned off; anything but a boolean is
+// refused with the field named.
+TEST(LidarConfig, ReleaseFixedOpenIsOnUnlessTurnedOff) {
+  EXPECT_TRUE(parse_lidar("  input: {udp: {}}\n").core.release_fixed_open);
+  EXPECT_FALSE(
+      parse_lidar("  input: {udp: {}}\nperception: {release_fixed_open: false}\n").core.release_fixed_open);
+  EXPECT_NE(lidar_refusal("  input: {udp: {}}\nperception: {release_fixed_open: soon}\n")
+                .find("perception.release_fixed_open"),
+            std::string::npos);
+}
+
 // perception.joint_release_range_gap_m (issue 16, latency): the clusterer's default unless given; a
 // negative or non-numeric gap is refused with the field named.
 TEST(LidarConfig, JointReleaseRangeGapIsReadAndChecked) {

@@ -154,6 +154,8 @@ def perception_overrides(args):
         keys.append("joint_release_range_gap_m: %g" % args.joint_release_gap)
     if args.prepare_thread == "on":
         keys.append("prepare_thread: true")
+    if args.release_fixed_open == "off":
+        keys.append("release_fixed_open: false")
     return "perception: {%s}\n" % ", ".join(keys) if keys else ""
 
 
@@ -301,8 +303,10 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
               count("auth.refused_before_signature"), count("datagram.beyond_verification_radius"),
               count("v2i.receiver_queue_full"), count("v2i.receiver_waiting_max")))
     print("rsud counted: fixes prepared ahead of their release %s, of them used by it %s (issue 16: a release "
-          "whose fix was not prepared computes it; one prepared and not used was computed twice)" % (
-              count("lidar.fixes_prepared"), count("lidar.fixes_prepared_used")))
+          "whose fix was not prepared computes it; one prepared and not used was computed twice); clusters "
+          "released %s, of them released open (their fixed box swept) %s" % (
+              count("lidar.fixes_prepared"), count("lidar.fixes_prepared_used"),
+              count("sweep.clusters_released"), count("sweep.clusters_released_open")))
     report_rsud_latency(h.path("rsud.prom"))
     sent_by_rsud = int(s.get("corrections_sent", 0))
     print("corrections: rsud sent %d, vehicles received %d (lost in transport %d), to vehicles not in view %d, "
@@ -424,6 +428,10 @@ def main():
     ap.add_argument("--prepare-thread", choices=("on", "off"), default="off",
                     help="on: rsud prepares the fits and fixes ahead of a vehicle's release on a thread of their "
                          "own (perception.prepare_thread: true); off (its default): on its event loop")
+    ap.add_argument("--release-fixed-open", choices=("on", "off"), default="on",
+                    help="off: rsud releases every cluster only once it is closed (perception.release_fixed_open: "
+                         "false), the baseline; on (its default): a near vehicle's goes once its prepared fix's "
+                         "box is swept")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     if args.rsud_nice is not None and args.rsud_session != "own":

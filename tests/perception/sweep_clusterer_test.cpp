@@ -92,6 +92,61 @@ TEST(SweepClusterer, ReleasesOnceNoLaterPointCanJoin) {
   }
 }
 
+// Released open (core/prepared_fixes.h): a cluster named by the id and size swept_open gave it goes with
+// the closed ones once every laser has swept past it, before the closing angle; one that has grown since
+// waits to be closed; and a point that would have joined the released one starts a cluster of its own.
+TEST(SweepClusterer, ReleasesANamedOpenClusterOnceSweptUnlessItGrew) {
+  SweepConfig config;
+  config.release_margin_deg = 0.5;
+  SweepClusterer sweep(config, clustering(), Eigen::Vector2d::Zero(), kHz, 0.0);
+  start_stream(sweep);
+  // A at 4 m over 40-45 deg (closed asin(0.7 / 4) = 10.1 deg + the margin past 45), B at 4 m over 80-85.
+  for (int i = 0; i < 20; ++i)
+    sweep.add(at(4.0, 40.0 + 5.0 * i / 19.0), true);
+  sweep.add(at(50.0, 45.3), false);  // every laser 44.8 deg: not past A yet
+  EXPECT_TRUE(sweep.swept_open().empty());
+  sweep.add(at(50.0, 45.6), false);  // 45.1 deg: past A
+  std::vector<SweptCluster> given = sweep.swept_open();
+  ASSERT_EQ(given.size(), 1U);
+  const OpenClusterName a{given[0].id, given[0].points.size()};
+  EXPECT_EQ(a.size, 20U);
+  EXPECT_TRUE(sweep.release_closed().empty()) << "not closed, and not named";
+  const OpenClusterName wrong_size{a.id, a.size + 1};
+  EXPECT_TRUE(sweep.release_closed(std::span(&wrong_size, 1)).empty()) << "named with another size";
+  std::vector<SweptCluster> released = sweep.release_closed(std::span(&a, 1));
+  ASSERT_EQ(released.size(), 1U);
+  EXPECT_EQ(released[0].id, a.id);
+  EXPECT_EQ(released[0].points.size(), 20U);
+  EXPECT_EQ(sweep.stats().clusters_released_open, 1U);
+  // Six points 0.5 m on from A's last (at 4 m, 7.2 deg): within the tolerance of A, which the closing
+  // rule would have joined them to; released open, A is gone, and they are a cluster of their own.
+  for (int i = 0; i < 6; ++i)
+    sweep.add(at(4.0, 52.2 + 0.1 * i), true);
+  for (int i = 0; i < 20; ++i)
+    sweep.add(at(4.0, 80.0 + 5.0 * i / 19.0), true);
+  sweep.add(at(50.0, 85.6), false);
+  given = sweep.swept_open();
+  ASSERT_EQ(given.size(), 1U) << "the six points are closed by now; B is swept and open";
+  const OpenClusterName b{given[0].id, given[0].points.size()};
+  released = sweep.release_closed();
+  ASSERT_EQ(released.size(), 1U);
+  EXPECT_EQ(released[0].points.size(), 6U);
+  EXPECT_NE(released[0].id, a.id);
+  // B gains a point within the tolerance after it was named: it waits to be closed, then goes whole.
+  sweep.add(at(4.0, 85.7), true);
+  EXPECT_TRUE(sweep.release_closed(std::span(&b, 1)).empty());
+  for (double az = 86.0; az < 100.0; az += 0.5) {
+    sweep.add(at(50.0, az), false);
+    released = sweep.release_closed(std::span(&b, 1));
+    if (!released.empty())
+      break;
+  }
+  ASSERT_EQ(released.size(), 1U);
+  EXPECT_EQ(released[0].points.size(), 21U);
+  EXPECT_EQ(sweep.stats().clusters_released_open, 1U);
+  EXPECT_EQ(sweep.stats().clusters_released, 3U);
+}
+
 TEST(SweepClusterer, DropsSmallClustersAndCountsThem) {
   SweepClusterer sweep({}, clustering(), Eigen::Vector2d::Zero(), kHz, 0.0);
   start_stream(sweep);
