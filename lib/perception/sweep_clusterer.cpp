@@ -285,17 +285,12 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything,
            std::any_of(fixed_open.begin(), fixed_open.end(),
                        [&](const OpenClusterName& n) { return n.id == s.first_seq && n.size == s.size; });
   };
-  std::vector<std::uint64_t> released_open;  // first_seq of those
   for (const std::uint32_t c : clusters_.components()) {
     const ComponentSummary& s = clusters_.summary(c);
-    if (everything || a_future > s.close_at) {
+    if (everything || a_future > s.close_at || fixed(s))
       closed.push_back(c);
-    } else if (fixed(s)) {
-      closed.push_back(c);
-      released_open.push_back(s.first_seq);
-    } else {
+    else
       open.push_back(s);
-    }
   }
   if (closed.empty()) {
     return out;
@@ -328,8 +323,8 @@ std::vector<SweptCluster> SweepClusterer::release(bool everything,
     SweptCluster cluster = released(s, open, members);
     out.push_back(std::move(cluster));
     ++stats_.clusters_released;
-    if (std::find(released_open.begin(), released_open.end(), s.first_seq) != released_open.end())
-      ++stats_.clusters_released_open;
+    if (!everything && !(a_future > s.close_at))
+      ++stats_.clusters_released_open;  // not closed: named in fixed_open
   }
   return out;
 }
