@@ -3,6 +3,8 @@
 
 #include <cmath>
 
+#include "common/angles.h"
+
 namespace rsu::core {
 
 LidarMount::LidarMount(const Pose3& sensor_to_map)
@@ -27,7 +29,8 @@ void LidarMount::to_map_frame(std::span<const lidar::LidarPoint> in,
 
 double LidarMount::beam_azimuth(const Eigen::Vector2d& xy) const {
   const Eigen::Vector3d s = map_to_sensor_ * Eigen::Vector3d(xy.x(), xy.y(), pose_.z);
-  return -std::atan2(s.y(), s.x());
+  // wrap_angle: -atan2(+0, -x) is -pi for a point straight behind, outside the promised (-pi, pi].
+  return wrap_angle(-std::atan2(s.y(), s.x()));
 }
 
 }  // namespace rsu::core

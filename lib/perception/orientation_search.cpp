@@ -25,7 +25,10 @@ double wrap_quarter(double theta) {
 
 // A criterion can be flat at its maximum (Autoware's closeness floors distances at 0.1 m, so every angle
 // that keeps all points within 0.1 m of an edge scores the same: a plateau about +-0.1 m / face length
-// wide). Picking the plateau's first angle biases the yaw by half its width; its middle is unbiased.
+// wide). Picking the plateau's first angle biases the yaw by half its width; its middle is unbiased when
+// the plateau is symmetric about the true direction. On an L of unequal faces it is not (the long face
+// bounds one side, the short face the other): on a 4.5 x 1.8 m L it lands 0.25-0.55 deg off (measured on
+// 2026-12-02; tests/perception/l_shape_criteria_test.cpp bounds it by the plateau, 1.27 deg).
 // Returns the middle (in sample units, possibly x.5, possibly outside [0, n) when circular) of the run
 // of samples equal to values[at].
 double middle_of_tied_run(const std::vector<double>& values, std::size_t at, bool circular) {

@@ -39,6 +39,24 @@ T doubled(T base, int exclusions, T cap) {
   return std::min(value, cap);
 }
 
+// The fix's innovation against `estimate` at its sweep time (x, y, box yaw), its covariance (both
+// estimates') and its NIS.
+struct FixInnovation {
+  Eigen::Vector3d residual;
+  Eigen::Matrix3d covariance;
+  double nis;
+};
+
+FixInnovation fix_innovation(const v2i::Correction& fix, const fusion::StateEstimate& estimate,
+                             const Eigen::Vector2d& reference_offset) {
+  const fusion::PoseMeasurement m{fix.sweep_time, fusion::MeasurementSource::kRsu, fix.pose,
+                                  fix.pose_covariance};
+  const fusion::PoseInnovation innovation = fusion::pose_innovation(estimate.state, m, reference_offset);
+  const auto& h = innovation.jacobian;
+  const Eigen::Matrix3d covariance = h * estimate.covariance * h.transpose() + fix.pose_covariance;
+  return {innovation.residual, covariance, nis(innovation.residual, covariance)};
+}
+
 }  // namespace
 
 const char* to_string(SourceState state) {
@@ -93,11 +111,7 @@ const char* to_string(FixVerdict verdict) {
 
 double fix_nis(const v2i::Correction& fix, const fusion::StateEstimate& estimate,
                const Eigen::Vector2d& reference_offset) {
-  const fusion::PoseMeasurement m{fix.sweep_time, fusion::MeasurementSource::kRsu, fix.pose,
-                                  fix.pose_covariance};
-  const fusion::PoseInnovation innovation = fusion::pose_innovation(estimate.state, m, reference_offset);
-  const auto& h = innovation.jacobian;
-  return nis(innovation.residual, h * estimate.covariance * h.transpose() + fix.pose_covariance);
+  return fix_innovation(fix, estimate, reference_offset).nis;
 }
 
 FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::StateEstimate& own,
@@ -106,12 +120,9 @@ FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::State
   SourceRecord& s = record(fix.rsu_id);
   ++s.fixes;
   const TimeNs t = fix.sweep_time;
-  const fusion::PoseMeasurement m{t, fusion::MeasurementSource::kRsu, fix.pose, fix.pose_covariance};
-  const fusion::PoseInnovation innovation = fusion::pose_innovation(own.state, m, reference_offset);
-  const auto& h = innovation.jacobian;
-  const Eigen::Matrix3d innovation_covariance = h * own.covariance * h.transpose() + fix.pose_covariance;
+  const FixInnovation innovation = fix_innovation(fix, own, reference_offset);
   FixCheck out;
-  out.nis = nis(innovation.residual, innovation_covariance);
+  out.nis = innovation.nis;
   if (s.state == SourceState::kAdmitted && !on_track) {
     s.track_broken = true;
   }
@@ -138,7 +149,7 @@ FixCheck IntegrityMonitor::check(const v2i::Correction& fix, const fusion::State
     out.verdict = FixVerdict::kUseOwnFailed;
   } else {
     const bool correlated = status == OwnEstimate::kDegraded && s.state == SourceState::kAdmitted &&
-                            !s.track_broken && agreed_over_run(s, innovation_covariance);
+                            !s.track_broken && agreed_over_run(s, innovation.covariance);
     update_cusum(s, out.nis, t, correlated);
     s.run.back().innovation = innovation.residual;
     admit_or_exclude(s, out.nis, t, out);
