@@ -139,6 +139,27 @@ bool observable_beyond(const AxisContext& ctx, int a, double sign, const Extreme
   return lidar.sees_surface(range, config.lowest_body_m, top);
 }
 
+// The highest of the body's points at the extreme's place along axis a: within a laser column's spread
+// along the axis there (range x azimuth step over the sine of the incidence on the face along the axis,
+// at least end_tolerance_m). A side seen at grazing incidence returns each column's lasers at one place
+// along the axis, one above the other: those above the extreme met the body there and passed above nothing
+// (a van's side 40 m along a 128-ring sensor's line of sight, its lowest return the trace's end: the
+// shadow put its front 1.2 m short, a fix 0.98 m off at NEES 20.6).
+double highest_at_extreme(const AxisContext& ctx, int a, const BoxPoint& extreme, const LidarGeometry& lidar,
+                          const CorrectionConfig& config) {
+  const Eigen::Vector2d sight = extreme.local - ctx.lidar_local;
+  const double sin_incidence = std::abs(sight[1 - a]) / std::max(sight.norm(), 1e-9);
+  const double spread =
+      std::max(config.end_tolerance_m,
+               extreme.range * lidar.azimuth_step_rad / std::max(sin_incidence, config.min_incidence_cos));
+  double top = extreme.height;
+  for (const BoxPoint& q : ctx.points) {
+    if (std::abs(q.local[a] - extreme.local[a]) <= spread)
+      top = std::max(top, q.height);
+  }
+  return top;
+}
+
 // Beyond an extreme on the side facing away from the LiDAR the body hides what lies behind it, but not
 // for ever: a laser that passes above the extreme point descends and meets any body at least
 // lowest_body_m tall that goes on behind it, and returns from there. The nearest such laser bounds how far
@@ -147,11 +168,13 @@ bool observable_beyond(const AxisContext& ctx, int a, double sign, const Extreme
 double shadow_allowance(const AxisContext& ctx, int a, const BoxPoint& extreme, const LidarGeometry& lidar,
                         const CorrectionConfig& config) {
   const double h = lidar.height_above_ground();
+  const double top = highest_at_extreme(ctx, a, extreme, lidar, config);
   double nearest = kInf;
   for (const double e : lidar.elevations_rad) {
     const double down = std::tan(-e);
-    // Rising, or meeting the body at or before the extreme point (the laser that saw it among them).
-    if (!(down > 0.0) || h - extreme.range * down < extreme.height + config.end_tolerance_m)
+    // Rising, or meeting the body at or before the extreme point (the lasers that saw it or the body
+    // above it there among them).
+    if (!(down > 0.0) || h - extreme.range * down < top + config.end_tolerance_m)
       continue;
     // Under lowest_body_m already at the extreme (which lies lower still): the body ends there, but for the
     // rounded corner (end_allowance_m, below), which a negative reach ate: a minivan's sill at 0.25 m, 0.36 m
