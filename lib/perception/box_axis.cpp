@@ -139,6 +139,15 @@ bool observable_beyond(const AxisContext& ctx, int a, double sign, const Extreme
   return lidar.sees_surface(range, config.lowest_body_m, top);
 }
 
+// How far apart along axis a a laser's returns lie on the face along it near p: range x azimuth step
+// across the line of sight, farther along a face seen at grazing incidence.
+double spacing_along(const AxisContext& ctx, int a, const BoxPoint& p, const LidarGeometry& lidar,
+                     const CorrectionConfig& config) {
+  const Eigen::Vector2d sight = p.local - ctx.lidar_local;
+  const double sin_incidence = std::abs(sight[1 - a]) / std::max(sight.norm(), 1e-9);
+  return p.range * lidar.azimuth_step_rad / std::max(sin_incidence, config.min_incidence_cos);
+}
+
 // The highest of the body's points at the extreme's place along axis a: within a laser column's spread
 // along the axis there (range x azimuth step over the sine of the incidence on the face along the axis,
 // at least end_tolerance_m). A side seen at grazing incidence returns each column's lasers at one place
@@ -147,11 +156,7 @@ bool observable_beyond(const AxisContext& ctx, int a, double sign, const Extreme
 // shadow put its front 1.2 m short, a fix 0.98 m off at NEES 20.6).
 double highest_at_extreme(const AxisContext& ctx, int a, const BoxPoint& extreme, const LidarGeometry& lidar,
                           const CorrectionConfig& config) {
-  const Eigen::Vector2d sight = extreme.local - ctx.lidar_local;
-  const double sin_incidence = std::abs(sight[1 - a]) / std::max(sight.norm(), 1e-9);
-  const double spread =
-      std::max(config.end_tolerance_m,
-               extreme.range * lidar.azimuth_step_rad / std::max(sin_incidence, config.min_incidence_cos));
+  const double spread = std::max(config.end_tolerance_m, spacing_along(ctx, a, extreme, lidar, config));
   double top = extreme.height;
   for (const BoxPoint& q : ctx.points) {
     if (std::abs(q.local[a] - extreme.local[a]) <= spread)
@@ -324,10 +329,7 @@ Side side_bound(const AxisContext& ctx, int a, double sign, const Extremes& e, c
       sign * (extreme - lower_extreme) <= config.end_tolerance_m) {
     // A laser's returns along a face lie range x azimuth step apart across the line of sight, farther
     // along a face seen at grazing incidence: the body may go on that far without a return.
-    const Eigen::Vector2d sight = p.local - ctx.lidar_local;
-    const double sin_incidence = std::abs(sight[1 - a]) / std::max(sight.norm(), 1e-9);
-    const double spacing =
-        p.range * lidar.azimuth_step_rad / std::max(sin_incidence, config.min_incidence_cos);
+    const double spacing = spacing_along(ctx, a, p, lidar, config);
     if (spacing <= config.max_end_spacing_m)
       return Side{config.end_allowance_m + spacing, true};
   }
