@@ -38,6 +38,8 @@ GrownFootprint::GrownFootprint(const tracking::VehicleHypothesis& h, const Gathe
 
 double GrownFootprint::fraction_inside(const perception::Detection& detection,
                                        const Eigen::Vector2d& half) const {
+  if (detection.points.empty())  // no points: none inside (never 0 / 0)
+    return 0.0;
   const Eigen::Rotation2Dd to_box(-yaw_);
   std::size_t inside = 0;
   for (const Eigen::Vector3d& p : detection.points) {

@@ -21,7 +21,7 @@ class GrownFootprint {
   // [min_margin_m, max_margin_m].
   GrownFootprint(const tracking::VehicleHypothesis& vehicle, const GatheringConfig& config);
 
-  // Share of the detection's points inside the grown footprint.
+  // Share of the detection's points inside the grown footprint (0 for a detection without points).
   double inside_fraction(const perception::Detection& detection) const;
   // Whether at least min_inside_fraction of the detection's points lie in the footprint grown by the
   // minimum margin and one sigma of the predicted centre only: the vehicle's own, rather than a

@@ -94,6 +94,7 @@ TEST(GrownFootprintShares, LostVehicleIsGrownByTheMaximumMargin) {
 TEST(GrownFootprintShares, EmptyDetectionIsNeitherTightlyInsideNorInTheLane) {
   const GrownFootprint f(car_at(0.3), GatheringConfig{});
   const perception::Detection none;
+  EXPECT_EQ(f.inside_fraction(none), 0.0);  // not 0 / 0
   EXPECT_FALSE(f.tightly_inside(none));
   EXPECT_FALSE(f.inside_lane(none));
 }

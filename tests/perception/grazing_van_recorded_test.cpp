@@ -11,19 +11,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <string>
 #include <vector>
 
-#include <Eigen/Cholesky>
-
-#include "common/angles.h"
-#include "lidar/sensor_model.h"
-#include "perception/vehicle_fix.h"
+#include "tests/perception/recorded_view.h"
 
 namespace rsu::perception {
 namespace grazing_van_recorded_test {
-
-constexpr double kChi2TwoDof3Sigma = 11.829;  // P(chi2_2 <= x) = 0.9973
 
 const std::vector<Eigen::Vector3d> kVanPoints = {
     {42.117, -0.757, 0.059}, {39.617, -0.714, 0.611}, {40.959, -0.740, 0.789}, {39.938, -0.722, 1.039},
@@ -103,14 +96,7 @@ const std::vector<Eigen::Vector2d> kOccluders = {
 const Eigen::Vector2d kTruth(40.606, -1.750);  // heading 0 (along +x)
 
 LidarGeometry dense_lidar_on_the_median() {
-  LidarGeometry lidar;
-  lidar.position = {0.0, 0.0, 2.0};
-  const lidar::SensorModel model = lidar::make_generic(128);
-  for (const double e : model.elevation_deg)
-    lidar.elevations_rad.push_back(deg_to_rad(e));
-  lidar.azimuth_step_rad = deg_to_rad(model.azimuth_step_deg());
-  lidar.occluders = kOccluders;
-  return lidar;
+  return test::recorded_lidar(lidar::make_generic(128), {0.0, 0.0, 2.0}, kOccluders);
 }
 
 TEST(GrazingVanRecorded, ViewIsTheOneClaimed) {
@@ -128,21 +114,8 @@ TEST(GrazingVanRecorded, ViewIsTheOneClaimed) {
 }
 
 TEST(GrazingVanRecorded, FixIsRightOrItsCovarianceCoversIt) {
-  const LidarGeometry lidar = dense_lidar_on_the_median();
-  for (const double prior_error_deg : {-8.0, -4.0, 0.0, 4.0, 8.0}) {
-    AnnouncedVehicle announced;
-    announced.size = {5.40, 2.00, 2.45};
-    announced.yaw_prior = YawPrior{deg_to_rad(prior_error_deg), deg_to_rad(10.0)};
-    const VehicleFix fix = fix_vehicle(kVanPoints, announced, lidar);
-    if (!fix.ok()) {
-      EXPECT_EQ(fix.status(), CorrectionStatus::position_unbounded) << prior_error_deg;
-      continue;
-    }
-    const Eigen::Vector2d error(fix.corrected.pose.x - kTruth.x(), fix.corrected.pose.y - kTruth.y());
-    const double nees = error.dot(fix.corrected.covariance.topLeftCorner<2, 2>().ldlt().solve(error));
-    EXPECT_TRUE(error.norm() < 0.10 || nees <= kChi2TwoDof3Sigma)
-        << "prior " << prior_error_deg << " deg: " << error.norm() << " m off at NEES " << nees;
-  }
+  test::expect_fix_right_or_covered(kVanPoints, {5.40, 2.00, 2.45}, kTruth, 0.0, dense_lidar_on_the_median(),
+                                    {-8.0, -4.0, 0.0, 4.0, 8.0});
 }
 
 }  // namespace grazing_van_recorded_test
