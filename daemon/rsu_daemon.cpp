@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "daemon/rsu_daemon.h"
 
+#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 #include <csignal>
@@ -243,7 +244,7 @@ void RsuDaemon::receive_lidar(udp::socket& socket, std::array<std::uint8_t, 6553
           const TimeNs read = clock_now();
           // The kernel's stamp of its arrival (SIOCGSTAMPNS: none for the first packet, which turns them
           // on): how long it waited in the socket for the loop (metrics: lidar_socket_wait_seconds).
-          if (const std::optional<TimeNs> arrival = last_arrival(socket.native_handle())) {
+          if (const std::optional<TimeNs> arrival = edge::last_arrival(socket.native_handle())) {
             stepped_packet_ = PacketTimes{*arrival, read};
             lidar_socket_wait_seconds_.observe(to_seconds(read - *arrival));
           }
@@ -562,7 +563,7 @@ void RsuDaemon::start_v2i_reception() {
   // Each datagram's arrival, stamped by the kernel: its time windows are judged from it, not from when
   // a loop that fell behind got to it (the receiver thread reads it from the control data).
   if (!config_.v2i_verifier_thread) {
-    last_arrival(v2i_socket_.native_handle());  // turns the stamps on (none yet)
+    edge::last_arrival(v2i_socket_.native_handle());  // turns the stamps on (none yet)
     receive_v2i();
     return;
   }
@@ -605,7 +606,7 @@ void RsuDaemon::receive_v2i() {
           return;
         if (!ec) {
           on_v2i_datagram(std::span<const std::uint8_t>(v2i_buffer_.data(), bytes), v2i_sender_, nullptr,
-                          last_arrival(v2i_socket_.native_handle()));
+                          edge::last_arrival(v2i_socket_.native_handle()));
         } else {
           // e.g. an ICMP error for an earlier correction: not fatal.
           spdlog::debug("V2I socket: {}", ec.message());
@@ -851,6 +852,13 @@ CounterList RsuDaemon::stats() {
     dds_->report(out);
   if (peers_)
     peers_->report(out);
+  // The allocator's view of the heap (glibc, every arena and its mmapped blocks): what live allocations
+  // hold, and what it holds from the kernel, in use or kept free for reuse. A resident size that steps
+  // up while the first stays flat is memory the allocator kept after a peak, not a leak (issue 16, RSS
+  // flat under the signed load).
+  const struct mallinfo2 heap = mallinfo2();
+  out.add_level("process", "heap_in_use_bytes", heap.uordblks + heap.hblkhd);
+  out.add_level("process", "heap_held_bytes", heap.arena + heap.hblkhd);
   return out;
 }
 

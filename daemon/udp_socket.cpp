@@ -2,11 +2,8 @@
 #include "daemon/udp_socket.h"
 
 #include <linux/sock_diag.h>
-#include <linux/sockios.h>
 #include <spdlog/spdlog.h>
-#include <sys/ioctl.h>
 #include <sys/socket.h>
-#include <time.h>
 
 #include <array>
 #include <cerrno>
@@ -63,39 +60,9 @@ std::optional<std::uint64_t> kernel_drops(int socket_fd) {
 }
 
 void request_arrival_stamps(int socket_fd, const char* what) {
-  const int on = 1;
-  if (::setsockopt(socket_fd, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) != 0)
+  if (!edge::request_arrival_stamps(socket_fd))
     spdlog::warn("{} socket: no arrival timestamps ({}): datagrams are timed when read", what,
                  std::strerror(errno));
-}
-
-namespace {
-
-TimeNs to_ns(const timespec& t) {
-  return static_cast<TimeNs>(t.tv_sec) * kNsPerSecond + t.tv_nsec;
-}
-
-}  // namespace
-
-std::optional<TimeNs> last_arrival(int socket_fd) {
-  timespec t{};
-  if (::ioctl(socket_fd, SIOCGSTAMPNS, &t) != 0)
-    return std::nullopt;
-  return to_ns(t);
-}
-
-std::optional<TimeNs> arrival_in(const msghdr& message) {
-  // CMSG_NXTHDR takes a non-const msghdr; it only reads it.
-  auto& m = const_cast<msghdr&>(message);
-  for (cmsghdr* c = CMSG_FIRSTHDR(&m); c != nullptr; c = CMSG_NXTHDR(&m, c)) {
-    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS &&
-        c->cmsg_len >= CMSG_LEN(sizeof(timespec))) {
-      timespec t{};
-      std::memcpy(&t, CMSG_DATA(c), sizeof t);
-      return to_ns(t);
-    }
-  }
-  return std::nullopt;
 }
 
 }  // namespace rsu::daemon

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "common/time.h"
+#include "edge/arrival_stamp.h"
 
 namespace rsu::daemon {
 
@@ -26,14 +27,8 @@ std::size_t request_receive_buffer(boost::asio::ip::udp::socket& socket, std::si
 // where the kernel cannot say (before Linux 4.12).
 std::optional<std::uint64_t> kernel_drops(int socket_fd);
 
-// A datagram's arrival on the host's clock (CLOCK_REALTIME, as edge::host_now_ns), stamped by the
-// kernel: what its time windows are judged from, however long it then waits in the socket for rsud.
-// Either in each message's control data (request_arrival_stamps: SO_TIMESTAMPNS, read by recvmsg /
-// recvmmsg with arrival_in), or, on a socket without SO_TIMESTAMPNS, for the datagram read last
-// (last_arrival: SIOCGSTAMPNS; its first call turns the stamps on and finds none).
-// request_arrival_stamps logs a warning naming `what` where the kernel refuses.
+// Asks the kernel to stamp each datagram's arrival (edge/arrival_stamp.h, which reads the stamps); logs a
+// warning naming `what` where it refuses.
 void request_arrival_stamps(int socket_fd, const char* what);
-std::optional<TimeNs> arrival_in(const msghdr& message);
-std::optional<TimeNs> last_arrival(int socket_fd);
 
 }  // namespace rsu::daemon

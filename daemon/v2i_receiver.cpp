@@ -169,7 +169,7 @@ void V2iReceiver::run() {
           continue;  // not an IP sender: cannot happen on a UDP socket
         std::memcpy(d.sender.data(), &senders[static_cast<std::size_t>(i)], length);
         d.sender.resize(length);
-        d.received = arrival_in(headers[static_cast<std::size_t>(i)].msg_hdr);
+        d.received = edge::arrival_in(headers[static_cast<std::size_t>(i)].msg_hdr);
         if (verify && window)
           d.signature = v2i::check_signature_ahead(d.bytes, *trust,
                                                    {now, window->max_age, window->max_future}, verify_within);

@@ -14,7 +14,8 @@
 //              <x> <y> <yaw> <points> <error to own truth m> <yaw error rad> <nearest other id>
 //              <error to nearest other m> <the position error in sigmas of the stated covariance:
 //              sqrt(e^T S^-1 e) over x, y>
-// (errors -1 and other id 0 where there is no truth, i.e. for synthetic vehicles); and one line
+// (errors -1 and other id 0 where there is no truth, i.e. for synthetic vehicles; recv ns: the kernel's
+// stamp of its arrival at the vehicle's socket); and one line
 //   size_change <vehicle> <send ns>
 // when a vehicle first announces its changed size. At the end, on stdout:
 //   summary sent=N send_failed=N corrections=N foreign=N undecodable=N
@@ -39,6 +40,7 @@
 
 #include "common/angles.h"
 #include "common/random.h"
+#include "edge/arrival_stamp.h"
 #include "edge/host_clock.h"
 #include "sim/scenario.h"
 #include "sim/trajectory.h"
@@ -215,6 +217,8 @@ void open_sockets(std::vector<FleetVehicle>& fleet, const FleetOptions& o, int e
     socklen_t len = sizeof local;
     getsockname(v.fd, reinterpret_cast<sockaddr*>(&local), &len);
     v.port = ntohs(local.sin_port);
+    if (!rsu::edge::request_arrival_stamps(v.fd))
+      throw std::runtime_error("no arrival timestamps on the socket of " + v.address);
     epoll_event ev{};
     ev.events = EPOLLIN;
     ev.data.u64 = k;
@@ -234,10 +238,13 @@ struct Counts {
 void receive(FleetVehicle& v, const Truth& truth, const FleetOptions& o, std::FILE* out, Counts& counts) {
   std::array<std::uint8_t, 65536> buffer{};
   for (;;) {
-    const ssize_t n = recv(v.fd, buffer.data(), buffer.size(), 0);
+    const rsu::edge::StampedRead read = rsu::edge::read_stamped(v.fd, buffer);
+    const ssize_t n = read.bytes;
     if (n <= 0)
       return;  // drained (EAGAIN), or an ICMP error for an earlier datagram
-    const TimeNs received = rsu::edge::host_now_ns();
+    // Its arrival at the vehicle's socket, stamped by the kernel: not when this loop, busy signing the
+    // fleet's announcements, got to it.
+    const TimeNs received = read.arrival.value_or(rsu::edge::host_now_ns());
     const auto decoded = v2i::decode_v2i_message(std::span(buffer.data(), static_cast<std::size_t>(n)));
     const auto* c = std::get_if<v2i::Correction>(&decoded.body);
     if (c == nullptr) {

@@ -8,9 +8,11 @@ Prints: announcements sent / accepted / rejected by reason; corrections rsud sen
 (lost in transport), and per vehicle in view: received vs rotations (missing ones listed); latency from the
 sweep to the correction's arrival (p50 / p99 / max) and from the last LiDAR packet that covered the vehicle
 in that rotation (the ray caster's truth, `rsu-sim stream --truth-out`) to the correction's arrival (issue
-16: "from the last packet covering a vehicle to its correction on the wire"); rsud's RSS sampled every 0.25 s (first, last, max and
-the slope of a least-squares line over the second half of the run, MB per minute); rsud's CPU (share of one
-core, from /proc/<pid>/stat).
+16: "from the last packet covering a vehicle to its correction on the wire"; a correction's arrival is the
+kernel's stamp at the vehicle's socket, rsu-fleet's busy loop left out); rsud's RSS sampled every 0.25 s (first,
+last, max and the slope of a least-squares line over the second half of the run, MB per minute), and its
+live heap (the allocator's count, process.heap_in_use_bytes, from its metrics file written every second);
+rsud's CPU (share of one core, from /proc/<pid>/stat).
 
   tests/load/rsud_load.py --build build                      # the full run: 1000 vehicles, 30 s
   tests/load/rsud_load.py --build build --signed             # the same, every announcement signed
@@ -180,7 +182,7 @@ def run(args):
                        extra={"on": "", "off": "mount_integrity: {enabled: false}\n",
                               "on-loop": "mount_integrity: {check_thread: false}\n"}[args.mount_integrity] +
                        perception_overrides(args) +
-                       "metrics: {textfile: %s, interval_s: 5}\n" % h.path("rsud.prom"))
+                       "metrics: {textfile: %s, interval_s: 1}\n" % h.path("rsud.prom"))
         if args.ouster:
             # rsud learns the background from the scene without its vehicles, streamed for the 3 s before
             # scenario time 0 (the Velodyne runs load rsu-sim simulate's frames instead); the stream
@@ -208,12 +210,20 @@ def run(args):
         stream = h.stream(0.0, args.seconds, options=["--truth-out", h.path("stream.truth")])
         fleet = h.fleet(args.seconds + 0.5, extra=args.vehicles - len(IN_VIEW))
         samples, cpu0, threads0, t0 = [], cpu_s(rsud.pid), thread_cpu_s(rsud.pid), time.time()
+        heap, prom, prom_mtime = [], h.path("rsud.prom"), None
         waits = [(time.time(), run_queue_wait_ns(rsud.pid))]
         deadline = t0 + args.seconds + 30
         while fleet.poll() is None and time.time() < deadline:
             mb = rss_mb(rsud.pid)
             if mb is not None:
                 samples.append((time.time() - t0, mb))
+            # The allocator's heap in use, from each metrics file rsud writes (every second).
+            mtime = os.path.getmtime(prom) if os.path.exists(prom) else None
+            if mtime is not None and mtime != prom_mtime:
+                prom_mtime = mtime
+                in_use = heap_in_use_mb(prom)
+                if in_use is not None:
+                    heap.append((time.time() - t0, in_use))
             time.sleep(0.25)
             waits.append((time.time(), run_queue_wait_ns(rsud.pid)))
         elapsed = time.time() - t0
@@ -225,7 +235,7 @@ def run(args):
         print(read_text(h.path("stream.log")).strip())
         drops = udp_drops(h.v2i_port)
         h.stop_rsud()
-        return report(h, args, samples, cpu_share, thread_shares, drops, waits)
+        return report(h, args, samples, cpu_share, thread_shares, drops, waits, heap)
     finally:
         if caller_nice is not None:
             set_autogroup_nice(os.getpid(), caller_nice)
@@ -240,6 +250,17 @@ def autogroup_nice(pid):
 def set_autogroup_nice(pid, nice):
     with open("/proc/%d/autogroup" % pid, "w") as f:
         f.write("%d" % nice)
+
+
+def heap_in_use_mb(prom):
+    """rsud_process_heap_in_use_bytes from a metrics file, in MB (as the RSS), or None (not yet written whole)."""
+    try:
+        families = parse_exposition(read_text(prom))
+    except (OSError, ValueError, AssertionError):
+        return None
+    for name, _labels, value in families.get("rsud_process_heap_in_use_bytes", {}).get("samples", []):
+        return value / (1 << 20)
+    return None
 
 
 def bucket_quantile(buckets, count, q):
@@ -265,7 +286,7 @@ def report_rsud_latency(prom):
     print("rsud measured (metrics; the parts of each correction a live packet released): " + "; ".join(parts))
 
 
-def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
+def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits, heap):
     s = h.stats()
     summary = h.fleet_summary()
     cs = h.corrections()
@@ -354,6 +375,10 @@ def report(h, args, samples, cpu_share, thread_shares, kernel_drops, waits):
     slope = slope_mb_per_min(samples)
     print("rsud RSS: first %.1f MB, last %.1f MB, max %.1f MB, slope over the second half %+.2f MB/min "
           "(%d samples)" % (samples[0][1], samples[-1][1], max(m for _, m in samples), slope, len(samples)))
+    if heap:
+        print("rsud heap in use (the allocator's count of live allocations, metrics every second): first %.1f MB, "
+              "last %.1f MB, max %.1f MB, slope over the second half %+.2f MB/min (%d samples)" % (
+                  heap[0][1], heap[-1][1], max(m for _, m in heap), slope_mb_per_min(heap), len(heap)))
     busiest = sorted(thread_shares.items(), key=lambda kv: -kv[1])[:3]
     print("rsud CPU: %.0f %% of one core (threads: %s)" % (
         100.0 * cpu_share, ", ".join("%s %.0f %%" % (n, 100.0 * c) for n, c in busiest)))
