@@ -18,6 +18,7 @@
 #include "daemon/v2i_receiver.h"
 #include "daemon/worker_thread.h"
 #include "edge/address_text.h"
+#include "edge/arrival_stamp.h"
 #include "edge/host_clock.h"
 #include "io/background_state.h"
 #include "io/pcd_io.h"

@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "edge/arrival_stamp.h"
+
 namespace rsu::daemon {
 
 namespace asio = boost::asio;

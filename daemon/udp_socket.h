@@ -9,9 +9,6 @@
 #include <cstdint>
 #include <optional>
 
-#include "common/time.h"
-#include "edge/arrival_stamp.h"
-
 namespace rsu::daemon {
 
 // Opens and binds `socket`, or throws naming `what` and the endpoint.

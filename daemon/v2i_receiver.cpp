@@ -9,6 +9,7 @@
 #include <boost/asio/post.hpp>
 
 #include "daemon/udp_socket.h"
+#include "edge/arrival_stamp.h"
 #include "edge/host_clock.h"
 
 #include <algorithm>

@@ -5,11 +5,12 @@
 // (issue 16: latency to the correction on the wire, not to a busy load generator's reading it).
 // Either in each message's control data (request_arrival_stamps: SO_TIMESTAMPNS, read by recvmsg /
 // recvmmsg with arrival_in), or, on a socket without SO_TIMESTAMPNS, for the datagram read last
-// (last_arrival: SIOCGSTAMPNS; its first call turns the stamps on and finds none).
+// (last_arrival: SIOCGSTAMPNS; its first call turns the stamps on and finds none). Linux switches its
+// stamping on for the host a moment after the first socket asks (net_enable_timestamp, deferred): a
+// datagram that arrives before then is stamped when it is read.
 #pragma once
 
 #include <sys/socket.h>
-
 #include <sys/types.h>
 
 #include <cstdint>
