@@ -11,6 +11,7 @@
 #include "common/angles.h"
 #include "common/random.h"
 #include "eval/consistency.h"
+#include "eval/pilot/outline_observability.h"
 #include "lidar/point_eigen.h"
 #include "lidar/sensor_model.h"
 #include "perception/ground_height_filter.h"
@@ -167,6 +168,7 @@ DistanceRun run_distance(const PilotConfig& config, const lidar::SensorModel& mo
     }
     const Pose2 truth = sim::pose_at(vehicle.trajectory, cell.sweep_ns);
     cell.yaw_deg = rad_to_deg(wrap_angle_positive(truth.yaw));
+    cell.outline_seen = observe_outline(points, truth, config.vehicle.length, config.vehicle.width).seen();
 
     // The vehicle's own yaw estimate: the truth plus a uniform error in [-bound, +bound], drawn per cell.
     const std::uint64_t key = mix64(

@@ -60,10 +60,11 @@ struct MethodCell {
 // One frame of the experiment.
 struct PilotCell {
   double distance_m = 0;
-  int frame_in_turn = 0;   // 0 .. frames_per_turn - 1
-  double yaw_deg = 0;      // true yaw at the sweep time, [0, 360)
-  TimeNs sweep_ns = 0;     // median firing time of the vehicle's points
-  std::size_t points = 0;  // foreground points (all on the vehicle: the scene is empty)
+  int frame_in_turn = 0;      // 0 .. frames_per_turn - 1
+  double yaw_deg = 0;         // true yaw at the sweep time, [0, 360)
+  TimeNs sweep_ns = 0;        // median firing time of the vehicle's points
+  std::size_t points = 0;     // foreground points (all on the vehicle: the scene is empty)
+  bool outline_seen = false;  // the points show the footprint's place (outline_observability.h)
   bool fit_ok = false;
   double area_err_m2 = MethodCell::kNaN;  // fitted area - true area
   std::array<MethodCell, 3> methods;      // indexed by PilotMethod

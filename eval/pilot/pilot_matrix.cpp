@@ -96,8 +96,8 @@ std::string matrix_markdown(const std::vector<MatrixRow>& rows) {
   out << "| LiDAR | mount | vehicle | mean points 6-36 m | < 0.10 m, 6-36 m | < 0.10 m, >= 30 points | p95 "
          "6-36 m "
          "| off-by-90 | no fix | withheld, >= 30 points | beyond 3 sigma position / yaw | worst 5 m band "
-         "position / yaw | HMI |\n";
-  out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+         "position / yaw | HMI | outline seen, >= 30 points | < 0.10 m where seen |\n";
+  out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const MatrixRow& r : rows) {
     const MethodSummary& s = r.improved;
     char mount[32];
@@ -108,6 +108,7 @@ std::string matrix_markdown(const std::vector<MatrixRow>& rows) {
         << s.off_by_90_cells << " | " << s.no_fit_cells << " | " << percent(s.withheld_6_36m_30pts) << " | "
         << percent(s.beyond_3sigma_position) << " / " << percent(s.beyond_3sigma_yaw) << " | "
         << percent(r.worst_band_position) << " / " << percent(r.worst_band_yaw) << " | " << s.hmi_fixes
+        << " | " << percent(s.outline_seen_6_36m_30pts) << " | " << percent(s.share_below_0p10_outline_seen)
         << " |\n";
   }
   return out.str();
@@ -121,7 +122,7 @@ void write_matrix_csv(const std::vector<MatrixRow>& rows, const std::string& pat
          "30pts,"
          "share_below_0p10_6_36m_30pts,p95_error_6_36m,off_by_90_cells,no_fit_cells,withheld_6_36m_30pts,"
          "fixes_6_36m,beyond_3sigma_position,beyond_3sigma_yaw,worst_band_position,worst_band_yaw,hmi_fixes,"
-         "wall_seconds\n";
+         "outline_seen_6_36m_30pts,share_below_0p10_outline_seen,wall_seconds\n";
   for (const MatrixRow& r : rows) {
     const MethodSummary& s = r.improved;
     out << r.model << ',' << r.mount_m << ',' << r.vehicle << ',' << r.folder << ',' << r.mean_points_6_36m
@@ -129,7 +130,8 @@ void write_matrix_csv(const std::vector<MatrixRow>& rows, const std::string& pat
         << s.share_below_0p10_6_36m_30pts << ',' << s.p95_error_6_36m << ',' << s.off_by_90_cells << ','
         << s.no_fit_cells << ',' << s.withheld_6_36m_30pts << ',' << s.fixes_6_36m << ','
         << s.beyond_3sigma_position << ',' << s.beyond_3sigma_yaw << ',' << r.worst_band_position << ','
-        << r.worst_band_yaw << ',' << s.hmi_fixes << ',' << r.wall_seconds << '\n';
+        << r.worst_band_yaw << ',' << s.hmi_fixes << ',' << s.outline_seen_6_36m_30pts << ','
+        << s.share_below_0p10_outline_seen << ',' << r.wall_seconds << '\n';
   }
 }
 

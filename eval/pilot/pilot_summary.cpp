@@ -94,6 +94,8 @@ std::string method_json(const MethodSummary& s) {
       << ", \"share_below_0p10_6_36m_30pts\": " << number(s.share_below_0p10_6_36m_30pts)
       << ", \"cells_6_36m_30pts\": " << s.cells_6_36m_30pts
       << ", \"withheld_6_36m_30pts\": " << number(s.withheld_6_36m_30pts)
+      << ", \"outline_seen_6_36m_30pts\": " << number(s.outline_seen_6_36m_30pts)
+      << ", \"share_below_0p10_outline_seen\": " << number(s.share_below_0p10_outline_seen)
       << ", \"off_by_90_cells\": " << s.off_by_90_cells
       << ", \"median_error_m\": " << number(s.median_error_m)
       << ", \"p95_error_m\": " << number(s.p95_error_m)
@@ -112,7 +114,7 @@ std::string method_json(const MethodSummary& s) {
 MethodSummary summarize(const PilotResult& result, PilotMethod method) {
   MethodSummary s;
   std::vector<double> errors, errors_claim;
-  int below = 0, below_dense = 0, withheld_dense = 0;
+  int below = 0, below_dense = 0, withheld_dense = 0, seen_dense = 0, below_seen = 0;
   for (const PilotCell& c : result.cells) {
     const MethodCell& m = c.of(method);
     const bool fixed = m.fixed() && std::isfinite(m.center_err_m);
@@ -134,6 +136,8 @@ MethodSummary summarize(const PilotResult& result, PilotMethod method) {
       ++s.cells_6_36m_30pts;
       below_dense += good;
       withheld_dense += !fixed;
+      seen_dense += c.outline_seen;
+      below_seen += c.outline_seen && good;
     }
   }
   s.share_below_0p10_6_36m = s.cells_6_36m > 0 ? static_cast<double>(below) / s.cells_6_36m : kNaN;
@@ -141,6 +145,9 @@ MethodSummary summarize(const PilotResult& result, PilotMethod method) {
       s.cells_6_36m_30pts > 0 ? static_cast<double>(below_dense) / s.cells_6_36m_30pts : kNaN;
   s.withheld_6_36m_30pts =
       s.cells_6_36m_30pts > 0 ? static_cast<double>(withheld_dense) / s.cells_6_36m_30pts : kNaN;
+  s.outline_seen_6_36m_30pts =
+      s.cells_6_36m_30pts > 0 ? static_cast<double>(seen_dense) / s.cells_6_36m_30pts : kNaN;
+  s.share_below_0p10_outline_seen = seen_dense > 0 ? static_cast<double>(below_seen) / seen_dense : kNaN;
   s.median_error_m = percentile(errors, 0.5);
   s.p95_error_m = percentile(errors, 0.95);
   s.p95_error_6_36m = percentile(errors_claim, 0.95);
@@ -201,7 +208,7 @@ void write_cells_csv(const PilotResult& result, const std::string& path, bool ap
       out << ',' << p << "_center_err_m," << p << "_yaw_err_deg," << p << "_sigma_m," << p
           << "_yaw_sigma_deg," << p << "_position_nees," << p << "_status";
     }
-    out << ",improved_resolution\n";
+    out << ",improved_resolution,outline_seen\n";
   }
   for (const PilotCell& c : result.cells) {
     out << result.config.model_name << ',' << result.config.lidar_height_m << ','
@@ -213,7 +220,7 @@ void write_cells_csv(const PilotResult& result, const std::string& path, bool ap
       out << ',' << number(r.center_err_m) << ',' << number(r.yaw_err_deg) << ',' << number(r.sigma_m) << ','
           << number(r.yaw_sigma_deg) << ',' << number(r.position_nees) << ',' << r.status;
     }
-    out << ',' << c.improved_resolution << '\n';
+    out << ',' << c.improved_resolution << ',' << (c.outline_seen ? 1 : 0) << '\n';
   }
 }
 

@@ -30,8 +30,12 @@ struct MethodSummary {
   int cells_6_36m_30pts = 0;          // ... of them, where the vehicle returned >= 30 points
   double share_below_0p10_6_36m_30pts = 0;
   double withheld_6_36m_30pts = 0;  // share of those cells without a fix
-  int off_by_90_cells = 0;          // yaw error > 45 deg, all distances
-  double median_error_m = 0;        // over cells with a fix, all distances
+  // ... share of those cells whose points show the footprint's place (outline_observability.h), and of
+  // these the share with a fix under 0.10 m: the method's misses where the sensor saw enough.
+  double outline_seen_6_36m_30pts = 0;
+  double share_below_0p10_outline_seen = 0;
+  int off_by_90_cells = 0;    // yaw error > 45 deg, all distances
+  double median_error_m = 0;  // over cells with a fix, all distances
   double p95_error_m = 0;
   double p95_error_6_36m = 0;
   int no_fit_cells = 0;  // cells without a fix, all distances
