@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "common/symmetric_eigen.h"
@@ -48,7 +49,9 @@ Eigen::Matrix2d common_cover(const Eigen::Matrix2d& a, const Eigen::Matrix2d& b,
 }  // namespace
 
 double point_noise_variance(double range_m, const CovarianceModelConfig& config) {
-  const double range = std::max(0.0, std::isfinite(range_m) ? range_m : 0.0);
+  if (!std::isfinite(range_m))
+    return std::numeric_limits<double>::infinity();  // an unknown range bounds nothing
+  const double range = std::max(0.0, range_m);
   return config.range_sigma_m * config.range_sigma_m +
          (range * config.angle_sigma_rad) * (range * config.angle_sigma_rad);
 }
@@ -90,13 +93,21 @@ double face_yaw_information(const FixEvidence& e, const CovarianceModelConfig& c
 }
 
 Eigen::Matrix3d fix_covariance(const FixEvidence& e, const CovarianceModelConfig& config) {
-  const double range = std::max(0.0, std::isfinite(e.range_m) ? e.range_m : 0.0);
+  const double max_var = config.max_yaw_sigma_rad * config.max_yaw_sigma_rad;
+  // Without a range the points' noise is unknown: the position is unbounded (position_sigma_m infinite,
+  // every cap refuses it) and the yaw as uncertain as a fix may state.
+  if (!std::isfinite(e.range_m)) {
+    Eigen::Matrix3d unbounded = Eigen::Matrix3d::Zero();
+    unbounded(0, 0) = unbounded(1, 1) = std::numeric_limits<double>::infinity();
+    unbounded(2, 2) = max_var;
+    return unbounded;
+  }
+  const double range = std::max(0.0, e.range_m);
   const double noise_var = point_noise_variance(range, config);
   const double shape_var = config.shape_sigma_m * config.shape_sigma_m;
   const double spacing = range * config.azimuth_resolution_rad;
 
   const double yaw_information = face_yaw_information(e, config) + std::max(0.0, e.prior_yaw_information);
-  const double max_var = config.max_yaw_sigma_rad * config.max_yaw_sigma_rad;
   double var_yaw = yaw_information > 0.0 ? 1.0 / yaw_information : max_var;
   var_yaw += config.search_resolution_rad * config.search_resolution_rad / 12.0;
   var_yaw = std::min(var_yaw, max_var);

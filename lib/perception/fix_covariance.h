@@ -119,7 +119,8 @@ struct FixEvidence {
 // Information (1 / variance, rad^-2) the seen faces give about the yaw (no prior, no quantisation).
 double face_yaw_information(const FixEvidence& evidence, const CovarianceModelConfig& config = {});
 
-// Variance of a point's position across a surface at horizontal range range_m (range and angle noise).
+// Variance of a point's position across a surface at horizontal range range_m (range and angle noise); a
+// negative range counts as 0, an unknown (non-finite) one gives an infinite variance.
 double point_noise_variance(double range_m, const CovarianceModelConfig& config);
 
 // The evidence of fitted edge `edge` (0..3) of `fit` as seen from the LiDAR at lidar_xy.

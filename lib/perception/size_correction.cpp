@@ -26,6 +26,10 @@ constexpr double kMaxPositionSigmaIncompleteSweepM = 0.1;
 }  // namespace
 
 double position_sigma_m(const CorrectedPose& fix) {
+  // A covariance that is not a number bounds nothing: unbounded, never 0 (std::max(0, NaN) is 0), so that
+  // every cap refuses it.
+  if (!fix.covariance.topLeftCorner<2, 2>().allFinite())
+    return std::numeric_limits<double>::infinity();
   const SymmetricEigen2 eig(fix.covariance.topLeftCorner<2, 2>());
   return std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
 }

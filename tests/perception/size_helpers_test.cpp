@@ -99,11 +99,15 @@ TEST(PointNoiseVariance, GrowsStrictlyWithRange) {
   }
 }
 
-// A negative or non-finite range is no range: the range noise alone, never NaN.
-TEST(PointNoiseVariance, RangeThatIsNotAPositiveNumberCountsAsZero) {
+// A negative range counts as 0 (the range noise alone); an unknown one bounds nothing: infinite, never NaN
+// and never the smallest noise.
+TEST(PointNoiseVariance, NegativeRangeCountsAsZeroUnknownRangeAsUnbounded) {
   const CovarianceModelConfig config;
-  for (const double r : {-5.0, kNan})
-    EXPECT_EQ(point_noise_variance(r, config), point_noise_variance(0.0, config)) << r;
+  EXPECT_EQ(point_noise_variance(-5.0, config), point_noise_variance(0.0, config));
+  for (const double r : {kNan, std::numeric_limits<double>::infinity()}) {
+    const double v = point_noise_variance(r, config);
+    EXPECT_TRUE(std::isinf(v) && v > 0.0) << r;
+  }
 }
 
 LidarGeometry mast(double z, double ground_z) {

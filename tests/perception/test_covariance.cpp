@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -64,6 +65,35 @@ TEST(FixCovariance, UnsettledFacesWidenTheirYaw) {
   FixEvidence none = unsettled;
   none.seen_faces = {};
   EXPECT_EQ(face_yaw_information(none), 0.0);
+}
+
+// Without a range the points' noise is unknown: the faces tell nothing, the position is unbounded (every
+// cap refuses it) and the yaw states the most a fix may; before, it was taken as 0 m, the smallest noise.
+TEST(FixCovariance, AnUnknownRangeBoundsNothing) {
+  for (const double range : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+    const FixEvidence evidence = two_faces(range, 60);
+    EXPECT_EQ(face_yaw_information(evidence), 0.0) << range;
+    const Eigen::Matrix3d cov = fix_covariance(evidence);
+    EXPECT_TRUE(std::isinf(cov(0, 0)) && std::isinf(cov(1, 1))) << range;
+    const CovarianceModelConfig config;
+    EXPECT_DOUBLE_EQ(cov(2, 2), config.max_yaw_sigma_rad * config.max_yaw_sigma_rad);
+    CorrectedPose fix;
+    fix.covariance = cov;
+    EXPECT_TRUE(std::isinf(position_sigma_m(fix)));
+    EXPECT_GT(position_sigma_m(fix), max_position_sigma_m(true, CorrectionConfig{}));
+  }
+}
+
+// A covariance holding NaN states no bound: unbounded, not 0 (std::max(0, NaN) is 0, a perfect fix).
+TEST(FixCovariance, ANotANumberCovarianceIsUnbounded) {
+  CorrectedPose fix;
+  fix.covariance = Eigen::Matrix3d::Identity() * 0.01;
+  EXPECT_NEAR(position_sigma_m(fix), 0.1, 1e-12);
+  fix.covariance(0, 1) = fix.covariance(1, 0) = std::nan("");
+  EXPECT_TRUE(std::isinf(position_sigma_m(fix)));
+  fix.covariance = Eigen::Matrix3d::Identity() * 0.01;
+  fix.covariance(1, 1) = std::nan("");
+  EXPECT_GT(position_sigma_m(fix), max_position_sigma_m(false, CorrectionConfig{}));
 }
 
 TEST(FixCovariance, ModelIsMonotoneInPointsRangeAndFaces) {
