@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "eval/pilot/pilot_experiment.h"
 #include "eval/pilot/pilot_matrix.h"
@@ -53,9 +54,17 @@ po::options_description grid_options(const rsu::eval::PilotConfig& defaults, dou
       "prior-error-deg", po::value<double>()->default_value(defaults.prior_error_deg),
       "bound of the uniform error of the vehicle's yaw prior (improved correction)")(
       "seed", po::value<std::uint64_t>()->default_value(defaults.noise.seed), "noise seed")(
-      "threads", po::value<int>()->default_value(defaults.threads), "worker threads");
+      "threads", po::value<int>()->default_value(defaults.threads), "worker threads")(
+      "max-position-sigma-m",
+      po::value<double>()->default_value(defaults.fix.correction.max_position_sigma_m),
+      "the fix's cap (rsud.yaml perception.correction.max_position_sigma_m, 0-10 m): a fix stating more is "
+      "withheld (position_unbounded); another value than rsud's default is printed with the results");
   return o;
 }
+
+const char* kFixConfigNote =
+    "fix configuration: rsud's (perception::VehicleFixConfig defaults = deploy/rsud.yaml); yaw prior = "
+    "truth + uniform error, announced sigma 10 deg";
 
 rsu::eval::PilotConfig base_config(const po::variables_map& vm) {
   rsu::eval::PilotConfig c;
@@ -66,7 +75,21 @@ rsu::eval::PilotConfig base_config(const po::variables_map& vm) {
   c.prior_error_deg = vm["prior-error-deg"].as<double>();
   c.noise.seed = vm["seed"].as<std::uint64_t>();
   c.threads = vm["threads"].as<int>();
+  // The same bounds as rsud's configuration (daemon/config.cpp).
+  const double cap = vm["max-position-sigma-m"].as<double>();
+  if (!(cap > 0.0 && cap <= 10.0))
+    throw std::invalid_argument("--max-position-sigma-m must be in (0, 10] m");
+  c.fix.correction.max_position_sigma_m = cap;
   return c;
+}
+
+// Which fix configuration the results were measured with: rsud's, or rsud's with another cap.
+void print_fix_config(const rsu::eval::PilotConfig& config) {
+  std::printf("%s\n", kFixConfigNote);
+  const double shipped = rsu::perception::CorrectionConfig{}.max_position_sigma_m;
+  if (config.fix.correction.max_position_sigma_m != shipped)
+    std::printf("NOT rsud's default: max_position_sigma_m %g m (rsud's: %g m)\n",
+                config.fix.correction.max_position_sigma_m, shipped);
 }
 
 void print_result(const rsu::eval::PilotResult& result) {
@@ -96,10 +119,6 @@ void print_result(const rsu::eval::PilotResult& result) {
       100.0 * k.position_beyond_3sigma, k.hmi_fixes);
 }
 
-const char* kFixConfigNote =
-    "fix configuration: rsud's (perception::VehicleFixConfig defaults = deploy/rsud.yaml); yaw prior = "
-    "truth + uniform error, announced sigma 10 deg";
-
 int run_single(int argc, char** argv) {
   rsu::eval::PilotConfig defaults;
   po::options_description options("rsu-pilot [options]: the paper's pilot experiment (Sec. 3.1)");
@@ -126,7 +145,13 @@ int run_single(int argc, char** argv) {
   }
   const std::filesystem::path out = vm["out"].as<std::string>();
   std::filesystem::create_directories(out);
-  rsu::eval::PilotConfig base = base_config(vm);
+  rsu::eval::PilotConfig base;
+  try {
+    base = base_config(vm);
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "rsu-pilot: %s\n", e.what());
+    return 2;
+  }
   base.lidar_height_m = vm["lidar-height-m"].as<double>();
   if (vm.count("vehicle")) {
     const auto v = rsu::sim::load_vehicle_shape_file(vm["vehicle"].as<std::string>());
@@ -134,7 +159,7 @@ int run_single(int argc, char** argv) {
     base.vehicle_name =
         v.name.empty() ? std::filesystem::path(vm["vehicle"].as<std::string>()).stem().string() : v.name;
   }
-  std::printf("%s\n", kFixConfigNote);
+  print_fix_config(base);
   std::ostringstream json;
   json << "{\n";
   bool first = true;
@@ -181,7 +206,12 @@ int run_matrix_command(int argc, char** argv) {
     return 0;
   }
   rsu::eval::MatrixConfig config;
-  config.base = base_config(vm);
+  try {
+    config.base = base_config(vm);
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "rsu-pilot matrix: %s\n", e.what());
+    return 2;
+  }
   config.mounts_m = split_list<double>(vm["mounts"].as<std::string>());
   config.models = split_list<std::string>(vm["models"].as<std::string>());
   for (const std::string& file : split_list<std::string>(vm["vehicles"].as<std::string>())) {
@@ -192,7 +222,7 @@ int run_matrix_command(int argc, char** argv) {
   }
   const std::string out = vm["out"].as<std::string>();
   std::filesystem::create_directories(out);
-  std::printf("%s\n", kFixConfigNote);
+  print_fix_config(config.base);
   const auto rows = rsu::eval::run_matrix(config, out, [](const rsu::eval::MatrixRow& r) {
     std::printf(
         "%-10s %4.1f m %-10s < 0.10 m %5.1f%% (>= 30 points %5.1f%%), p95 %.3f m, off-by-90 %d, no fix %d, "
