@@ -61,11 +61,7 @@ TEST(Pilot, FromAMastTheOutlineIsOftenUnseen) {
   const MethodSummary improved = summarize(result, PilotMethod::improved);
   ASSERT_GT(improved.cells_6_36m_30pts, 100);
   EXPECT_LT(improved.outline_seen_6_36m_30pts, 0.67);
-  EXPECT_GT(improved.outline_seen_6_36m_30pts, 0.0);
-  int seen = 0;
-  for (const PilotCell& c : result.cells)
-    seen += c.outline_seen;
-  EXPECT_GT(seen, 0);
+  EXPECT_GT(improved.outline_seen_6_36m_30pts, 0.0);  // the oracle does mark some cells
 }
 
 TEST(Pilot, PointCountFallsWithDistance) {
